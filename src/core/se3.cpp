@@ -7,8 +7,11 @@
 namespace agvslam {
 
 double rotation_angle_rad(const SE3d& T) {
-  const double c = (T.linear().trace() - 1.0) * 0.5;
-  return std::acos(std::clamp(c, -1.0, 1.0));
+  // atan2(|sin|, cos) stays accurate near 0 and pi, where acos of the trace loses half the digits.
+  const Eigen::Matrix3d R = T.linear();
+  const Eigen::Vector3d axis_sin(R(2, 1) - R(1, 2), R(0, 2) - R(2, 0), R(1, 0) - R(0, 1));
+  const double c = std::clamp((R.trace() - 1.0) * 0.5, -1.0, 1.0);
+  return std::atan2(0.5 * axis_sin.norm(), c);
 }
 
 Eigen::Matrix3d orthonormalize(const Eigen::Matrix3d& R) {
