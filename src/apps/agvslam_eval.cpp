@@ -47,10 +47,10 @@ agvslam::Trajectory load(const std::string& path, const std::string& format_name
 }
 
 int run(const Options& o) {
+  const eval::AlignMode align = eval::parse_align_mode(o.align);  // options first, before any file is read
   TrajectoryFormat gt_format{}, est_format{};
   const agvslam::Trajectory gt = load(o.gt_path, o.gt_format, "--gt-format", o.times_path, &gt_format);
   const agvslam::Trajectory est = load(o.est_path, o.est_format, "--est-format", o.times_path, &est_format);
-  const eval::AlignMode align = eval::parse_align_mode(o.align);
   if (gt.empty()) throw InputError(o.gt_path, "", "expected at least one pose, found none");
   if (est.empty()) throw InputError(o.est_path, "", "expected at least one pose, found none");
 
