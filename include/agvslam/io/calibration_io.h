@@ -27,6 +27,13 @@ void write_kitti_calib(const std::string& path, const StereoCalibration& calib);
 StereoCalibration load_orbslam_yaml(const std::string& path);
 RawStereoRig load_kalibr_camchain_rig(const std::string& path);
 StereoCalibration load_kalibr_camchain(const std::string& path);
+// One EuRoC sensor.yaml (a single camera): the raw camera and T_BS (= T_B_cam, the camera in the body frame).
+struct EurocCameraSensor {
+  RawCamera camera;
+  SE3d T_B_S = SE3d::Identity();
+};
+EurocCameraSensor load_euroc_sensor(const std::string& sensor_yaml);
+
 RawStereoRig load_euroc_rig(const std::string& cam0_sensor_yaml, const std::string& cam1_sensor_yaml);
 StereoCalibration load_euroc_calibration(const std::string& cam0_sensor_yaml, const std::string& cam1_sensor_yaml);
 

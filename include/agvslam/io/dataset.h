@@ -59,10 +59,15 @@ class KittiDataset final : public StereoDataset {
 
   const std::string& left_dir() const { return left_dir_; }
   const std::string& right_dir() const { return right_dir_; }
+  // Paths of the images of frame i (sorted .png names of the left and right folders).
+  std::string left_path(std::size_t i) const;
+  std::string right_path(std::size_t i) const;
 
  private:
   std::string root_, left_dir_, right_dir_;
+  std::vector<std::string> left_names_, right_names_;  // file names, sorted
   std::vector<int64_t> times_ns_;
+  cv::Size image_size_;  // size of the images on disk (from the first left image)
   double rate_hz_ = 10.0;
   StereoCalibration calib_;
 };
@@ -84,6 +89,11 @@ class EurocDataset final : public StereoDataset {
 
   // Frames skipped while pairing (listed without an image, or without a partner within 1 ms).
   std::size_t skipped_frames() const { return skipped_; }
+  // cam0's pose in the EuRoC body frame (T_BS of mav0/cam0/sensor.yaml; identity with a calibration override
+  // when that file is absent).
+  const SE3d& T_B_cam0() const { return T_B_cam0_; }
+  const std::string& left_path(std::size_t i) const { return pairs_.at(i).left_path; }
+  const std::string& right_path(std::size_t i) const { return pairs_.at(i).right_path; }
 
  private:
   struct Pair {
@@ -93,6 +103,7 @@ class EurocDataset final : public StereoDataset {
   std::string root_;
   std::vector<Pair> pairs_;
   double rate_hz_ = 20.0;
+  cv::Size image_size_;  // raw image size (sensor.yaml resolution)
   StereoCalibration calib_;
   SE3d T_B_cam0_ = SE3d::Identity();
   std::size_t skipped_ = 0;
