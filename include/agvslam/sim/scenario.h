@@ -1,0 +1,130 @@
+#pragma once
+// Built-in scenarios: the camera-carrying AGV's motion plus the people and vehicles around it.
+//
+//   static  the loop, no people (control)
+//   scene1  AGV stationary in the staging area; a person enters from the left (~25 %), turns and stands
+//           (~45 %), walks back and leaves (~85 %)
+//   scene2  AGV drives a 13.6 m straight aisle; one person crosses in front
+//   scene3  the same aisle; three people (one crossing early, one walking ahead of the AGV after standing,
+//           one crossing later) and a forklift that is parked, then drives across the aisle far ahead
+//   scene4  AGV drives a 6.4 m x 8.8 m loop (1 m corner arcs) back to its start; one person crosses; a parked
+//           forklift (never moves)
+//   scene5  the same loop; a person walks ahead of the AGV for the whole loop, one crosses, one stands picking
+//           then walks away; another AGV is parked, then drives
+//
+// Every scenario has a nominal timeline (people ~1.2 m/s, the AGV ~0.8-0.9 m/s). `--frames N` plays the whole
+// timeline over N frames, so speeds scale with default_frames / N. Actors are generated from (seed,
+// RngStream::kActors), the warehouse from the layout seed, so the layout can be kept while people change.
+// Actor timings are chosen so that every actor keeps >= 1.5 m from the camera and >= 0.5 m from other actors
+// (checked on a 50 ms grid; a warning is logged if no candidate satisfies it).
+
+#include <cstdint>
+#include <optional>
+#include <string>
+#include <vector>
+
+#include "agvslam/sim/actors.h"
+#include "agvslam/sim/warehouse.h"
+
+namespace agvslam::sim {
+
+struct ScenarioInfo {
+  std::string name;
+  std::string description;
+  double nominal_duration_s;  // default frames = round(nominal_duration_s * rate_hz)
+};
+
+// The catalogue, in order: static, scene1 .. scene5.
+const std::vector<ScenarioInfo>& scenario_catalogue();
+// Throws InputError("--scenario", name, "expected one of: ...") for an unknown name.
+const ScenarioInfo& find_scenario(const std::string& name);
+
+struct ScenarioOptions {
+  std::string name = "scene1";
+  int frames = 0;                        // 0: the scenario's default
+  uint64_t seed = 1;                     // actors (and, by default, the layout)
+  std::optional<uint64_t> layout_seed;   // warehouse layout and textures (default: seed)
+  double start_offset_m = 0;             // AGV start along its route (loop: any value, wraps; line: [0, 3] m)
+
+  uint64_t effective_layout_seed() const { return layout_seed ? *layout_seed : seed; }
+  // Throws InputError naming the option for frames <= 0 (when given), a bad start offset, ...
+  void validate(const WarehouseLayout& layout) const;
+};
+
+// A path of straight lines and circular arcs (tangent-continuous), parameterised by arc length.
+class RoutePath {
+ public:
+  void add_line(double x0, double y0, double x1, double y1);
+  // Arc around (cx, cy) from angle a0_rad sweeping sweep_rad (positive: counter-clockwise).
+  void add_arc(double cx, double cy, double radius, double a0_rad, double sweep_rad);
+  void set_closed(bool closed) { closed_ = closed; }
+  bool closed() const { return closed_; }
+  double length() const { return length_; }
+  // Position and heading (direction of travel, radians from +x) at arc length s (wrapped when closed,
+  // clamped otherwise).
+  void sample(double s, double& x, double& y, double& heading_rad) const;
+
+ private:
+  struct Piece {
+    bool arc;
+    double x0, y0, x1, y1;           // line
+    double cx, cy, r, a0, sweep;     // arc
+    double s0, len;
+  };
+  std::vector<Piece> pieces_;
+  double length_ = 0;
+  bool closed_ = false;
+};
+
+// Trapezoidal speed profile: rest for hold_start_s, accelerate, cruise, decelerate, rest for hold_end_s.
+struct SpeedProfile {
+  double distance_m = 0;
+  double duration_s = 1;
+  double hold_start_s = 0.5, hold_end_s = 0.5;
+  double accel_mps2 = 0.4;
+  double cruise_mps = 0;  // derived by solve()
+  void solve();
+  double distance_at(double t_s) const;
+  double speed_at(double t_s) const;
+};
+
+struct AgvMotion {
+  bool stationary = true;
+  double x = 0, y = 0, yaw_rad = 0;  // when stationary
+  RoutePath route;
+  double s_start = 0;                 // arc length where it starts
+  SpeedProfile profile;
+  // Planar pose (map frame) at scenario time t_s; s_out = arc length travelled from the start.
+  void planar_pose(double t_s, double& x_out, double& y_out, double& yaw_out, double& s_out) const;
+};
+
+struct Scenario {
+  std::string name, description;
+  uint64_t seed = 1, layout_seed = 1;
+  double start_offset_m = 0;
+  int frames = 1;
+  double rate_hz = 20;
+  double nominal_duration_s = 20;   // scenario timeline length
+  double time_scale = 1;            // real seconds per scenario second = frames / rate / nominal duration
+  AgvMotion agv;
+  std::vector<Actor> actors;
+  double min_camera_clearance_m = 1e9;  // smallest actor-to-camera distance over the timeline (surface)
+  double min_actor_clearance_m = 1e9;   // smallest distance between two actors
+
+  // Scenario time of frame k.
+  double scenario_time(int frame) const { return (frame / rate_hz) / time_scale; }
+  // Cruise speed of the AGV in real time (m/s).
+  double agv_speed_mps() const { return agv.stationary ? 0.0 : agv.profile.cruise_mps / time_scale; }
+  double agv_path_length_m() const { return agv.stationary ? 0.0 : agv.profile.distance_m; }
+};
+
+// Builds a scenario (validates the options first). rate_hz: the camera rate.
+Scenario make_scenario(const ScenarioOptions& options, const Warehouse& warehouse, double rate_hz);
+
+// Clearance circles of an actor in a state (x, y, radius), for collision checks.
+struct Circle {
+  double x, y, r;
+};
+std::vector<Circle> actor_footprint(ActorClass cls, const ActorState& state);
+
+}  // namespace agvslam::sim

@@ -1,0 +1,627 @@
+#include "agvslam/sim/scenario.h"
+
+#include <spdlog/spdlog.h>
+
+#include <algorithm>
+#include <cmath>
+#include <functional>
+
+#include "agvslam/core/error.h"
+#include "agvslam/sim/random.h"
+
+namespace agvslam::sim {
+namespace {
+
+constexpr double kPi = 3.14159265358979323846;
+constexpr double kCameraClearanceM = 1.5;  // actor surface to the camera
+constexpr double kActorClearanceM = 0.5;   // between actors
+constexpr double kCheckStepS = 0.05;
+
+double wrap_angle(double a) { return std::atan2(std::sin(a), std::cos(a)); }
+
+}  // namespace
+
+// ---- Catalogue ------------------------------------------------------------------------------------------------
+
+const std::vector<ScenarioInfo>& scenario_catalogue() {
+  static const std::vector<ScenarioInfo> catalogue = {
+      {"static", "the 6.4 m x 8.8 m loop without people (control)", 35.0},
+      {"scene1", "AGV stationary; one person enters from the left, turns, stands, walks back and leaves", 20.0},
+      {"scene2", "AGV drives a 13.6 m straight aisle; one person crosses", 20.0},
+      {"scene3", "13.6 m straight aisle; three people crossing/walking ahead, a forklift parked then crossing", 20.0},
+      {"scene4", "6.4 m x 8.8 m loop back to the start; one person crosses; a parked forklift", 35.0},
+      {"scene5", "the loop; a person walks ahead all the way, one crosses, one stands then leaves; an AGV parked then driving",
+       35.0},
+  };
+  return catalogue;
+}
+
+const ScenarioInfo& find_scenario(const std::string& name) {
+  std::string names;
+  for (const auto& s : scenario_catalogue()) {
+    if (s.name == name) return s;
+    names += (names.empty() ? "" : ", ") + s.name;
+  }
+  throw InputError("--scenario", "'" + name + "'", "unknown scenario; expected one of: " + names);
+}
+
+void ScenarioOptions::validate(const WarehouseLayout& layout) const {
+  find_scenario(name);
+  if (frames < 0) throw InputError("--frames", std::to_string(frames), "expected a number of frames > 0");
+  if (!std::isfinite(start_offset_m))
+    throw InputError("--start-offset", std::to_string(start_offset_m), "expected a finite distance in metres");
+  const bool line = name == "scene2" || name == "scene3";
+  if (line && (start_offset_m < 0 || start_offset_m > layout.line_max_start_offset_m))
+    throw InputError("--start-offset", std::to_string(start_offset_m),
+                     "expected a distance in [0, " + std::to_string(layout.line_max_start_offset_m) +
+                         "] m along the aisle for " + name);
+  if (name == "scene1" && std::fabs(start_offset_m) > 2.0)
+    throw InputError("--start-offset", std::to_string(start_offset_m),
+                     "expected a sideways shift in [-2, 2] m of the stationary AGV for scene1");
+}
+
+// ---- Route and speed profile ----------------------------------------------------------------------------------
+
+void RoutePath::add_line(double x0, double y0, double x1, double y1) {
+  Piece p{};
+  p.arc = false;
+  p.x0 = x0;
+  p.y0 = y0;
+  p.x1 = x1;
+  p.y1 = y1;
+  p.s0 = length_;
+  p.len = std::hypot(x1 - x0, y1 - y0);
+  length_ += p.len;
+  pieces_.push_back(p);
+}
+
+void RoutePath::add_arc(double cx, double cy, double radius, double a0_rad, double sweep_rad) {
+  Piece p{};
+  p.arc = true;
+  p.cx = cx;
+  p.cy = cy;
+  p.r = radius;
+  p.a0 = a0_rad;
+  p.sweep = sweep_rad;
+  p.s0 = length_;
+  p.len = std::fabs(sweep_rad) * radius;
+  length_ += p.len;
+  pieces_.push_back(p);
+}
+
+void RoutePath::sample(double s, double& x, double& y, double& heading) const {
+  if (pieces_.empty()) {
+    x = y = heading = 0;
+    return;
+  }
+  if (closed_ && length_ > 0) {
+    s = std::fmod(s, length_);
+    if (s < 0) s += length_;
+  } else {
+    s = std::clamp(s, 0.0, length_);
+  }
+  std::size_t i = 0;
+  while (i + 1 < pieces_.size() && s > pieces_[i].s0 + pieces_[i].len) ++i;
+  const Piece& p = pieces_[i];
+  const double f = p.len > 0 ? std::clamp((s - p.s0) / p.len, 0.0, 1.0) : 0.0;
+  if (!p.arc) {
+    x = p.x0 + (p.x1 - p.x0) * f;
+    y = p.y0 + (p.y1 - p.y0) * f;
+    heading = std::atan2(p.y1 - p.y0, p.x1 - p.x0);
+  } else {
+    const double a = p.a0 + p.sweep * f;
+    x = p.cx + p.r * std::cos(a);
+    y = p.cy + p.r * std::sin(a);
+    heading = wrap_angle(a + (p.sweep > 0 ? 0.5 * kPi : -0.5 * kPi));
+  }
+}
+
+void SpeedProfile::solve() {
+  const double t_move = std::max(1e-3, duration_s - hold_start_s - hold_end_s);
+  double a = accel_mps2;
+  if (t_move * t_move < 4.0 * distance_m / a) a = 4.0 * distance_m / (t_move * t_move);  // triangular
+  accel_mps2 = a;
+  const double disc = std::max(0.0, t_move * t_move - 4.0 * distance_m / a);
+  cruise_mps = 0.5 * a * (t_move - std::sqrt(disc));
+}
+
+double SpeedProfile::distance_at(double t) const {
+  const double t_move = std::max(1e-3, duration_s - hold_start_s - hold_end_s);
+  const double tau = std::clamp(t - hold_start_s, 0.0, t_move);
+  if (cruise_mps <= 0) return 0;
+  const double t_acc = cruise_mps / accel_mps2;
+  if (tau < t_acc) return 0.5 * accel_mps2 * tau * tau;
+  if (tau > t_move - t_acc) {
+    const double rem = t_move - tau;
+    return distance_m - 0.5 * accel_mps2 * rem * rem;
+  }
+  return 0.5 * accel_mps2 * t_acc * t_acc + cruise_mps * (tau - t_acc);
+}
+
+double SpeedProfile::speed_at(double t) const {
+  const double t_move = std::max(1e-3, duration_s - hold_start_s - hold_end_s);
+  const double tau = t - hold_start_s;
+  if (tau <= 0 || tau >= t_move || cruise_mps <= 0) return 0;
+  return std::min(cruise_mps, accel_mps2 * std::min(tau, t_move - tau));
+}
+
+void AgvMotion::planar_pose(double t_s, double& x_out, double& y_out, double& yaw_out, double& s_out) const {
+  if (stationary) {
+    x_out = x;
+    y_out = y;
+    yaw_out = yaw_rad;
+    s_out = 0;
+    return;
+  }
+  s_out = profile.distance_at(t_s);
+  route.sample(s_start + s_out, x_out, y_out, yaw_out);
+}
+
+std::vector<Circle> actor_footprint(ActorClass cls, const ActorState& st) {
+  const double c = std::cos(st.yaw_rad), s = std::sin(st.yaw_rad);
+  auto at = [&](double fwd, double r) { return Circle{st.x + c * fwd, st.y + s * fwd, r}; };
+  switch (cls) {
+    case ActorClass::kPerson: return {at(0.0, 0.3)};
+    case ActorClass::kForklift: return {at(-0.5, 0.75), at(0.45, 0.75), at(1.5, 0.7)};
+    case ActorClass::kAgv: return {at(-0.3, 0.45), at(0.3, 0.45)};
+  }
+  return {at(0, 1.0)};
+}
+
+// ---- Scenario construction --------------------------------------------------------------------------------------
+
+namespace {
+
+struct PathBuilder {
+  std::vector<Waypoint> pts;
+  PathBuilder(double x, double y) { pts.push_back({0.0, x, y}); }
+  double t() const { return pts.back().t_s; }
+  std::size_t walk_to(double x, double y, double speed) {
+    const Waypoint& last = pts.back();
+    const double d = std::hypot(x - last.x, y - last.y);
+    pts.push_back({last.t_s + d / speed, x, y});
+    return pts.size() - 1;
+  }
+  void wait(double dt) {
+    const Waypoint last = pts.back();
+    pts.push_back({last.t_s + dt, last.x, last.y});
+  }
+  // Shifts the timeline so that waypoint i is reached at t_s.
+  void align(std::size_t i, double t_s) {
+    const double d = t_s - pts[i].t_s;
+    for (auto& p : pts) p.t_s += d;
+  }
+};
+
+PersonLook random_look(Rng& rng) {
+  PersonLook look;
+  look.height_m = static_cast<float>(rng.uniform(1.6, 1.92));
+  look.shirt_shade = static_cast<float>(rng.uniform(0.12, 0.85));
+  const double p = rng.uniform();
+  look.shirt_pattern = p < 0.35 ? 0 : (p < 0.55 ? 1 : (p < 0.7 ? 2 : 3));
+  look.trousers_shade = static_cast<float>(rng.uniform(0.08, 0.4));
+  look.skin_shade = static_cast<float>(rng.uniform(0.35, 0.75));
+  look.hair_shade = static_cast<float>(rng.uniform(0.05, 0.4));
+  look.helmet = rng.chance(0.3);
+  return look;
+}
+
+Actor make_actor(int id, ActorClass cls, const std::string& role, std::vector<Waypoint> path, Rng& rng) {
+  Actor a;
+  a.id = id;
+  a.cls = cls;
+  a.role = role;
+  a.path = std::move(path);
+  a.seed = rng.next_u32();
+  if (cls == ActorClass::kPerson) a.look = random_look(rng);
+  // Facing the first direction of travel until then.
+  a.initial_yaw_rad = 0;
+  for (std::size_t i = 0; i + 1 < a.path.size(); ++i) {
+    const double dx = a.path[i + 1].x - a.path[i].x, dy = a.path[i + 1].y - a.path[i].y;
+    if (std::hypot(dx, dy) > 1e-3) {
+      a.initial_yaw_rad = std::atan2(dy, dx);
+      break;
+    }
+  }
+  prepare_actor(a);
+  return a;
+}
+
+class ScenarioBuilder {
+ public:
+  ScenarioBuilder(Scenario& sc, const Warehouse& w) : sc_(sc), w_(w), L_(w.layout), rng_(sc.seed, RngStream::kActors) {}
+
+  Rng& rng() { return rng_; }
+
+  void agv_stationary(double x, double y, double yaw) {
+    sc_.agv.stationary = true;
+    sc_.agv.x = x;
+    sc_.agv.y = y;
+    sc_.agv.yaw_rad = yaw;
+  }
+
+  void agv_line(double offset) {
+    AgvMotion& m = sc_.agv;
+    m.stationary = false;
+    const double x0 = L_.line_x_start + offset;
+    m.route.add_line(x0, L_.line_y, x0 + L_.line_length_m, L_.line_y);
+    m.s_start = 0;
+    m.profile.distance_m = L_.line_length_m;
+    finish_profile();
+  }
+
+  // Counter-clockwise rounded rectangle, starting 1 m into the south leg (+ offset), one full lap.
+  void agv_loop(double offset) {
+    AgvMotion& m = sc_.agv;
+    m.stationary = false;
+    const double x0 = L_.loop_x0, y0 = L_.loop_y0, x1 = L_.loop_x1, y1 = L_.loop_y1, r = L_.loop_corner_radius_m;
+    RoutePath& p = m.route;
+    p.add_line(x0 + r, y0, x1 - r, y0);
+    p.add_arc(x1 - r, y0 + r, r, -0.5 * kPi, 0.5 * kPi);
+    p.add_line(x1, y0 + r, x1, y1 - r);
+    p.add_arc(x1 - r, y1 - r, r, 0.0, 0.5 * kPi);
+    p.add_line(x1 - r, y1, x0 + r, y1);
+    p.add_arc(x0 + r, y1 - r, r, 0.5 * kPi, 0.5 * kPi);
+    p.add_line(x0, y1 - r, x0, y0 + r);
+    p.add_arc(x0 + r, y0 + r, r, kPi, 0.5 * kPi);
+    p.set_closed(true);
+    m.s_start = std::fmod(1.0 + offset, p.length());
+    if (m.s_start < 0) m.s_start += p.length();
+    m.profile.distance_m = p.length();
+    finish_profile();
+  }
+
+  // Arc length along the loop route of the points where the cross-aisle crosses the south and north legs.
+  double loop_s_south_crossing() const { return L_.loop_cross_x - (L_.loop_x0 + L_.loop_corner_radius_m); }
+  double loop_s_north_crossing() const {
+    const double r = L_.loop_corner_radius_m;
+    return (L_.loop_x1 - L_.loop_x0 - 2 * r) + 0.5 * kPi * r + (L_.loop_y1 - L_.loop_y0 - 2 * r) + 0.5 * kPi * r +
+           (L_.loop_x1 - r - L_.loop_cross_x);
+  }
+
+  // Scenario time at which the AGV has travelled `distance` from its start (clamped to the motion).
+  double time_at_distance(double distance) const {
+    const SpeedProfile& p = sc_.agv.profile;
+    if (distance <= 0) return p.hold_start_s;
+    if (distance >= p.distance_m) return p.duration_s - p.hold_end_s;
+    double lo = 0, hi = p.duration_s;
+    for (int i = 0; i < 60; ++i) {
+      const double mid = 0.5 * (lo + hi);
+      (p.distance_at(mid) < distance ? lo : hi) = mid;
+    }
+    return 0.5 * (lo + hi);
+  }
+  // Distance along the route from the AGV's start to arc length s_target (ahead, wrapped on the loop).
+  double distance_ahead(double s_target) const {
+    const RoutePath& r = sc_.agv.route;
+    double d = s_target - sc_.agv.s_start;
+    if (r.closed()) {
+      d = std::fmod(d, r.length());
+      if (d < 0) d += r.length();
+    }
+    return d;
+  }
+
+  // Worst clearance margin of `cand` against the camera and the actors placed so far (>= 0: acceptable).
+  double margin(const Actor& cand) const {
+    double worst = 1e9;
+    for (double t = 0; t <= sc_.nominal_duration_s + 1e-9; t += kCheckStepS) {
+      const ActorState st = actor_state(cand, t);
+      const std::vector<Circle> circles = actor_footprint(cand.cls, st);
+      double cx, cy, cyaw, cs;
+      sc_.agv.planar_pose(t, cx, cy, cyaw, cs);
+      for (const Circle& c : circles) {
+        worst = std::min(worst, std::hypot(c.x - cx, c.y - cy) - c.r - kCameraClearanceM);
+        for (const Actor& other : sc_.actors) {
+          const ActorState so = actor_state(other, t);
+          for (const Circle& o : actor_footprint(other.cls, so))
+            worst = std::min(worst, std::hypot(c.x - o.x, c.y - o.y) - c.r - o.r - kActorClearanceM);
+        }
+      }
+    }
+    return worst;
+  }
+
+  // Tries candidates 0..n-1 (make(i) builds one) and keeps the first with a non-negative margin, else the best.
+  void add_best(int n, const std::function<Actor(int)>& make) {
+    Actor best;
+    double best_margin = -1e18;
+    for (int i = 0; i < n; ++i) {
+      Actor a = make(i);
+      const double m = margin(a);
+      if (m > best_margin) {
+        best_margin = m;
+        best = a;
+      }
+      if (m >= 0) break;
+    }
+    if (best_margin < 0)
+      spdlog::warn("scenario {}: actor {} ({}) comes {:.2f} m closer than the clearance it should keep", sc_.name,
+                   best.id, best.role, -best_margin);
+    sc_.actors.push_back(best);
+  }
+
+  // Person crossing the main aisle through the cross-aisle at gap_x, at the aisle centre at t_cross.
+  // side: +1 / -1 = comes from and leaves towards +x / -x along the service corridors (0: random).
+  Actor line_crossing_person(int id, double gap_x, bool north_to_south, double t_cross, Rng& r, int side = 0) {
+    const double speed = r.uniform(1.1, 1.35);
+    const double j = r.uniform(-0.5, 0.5);
+    const double a = (side != 0 ? side : (r.chance(0.5) ? 1 : -1)) * r.uniform(2.0, 4.0);
+    const double b = (side != 0 ? side : (r.chance(0.5) ? 1 : -1)) * r.uniform(2.0, 4.0);
+    const double y_from = north_to_south ? L_.north_corridor_y : L_.south_corridor_y;
+    const double y_to = north_to_south ? L_.south_corridor_y : L_.north_corridor_y;
+    PathBuilder pb(gap_x + j + a, y_from);
+    pb.walk_to(gap_x + j, y_from, speed);
+    const std::size_t mid = pb.walk_to(gap_x + j, L_.line_y, speed);
+    pb.walk_to(gap_x + j, y_to, speed);
+    pb.walk_to(gap_x + j + b, y_to, speed);
+    pb.align(mid, t_cross);
+    return make_actor(id, ActorClass::kPerson, north_to_south ? "crosses the aisle southwards" : "crosses the aisle northwards",
+                      pb.pts, r);
+  }
+
+  // Person walking through the loop's cross-aisle (crossing both legs); at leg_y at t_cross.
+  Actor loop_crossing_person(int id, bool north_to_south, double leg_y, double t_cross, Rng& r) {
+    const double speed = r.uniform(1.1, 1.3);
+    const double xc = L_.loop_cross_x + r.uniform(-0.25, 0.25);
+    const double a = (r.chance(0.5) ? 1 : -1) * r.uniform(1.5, 3.5);
+    const double b = (r.chance(0.5) ? 1 : -1) * r.uniform(1.5, 3.5);
+    const double y_n = L_.loop_north_area_y, y_s = L_.north_corridor_y;
+    const double y_from = north_to_south ? y_n : y_s, y_to = north_to_south ? y_s : y_n;
+    PathBuilder pb(xc + a, y_from);
+    pb.walk_to(xc, y_from, speed);
+    const std::size_t mid = pb.walk_to(xc, leg_y, speed);
+    pb.walk_to(xc, y_to, speed);
+    pb.walk_to(xc + b, y_to, speed);
+    pb.align(mid, t_cross);
+    return make_actor(id, ActorClass::kPerson, "crosses the loop through the cross-aisle", pb.pts, r);
+  }
+
+  void finalize_clearances() {
+    double cam = 1e9, act = 1e9;
+    for (double t = 0; t <= sc_.nominal_duration_s + 1e-9; t += kCheckStepS) {
+      double cx, cy, cyaw, cs;
+      sc_.agv.planar_pose(t, cx, cy, cyaw, cs);
+      std::vector<std::vector<Circle>> fp;
+      for (const Actor& a : sc_.actors) fp.push_back(actor_footprint(a.cls, actor_state(a, t)));
+      for (std::size_t i = 0; i < fp.size(); ++i)
+        for (const Circle& c : fp[i]) {
+          cam = std::min(cam, std::hypot(c.x - cx, c.y - cy) - c.r);
+          for (std::size_t j = i + 1; j < fp.size(); ++j)
+            for (const Circle& o : fp[j]) act = std::min(act, std::hypot(c.x - o.x, c.y - o.y) - c.r - o.r);
+        }
+    }
+    sc_.min_camera_clearance_m = cam;
+    sc_.min_actor_clearance_m = act;
+  }
+
+ private:
+  void finish_profile() {
+    SpeedProfile& p = sc_.agv.profile;
+    p.duration_s = sc_.nominal_duration_s;
+    p.hold_start_s = 0.5;
+    p.hold_end_s = 0.5;
+    p.accel_mps2 = 0.4;
+    p.solve();
+  }
+
+  Scenario& sc_;
+  const Warehouse& w_;
+  const WarehouseLayout& L_;
+  Rng rng_;
+};
+
+}  // namespace
+
+Scenario make_scenario(const ScenarioOptions& options, const Warehouse& warehouse, double rate_hz) {
+  options.validate(warehouse.layout);
+  const ScenarioInfo& info = find_scenario(options.name);
+  Scenario sc;
+  sc.name = info.name;
+  sc.description = info.description;
+  sc.seed = options.seed;
+  sc.layout_seed = options.effective_layout_seed();
+  sc.start_offset_m = options.start_offset_m;
+  sc.rate_hz = rate_hz;
+  sc.nominal_duration_s = info.nominal_duration_s;
+  sc.frames = options.frames > 0 ? options.frames : std::max(1, static_cast<int>(std::lround(info.nominal_duration_s * rate_hz)));
+  sc.time_scale = (sc.frames / rate_hz) / sc.nominal_duration_s;
+
+  const WarehouseLayout& L = warehouse.layout;
+  ScenarioBuilder b(sc, warehouse);
+  Rng& rng = b.rng();
+  const double T = sc.nominal_duration_s;
+  const std::string& name = sc.name;
+
+  if (name == "scene1") {
+    const double x_agv = L.stage_x + options.start_offset_m;
+    b.agv_stationary(x_agv, L.stage_y, 0.5 * kPi);
+    Rng r = rng.fork(1);
+    // Half width of the view at depth d (fx / (width / 2) = 460 / 376 for the nominal camera), plus a body.
+    auto edge_x = [&](double depth) { return x_agv - depth * (376.0 / 460.0) - 0.15; };
+    const double depth_in = r.uniform(4.4, 6.0);
+    const double depth_out = depth_in + r.uniform(1.5, 3.0);
+    const double speed = r.uniform(1.1, 1.3);
+    const double t_enter = T * (0.25 + r.uniform(-0.015, 0.015));
+    const double t_turn = T * (0.45 + r.uniform(-0.015, 0.015));
+    const double t_back = t_turn + r.uniform(1.5, 2.5);
+    const double t_leave = T * (0.85 + r.uniform(-0.015, 0.015));
+    const double x_enter = edge_x(depth_in);
+    const double x_turn = x_enter + speed * (t_turn - t_enter);
+    const double x_exit = edge_x(depth_out);
+    const double y_in = L.stage_y + depth_in, y_out = std::min(20.4, L.stage_y + depth_out);
+    std::vector<Waypoint> path;
+    path.push_back({t_enter - 3.0, x_enter - 3.0 * speed, y_in});
+    path.push_back({t_enter, x_enter, y_in});
+    path.push_back({t_turn, x_turn, y_in});
+    path.push_back({t_back, x_turn, y_in});
+    path.push_back({t_leave, x_exit, y_out});
+    const double dx = x_exit - x_turn, dy = y_out - y_in, len = std::hypot(dx, dy);
+    const double back_speed = len / (t_leave - t_back);
+    path.push_back({t_leave + 2.5, x_exit + dx / len * back_speed * 2.5, std::min(20.6, y_out + dy / len * back_speed * 2.5)});
+    sc.actors.push_back(make_actor(1, ActorClass::kPerson, "enters from the left, stands, walks back", path, r));
+  } else if (name == "scene2" || name == "scene3") {
+    b.agv_line(options.start_offset_m);
+    const double x_start = L.line_x_start + options.start_offset_m;
+    std::vector<double> gaps;
+    for (double g : L.line_cross_aisles_x)
+      if (g - x_start >= 4.5) gaps.push_back(g);
+    if (gaps.empty()) gaps.push_back(L.line_cross_aisles_x.back());
+    auto crossing_time = [&](double gap_x, double ahead_m) {
+      return b.time_at_distance(gap_x - ahead_m - x_start);
+    };
+    if (name == "scene2") {
+      Rng r = rng.fork(2);
+      const double gap_x = gaps[gaps.size() / 2];
+      const bool north_to_south = r.chance(0.5);
+      b.add_best(16, [&](int i) {
+        Rng ri = r.fork(static_cast<uint64_t>(i));
+        const double ahead = 4.5 + 0.25 * i + ri.uniform(0.0, 1.5);
+        return b.line_crossing_person(1, gap_x, north_to_south, crossing_time(gap_x, ahead), ri);
+      });
+    } else {
+      // Person 2 first: stands in the aisle ahead, then walks ahead of the AGV and turns off at the last gap.
+      {
+        Rng r = rng.fork(3);
+        b.add_best(12, [&](int i) {
+          Rng ri = r.fork(static_cast<uint64_t>(i));
+          const double speed = ri.uniform(1.05, 1.25);
+          const double y = L.line_y + ri.uniform(0.3, 0.7);
+          const double exit_x = gaps.back() + ri.uniform(-0.4, 0.4);
+          // Standing in the aisle ahead, but not in the mouth of a cross-aisle that others walk through.
+          double x0 = x_start + 5.0 + 0.3 * i + ri.uniform(0.0, 0.5);
+          for (double g : gaps)
+            if (std::fabs(x0 - g) < 1.9) x0 = g + 1.9;
+          PathBuilder pb(x0, y);
+          pb.pts.front().t_s = 1.2 + ri.uniform(0.0, 1.0);
+          pb.walk_to(exit_x - 0.6, y, speed);
+          pb.walk_to(exit_x, y + 0.6, speed);
+          pb.walk_to(exit_x, L.north_corridor_y, speed);
+          pb.walk_to(exit_x + ri.uniform(2.0, 4.0), L.north_corridor_y, speed);
+          return make_actor(2, ActorClass::kPerson, "stands in the aisle, then walks ahead and turns off", pb.pts, ri);
+        });
+      }
+      {  // Person 1 crosses the first gap early.
+        Rng r = rng.fork(4);
+        const bool north_to_south = r.chance(0.5);
+        b.add_best(48, [&](int i) {
+          Rng ri = r.fork(static_cast<uint64_t>(i));
+          const double ahead = 4.0 + 0.25 * i + ri.uniform(0.0, 0.5);
+          return b.line_crossing_person(1, gaps.front(), north_to_south, crossing_time(gaps.front(), ahead), ri, +1);
+        });
+      }
+      {  // Person 3 crosses while person 2 is still ahead: a gap of its own when there are three, else the
+         // first one (after person 1); never the gap person 2 turns into.
+        Rng r = rng.fork(5);
+        const double gap_x = gaps.size() > 2 ? gaps[1] : gaps.front();
+        const bool north_to_south = r.chance(0.5);
+        b.add_best(64, [&](int i) {
+          Rng ri = r.fork(static_cast<uint64_t>(i));
+          const double ahead = 4.5 + 0.25 * (i / 2) + ri.uniform(0.0, 0.5);
+          return b.line_crossing_person(3, gap_x, (i % 2 == 0) == north_to_south, crossing_time(gap_x, ahead), ri,
+                                        -1);
+        });
+      }
+      {  // Forklift: parked facing the aisle beyond the racks, then drives across it and away.
+        Rng r = rng.fork(6);
+        b.add_best(20, [&](int i) {
+          Rng ri = r.fork(static_cast<uint64_t>(i));
+          const double x = L.line_exit_x + ri.uniform(-0.3, 0.3);
+          // Forks first (south); it stops in the gap of the south row with the fork tips short of the wall.
+          PathBuilder pb(x, 7.9);
+          pb.pts.front().t_s = T * (0.3 + 0.025 * i) + ri.uniform(0.0, 0.5);
+          pb.walk_to(x, 2.45, ri.uniform(1.2, 1.6));
+          return make_actor(4, ActorClass::kForklift, "parked, drives across the aisle ahead, parks", pb.pts, ri);
+        });
+      }
+    }
+  } else {  // loops
+    b.agv_loop(options.start_offset_m);
+    if (name == "scene4" || name == "scene5") {
+      const double len = sc.agv.route.length();
+      const double d_south = b.distance_ahead(b.loop_s_south_crossing());
+      const double d_north = b.distance_ahead(b.loop_s_north_crossing());
+      struct Crossing {
+        double distance;
+        double leg_y;
+        bool heading_east;
+      };
+      std::vector<Crossing> crossings = {{d_south, L.loop_y0, true}, {d_north, L.loop_y1, false}};
+      // Prefer crossings reached between 20 % and 85 % of the lap.
+      std::vector<Crossing> good;
+      for (const auto& c : crossings)
+        if (c.distance > 0.2 * len && c.distance < 0.85 * len) good.push_back(c);
+      if (good.empty()) good = crossings;
+      Rng r = rng.fork(7);
+      const Crossing chosen = good[static_cast<std::size_t>(r.uniform_int(0, static_cast<int>(good.size()) - 1))];
+
+      if (name == "scene5") {
+        // Person 1 walks ahead of the AGV along the loop for the whole lap.
+        Rng ra = rng.fork(8);
+        const double lateral = ra.uniform(0.25, 0.45);
+        const double gap0 = ra.uniform(3.3, 3.9), amp = ra.uniform(0.3, 0.6), period = ra.uniform(9.0, 14.0);
+        const double phase = ra.uniform(0.0, 2 * kPi);
+        std::vector<Waypoint> path;
+        for (double t = 0; t <= T + 1e-9; t += 0.1) {
+          double x, y, yaw, s;
+          sc.agv.planar_pose(t, x, y, yaw, s);
+          // Closer behind a corner so that the person stays in view while the AGV turns after them.
+          double hx, hy, h_now, h_ahead;
+          sc.agv.route.sample(sc.agv.s_start + s, hx, hy, h_now);
+          sc.agv.route.sample(sc.agv.s_start + s + 3.0, hx, hy, h_ahead);
+          const double corner = std::min(1.0, std::fabs(wrap_angle(h_ahead - h_now)) / (0.5 * kPi));
+          const double gap = (gap0 + amp * std::sin(2 * kPi * t / period + phase)) * (1.0 - 0.15 * corner);
+          double px, py, heading;
+          sc.agv.route.sample(sc.agv.s_start + s + gap, px, py, heading);
+          path.push_back({t, px - lateral * std::sin(heading), py + lateral * std::cos(heading)});
+        }
+        sc.actors.push_back(make_actor(1, ActorClass::kPerson, "walks ahead of the AGV around the loop", path, ra));
+      }
+      // A person crossing through the loop's cross-aisle in front of the AGV.
+      {
+        const int id = name == "scene5" ? 2 : 1;
+        const bool north_to_south = r.chance(0.5);
+        b.add_best(24, [&](int i) {
+          Rng ri = r.fork(static_cast<uint64_t>(i));
+          const double ahead = (name == "scene5" ? 6.0 : 4.5) + 0.35 * i + ri.uniform(0.0, 1.0);
+          return b.loop_crossing_person(id, north_to_south, chosen.leg_y, b.time_at_distance(chosen.distance - ahead), ri);
+        });
+      }
+      if (name == "scene4") {  // a forklift parked in the east lane (never moves)
+        Rng rf = rng.fork(9);
+        std::vector<Waypoint> path = {{0.0, L.east_lane_x + rf.uniform(-0.1, 0.1), 11.3 + rf.uniform(0.0, 1.0)}};
+        Actor a = make_actor(2, ActorClass::kForklift, "parked (never moves)", path, rf);
+        a.initial_yaw_rad = 0.5 * kPi;
+        sc.actors.push_back(a);
+      } else {
+        // Person 3: stands picking at the pallets along the east wall, then walks away north and west.
+        Rng rp = rng.fork(10);
+        b.add_best(20, [&](int i) {
+          Rng ri = rp.fork(static_cast<uint64_t>(i));
+          const double y = ri.uniform(13.5, 18.5);
+          PathBuilder pb(37.85, y);
+          pb.pts.front().t_s = T * (0.45 + 0.02 * i) + ri.uniform(0.0, 1.0);
+          const double speed = ri.uniform(1.1, 1.3);
+          pb.walk_to(37.85, L.loop_north_area_y + 0.3, speed);
+          pb.walk_to(27.5 + ri.uniform(0.0, 2.0), L.loop_north_area_y + 0.3, speed);
+          Actor a = make_actor(3, ActorClass::kPerson, "stands picking, then walks away", pb.pts, ri);
+          a.initial_yaw_rad = 0.0;  // facing the pallets at the east wall while standing
+          return a;
+        });
+        // Another AGV: parked at the south end of the east lane, drives north, parks again.
+        Rng rv = rng.fork(11);
+        b.add_best(24, [&](int i) {
+          Rng ri = rv.fork(static_cast<uint64_t>(i));
+          PathBuilder pb(36.55, 9.6);
+          pb.pts.front().t_s = T * (0.1 + 0.03 * i) + ri.uniform(0.0, 1.0);
+          pb.walk_to(36.55, L.loop_north_area_y - 0.2, ri.uniform(0.9, 1.1));
+          return make_actor(4, ActorClass::kAgv, "parked, drives north along the east lane, parks", pb.pts, ri);
+        });
+      }
+    }
+  }
+  b.finalize_clearances();
+  return sc;
+}
+
+}  // namespace agvslam::sim

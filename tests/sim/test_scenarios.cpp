@@ -1,0 +1,236 @@
+// Scenario timelines and ground-truth trajectories (no rendering).
+#include <gtest/gtest.h>
+
+#include <cmath>
+
+#include "agvslam/sim/simulator.h"
+
+namespace agvslam::sim {
+namespace {
+
+constexpr double kPi = 3.14159265358979323846;
+
+Simulator make_sim(const std::string& name, uint64_t seed, int frames = 0, double scale = 0.25) {
+  ScenarioOptions o;
+  o.name = name;
+  o.seed = seed;
+  o.frames = frames;
+  return Simulator(SimConfig{}.scaled(scale), o);
+}
+
+// Pixel of a map-frame point in the left camera of a frame (nullopt when behind the camera).
+std::optional<Eigen::Vector2d> project(const Simulator& s, int frame, const Eigen::Vector3d& p_map) {
+  const Eigen::Vector3d p_c = s.T_map_cam(frame).inverse() * p_map;
+  if (p_c.z() < 0.1) return std::nullopt;
+  const CameraIntrinsics cam = s.intrinsics();
+  return Eigen::Vector2d(cam.fx * p_c.x() / p_c.z() + cam.cx, cam.fy * p_c.y() / p_c.z() + cam.cy);
+}
+
+bool in_image(const Simulator& s, const std::optional<Eigen::Vector2d>& uv, double margin = 0) {
+  const CameraIntrinsics cam = s.intrinsics();
+  return uv && uv->x() >= margin && uv->x() <= cam.width - 1 - margin && uv->y() >= 0 && uv->y() <= cam.height - 1;
+}
+
+TEST(Scenario, DefaultFrameCountsAndSpeeds) {
+  struct Expect {
+    const char* name;
+    int frames;
+    double min_speed, max_speed, length;
+  };
+  const Expect expected[] = {{"static", 700, 0.8, 1.0, 28.68}, {"scene1", 400, 0, 0, 0},
+                             {"scene2", 400, 0.6, 1.0, 13.6},  {"scene3", 400, 0.6, 1.0, 13.6},
+                             {"scene4", 700, 0.8, 1.0, 28.68}, {"scene5", 700, 0.8, 1.0, 28.68}};
+  for (const auto& e : expected) {
+    const Simulator s = make_sim(e.name, 1);
+    EXPECT_EQ(s.frame_count(), e.frames) << e.name;
+    EXPECT_GE(s.scenario().agv_speed_mps(), e.min_speed) << e.name;
+    EXPECT_LE(s.scenario().agv_speed_mps(), e.max_speed) << e.name;
+    EXPECT_NEAR(s.scenario().agv_path_length_m(), e.length, 0.01) << e.name;
+  }
+  // --frames plays the same timeline faster or slower.
+  const Simulator half = make_sim("scene2", 1, 200);
+  EXPECT_NEAR(half.scenario().agv_speed_mps(), 2.0 * make_sim("scene2", 1).scenario().agv_speed_mps(), 1e-9);
+}
+
+TEST(Scenario, PosesStartAtIdentityAndFollowTheRoutes) {
+  for (const char* name : {"scene1", "scene2", "scene4"}) {
+    const Simulator s = make_sim(name, 5);
+    const Trajectory gt = s.ground_truth();
+    ASSERT_EQ(gt.size(), static_cast<std::size_t>(s.frame_count()));
+    EXPECT_TRUE(gt.front().T_w_c.isApprox(SE3d::Identity(), 1e-12)) << name;
+    for (std::size_t i = 0; i < gt.size(); ++i) {
+      ASSERT_EQ(gt[i].t_ns, static_cast<int64_t>(std::llround(i * 0.05 * 1e9))) << name;
+      // The camera stays at its height: world y (down) of the optical centre is constant.
+      EXPECT_NEAR(gt[i].T_w_c.translation().y(), 0.0, 1e-9) << name << " frame " << i;
+      // Vibration is a few tenths of a degree: the optical axis stays horizontal within 1 degree.
+      const Eigen::Vector3d z_axis = gt[i].T_w_c.linear().col(2);
+      EXPECT_LT(std::fabs(z_axis.y()), std::sin(1.0 * kPi / 180)) << name << " frame " << i;
+    }
+    const Eigen::Vector3d end = gt.back().T_w_c.translation();
+    if (std::string(name) == "scene1") {
+      for (const auto& p : gt) EXPECT_TRUE(p.T_w_c.isApprox(SE3d::Identity(), 1e-12));
+    } else if (std::string(name) == "scene2") {
+      EXPECT_NEAR(end.z(), 13.6, 1e-6);  // straight ahead
+      EXPECT_NEAR(end.x(), 0.0, 1e-6);
+    } else {
+      // The loop returns exactly to its start (level, same heading) so a loop closer can close it.
+      EXPECT_LT(end.norm(), 1e-6);
+      EXPECT_LT(rotation_angle_rad(gt.back().T_w_c), 1e-6);
+      double x_min = 1e9, x_max = -1e9, z_min = 1e9, z_max = -1e9;
+      for (const auto& p : gt) {
+        x_min = std::min(x_min, p.T_w_c.translation().x());
+        x_max = std::max(x_max, p.T_w_c.translation().x());
+        z_min = std::min(z_min, p.T_w_c.translation().z());
+        z_max = std::max(z_max, p.T_w_c.translation().z());
+      }
+      EXPECT_NEAR(z_max - z_min, 8.8, 0.02);  // along the first leg
+      EXPECT_NEAR(x_max - x_min, 6.4, 0.02);
+      EXPECT_LT(x_max, 0.01);  // counter-clockwise seen from above: the loop lies to the camera's left (-x)
+    }
+  }
+}
+
+TEST(Scenario, ActorsKeepClearOfTheCameraOnManySeeds) {
+  for (const char* name : {"scene1", "scene2", "scene3", "scene4", "scene5"}) {
+    for (uint64_t seed : {1u, 2u, 3u, 17u}) {
+      ScenarioOptions o;
+      o.name = name;
+      o.seed = seed;
+      const Warehouse w = generate_warehouse(seed);
+      const Scenario sc = make_scenario(o, w, 20.0);
+      EXPECT_GE(sc.min_camera_clearance_m, 1.45) << name << " seed " << seed;
+      EXPECT_GE(sc.min_actor_clearance_m, 0.2) << name << " seed " << seed;
+    }
+  }
+  // The loop start can be moved (seed-independent layout, different start).
+  ScenarioOptions o;
+  o.name = "scene5";
+  o.seed = 4;
+  for (double offset : {5.0, 12.5, 21.0}) {
+    o.start_offset_m = offset;
+    const Scenario sc = make_scenario(o, generate_warehouse(9), 20.0);
+    EXPECT_GE(sc.min_camera_clearance_m, 1.45) << "offset " << offset;
+  }
+}
+
+TEST(Scenario, Scene1PersonEntersTurnsStandsAndLeaves) {
+  for (uint64_t seed : {1u, 2u, 3u}) {
+    const Simulator s = make_sim("scene1", seed);
+    const Actor& person = s.scenario().actors.at(0);
+    const int n = s.frame_count();
+    int first = -1, last = -1, stand_begin = -1, stand_end = -1;
+    for (int k = 0; k < n; ++k) {
+      const ActorState st = actor_state(person, s.scenario().scenario_time(k));
+      const auto uv = project(s, k, Eigen::Vector3d(st.x, st.y, 1.0));
+      if (in_image(s, uv)) {
+        if (first < 0) first = k;
+        last = k;
+        if (!st.moving) {
+          if (stand_begin < 0) stand_begin = k;
+          stand_end = k;
+        }
+      }
+    }
+    ASSERT_GE(first, 0);
+    EXPECT_NEAR(first / static_cast<double>(n), 0.25, 0.04) << "seed " << seed;
+    EXPECT_NEAR(last / static_cast<double>(n), 0.85, 0.04) << "seed " << seed;
+    ASSERT_GE(stand_begin, 0) << "the person must stand still in view for a while";
+    EXPECT_NEAR(stand_begin / static_cast<double>(n), 0.45, 0.04) << "seed " << seed;
+    EXPECT_GE(stand_end - stand_begin, 20) << "seed " << seed;  // >= 1 s standing
+    // Entering from the left: the first visible position is on the left half of the image.
+    const ActorState st = actor_state(person, s.scenario().scenario_time(first));
+    EXPECT_LT(project(s, first, Eigen::Vector3d(st.x, st.y, 1.0))->x(), s.intrinsics().cx);
+  }
+}
+
+TEST(Scenario, Scene5LeaderWalksAheadInViewAndOthersStandStillAtTimes) {
+  const Simulator s = make_sim("scene5", 7);
+  const auto& actors = s.scenario().actors;
+  ASSERT_EQ(actors.size(), 4u);
+  const int n = s.frame_count();
+  int in_view = 0;
+  double min_gap = 1e9, max_gap = 0;
+  for (int k = 0; k < n; ++k) {
+    const double t = s.scenario().scenario_time(k);
+    const ActorState st = actor_state(actors[0], t);
+    const Eigen::Vector3d p_c = s.T_map_cam(k).inverse() * Eigen::Vector3d(st.x, st.y, 1.2);
+    if (in_image(s, project(s, k, Eigen::Vector3d(st.x, st.y, 1.2)))) ++in_view;
+    const double gap = std::hypot(p_c.x(), p_c.z());
+    min_gap = std::min(min_gap, gap);
+    max_gap = std::max(max_gap, gap);
+  }
+  // Out of view only briefly while the AGV turns the 1 m corners after the person.
+  EXPECT_GT(in_view, 0.7 * n) << "the leading person should be in view most of the loop";
+  EXPECT_GT(min_gap, 1.8);
+  EXPECT_LT(max_gap, 6.0);
+  // Person 3 stands (not moving) at first, then walks; the other AGV is parked, drives, parks.
+  int p3_still = 0, p3_moving = 0, agv_still = 0, agv_moving = 0;
+  for (int k = 0; k < n; ++k) {
+    const double t = s.scenario().scenario_time(k);
+    (actor_state(actors[2], t).moving ? p3_moving : p3_still)++;
+    (actor_state(actors[3], t).moving ? agv_moving : agv_still)++;
+  }
+  EXPECT_GT(p3_still, 100);
+  EXPECT_GT(p3_moving, 100);
+  EXPECT_GT(agv_still, 100);
+  EXPECT_GT(agv_moving, 100);
+  EXPECT_EQ(actors[3].cls, ActorClass::kAgv);
+}
+
+TEST(Scenario, SeedsChangeActorsAndLayoutSeedKeepsTheWarehouse) {
+  ScenarioOptions a;
+  a.name = "scene3";
+  a.seed = 1;
+  ScenarioOptions b = a;
+  b.seed = 2;
+  ScenarioOptions c = b;
+  c.layout_seed = 1;
+  const Warehouse wa = generate_warehouse(a.effective_layout_seed());
+  const Warehouse wb = generate_warehouse(b.effective_layout_seed());
+  const Warehouse wc = generate_warehouse(c.effective_layout_seed());
+  auto same_boxes = [](const Warehouse& x, const Warehouse& y) {
+    if (x.boxes.size() != y.boxes.size()) return false;
+    for (std::size_t i = 0; i < x.boxes.size(); ++i)
+      if (x.boxes[i].lo.x != y.boxes[i].lo.x || x.boxes[i].hi.z != y.boxes[i].hi.z ||
+          x.boxes[i].seed != y.boxes[i].seed || x.boxes[i].material != y.boxes[i].material)
+        return false;
+    return true;
+  };
+  EXPECT_FALSE(same_boxes(wa, wb));
+  EXPECT_TRUE(same_boxes(wa, wc));
+  const Scenario sa = make_scenario(a, wa, 20.0), sc = make_scenario(c, wc, 20.0);
+  ASSERT_EQ(sa.actors.size(), sc.actors.size());
+  bool any_different = false;
+  for (std::size_t i = 0; i < sa.actors.size(); ++i) {
+    const ActorState x = actor_state(sa.actors[i], 8.0), y = actor_state(sc.actors[i], 8.0);
+    if (std::hypot(x.x - y.x, x.y - y.y) > 0.05 || sa.actors[i].look.height_m != sc.actors[i].look.height_m)
+      any_different = true;
+  }
+  EXPECT_TRUE(any_different) << "a different --seed must change the people";
+}
+
+TEST(Actors, StandingStillIsNotMovingAndLimbsRest) {
+  Actor a;
+  a.cls = ActorClass::kPerson;
+  a.path = {{0.0, 0.0, 0.0}, {2.0, 2.4, 0.0}, {4.0, 2.4, 0.0}, {6.0, 2.4, 2.4}};
+  prepare_actor(a);
+  const ActorState walking = actor_state(a, 1.0);
+  EXPECT_TRUE(walking.moving);
+  EXPECT_NEAR(walking.speed_mps, 1.2, 1e-9);
+  EXPECT_NEAR(walking.x, 1.2, 1e-9);
+  const ActorState standing = actor_state(a, 3.0);
+  EXPECT_FALSE(standing.moving);
+  EXPECT_EQ(standing.gait_amplitude, 0.0);
+  EXPECT_NEAR(standing.yaw_rad, 0.0, 1e-9);  // keeps facing where it walked
+  const ActorState turned = actor_state(a, 5.5);
+  EXPECT_NEAR(turned.yaw_rad, kPi / 2, 1e-6);
+  EXPECT_NEAR(actor_distance_m(a, 6.0), 4.8, 1e-9);
+  // The posed person has a head, a torso, two arms and two legs.
+  DynamicObject obj;
+  pose_actor(a, walking, obj);
+  EXPECT_GE(obj.primitives.size(), 12u);
+  EXPECT_NEAR(obj.hi.z, a.look.height_m, 0.05);
+}
+
+}  // namespace
+}  // namespace agvslam::sim
