@@ -1,0 +1,210 @@
+#include "agvslam/stereo/sparse_stereo.h"
+
+#include <algorithm>
+#include <cmath>
+#include <cstdio>
+#include <cstdlib>
+#include <limits>
+
+#include "agvslam/core/error.h"
+
+namespace agvslam::stereo {
+
+namespace {
+constexpr int32_t kQuarter = 4;  // intensities in quarter grey levels inside the matcher
+}  // namespace
+
+void SparseStereoConfig::validate(const std::string& source) const {
+  auto require = [&](bool ok, const char* field, const char* expected) {
+    if (!ok) throw InputError(source, std::string("sparse.") + field, expected);
+  };
+  require(half_window >= 1 && half_window <= 10, "half_window", "expected an integer in [1, 10] px");
+  require(min_disparity >= 0 && min_disparity <= 1024, "min_disparity", "expected an integer in [0, 1024] px");
+  require(num_disparities >= 4 && num_disparities <= 1024, "num_disparities", "expected an integer in [4, 1024]");
+  require(uniqueness_margin >= 0 && uniqueness_margin <= 2, "uniqueness_margin", "expected a number in [0, 2]");
+  require(max_mean_cost > 0 && max_mean_cost <= 255, "max_mean_cost", "expected a number in (0, 255] grey levels");
+  require(max_cost_ratio > 0 && max_cost_ratio <= 10, "max_cost_ratio", "expected a number in (0, 10]");
+  require(min_texture >= 0 && min_texture <= 128, "min_texture", "expected a number in [0, 128] grey levels");
+  require(lr_max_diff_px <= 16, "lr_max_diff_px", "expected at most 16 px (< 0 disables the check)");
+}
+
+std::string SparseStereoConfig::describe() const {
+  char buf[256];
+  std::snprintf(buf, sizeof(buf),
+                "sparse: ZSAD %dx%d, disparities [%d, %d] px, uniqueness margin %.2f, max mean cost %.1f DN and "
+                "%.2f x texture, min texture %.1f DN, lr-check %d px, subpixel %s",
+                2 * half_window + 1, 2 * half_window + 1, min_disparity, max_disparity(), uniqueness_margin,
+                max_mean_cost, max_cost_ratio, min_texture, lr_max_diff_px, subpixel ? "on" : "off");
+  return buf;
+}
+
+const char* to_string(SparseMatchStatus status) {
+  switch (status) {
+    case SparseMatchStatus::kOk: return "ok";
+    case SparseMatchStatus::kOutside: return "outside";
+    case SparseMatchStatus::kNoTexture: return "no texture";
+    case SparseMatchStatus::kNotUnique: return "not unique";
+    case SparseMatchStatus::kHighCost: return "high cost";
+    case SparseMatchStatus::kLeftRight: return "left-right check";
+    case SparseMatchStatus::kRange: return "out of range";
+  }
+  return "?";
+}
+
+SparseStereoMatcher::SparseStereoMatcher(const SparseStereoConfig& config) : config_(config) {
+  config_.validate("SparseStereoConfig");
+}
+
+SparseStereoMatcher::Search SparseStereoMatcher::search(const cv::Mat& ref, const cv::Mat& other, int x, int y,
+                                                        int direction, int d_lo, int d_hi) {
+  Search out;
+  const int r = config_.half_window;
+  const int side = 2 * r + 1;
+  const int n = side * side;
+  const int width = ref.cols;
+  // Candidate columns in `other`, clipped so that each window lies inside the image.
+  int c_lo = direction < 0 ? x - d_hi : x + d_lo;
+  int c_hi = direction < 0 ? x - d_lo : x + d_hi;
+  c_lo = std::max(c_lo, r);
+  c_hi = std::min(c_hi, width - 1 - r);
+  const int m = c_hi - c_lo + 1;
+  if (m < 3) return out;
+  out.first_column = c_lo;
+
+  // Zero-mean SAD in 16-bit integers, intensities in quarter grey levels (kQuarter): the reference window
+  // minus its mean, and each candidate window minus its own mean, |difference| accumulated per window row in
+  // 16 bits (at most 21 columns x 2040) and per window in 32 bits. The inner loops run over the candidates,
+  // contiguous in memory, so the compiler vectorises them (8 lanes with SSE2).
+  ref_zero_mean_.resize(static_cast<std::size_t>(n));
+  int32_t sum_ref = 0;
+  for (int j = 0; j < side; ++j) {
+    const uint8_t* row = ref.ptr<uint8_t>(y - r + j) + (x - r);
+    for (int i = 0; i < side; ++i) sum_ref += row[i];
+  }
+  const int32_t mean_ref_q = (kQuarter * sum_ref + n / 2) / n;
+  int64_t abs_dev = 0;
+  for (int j = 0; j < side; ++j) {
+    const uint8_t* row = ref.ptr<uint8_t>(y - r + j) + (x - r);
+    for (int i = 0; i < side; ++i) {
+      const int16_t v = static_cast<int16_t>(kQuarter * static_cast<int32_t>(row[i]) - mean_ref_q);
+      ref_zero_mean_[static_cast<std::size_t>(j * side + i)] = v;
+      abs_dev += std::abs(static_cast<int32_t>(v));
+    }
+  }
+  out.texture = static_cast<double>(abs_dev) / (static_cast<double>(kQuarter) * n);
+
+  // Window means of `other` for every candidate column (column sums, then a running sum).
+  const int strip_width = m + 2 * r;
+  const int strip_x0 = c_lo - r;
+  col_sums_.assign(static_cast<std::size_t>(strip_width), 0);
+  for (int j = 0; j < side; ++j) {
+    const uint8_t* row = other.ptr<uint8_t>(y - r + j) + strip_x0;
+    for (int k = 0; k < strip_width; ++k) col_sums_[static_cast<std::size_t>(k)] += row[k];
+  }
+  win_means_.resize(static_cast<std::size_t>(m));
+  int32_t running = 0;
+  for (int k = 0; k < side; ++k) running += col_sums_[static_cast<std::size_t>(k)];
+  win_means_[0] = static_cast<int16_t>((kQuarter * running + n / 2) / n);
+  for (int e = 1; e < m; ++e) {
+    running += col_sums_[static_cast<std::size_t>(e + side - 1)] - col_sums_[static_cast<std::size_t>(e - 1)];
+    win_means_[static_cast<std::size_t>(e)] = static_cast<int16_t>((kQuarter * running + n / 2) / n);
+  }
+
+  costs_.assign(static_cast<std::size_t>(m), 0);
+  strip_scaled_.resize(static_cast<std::size_t>(strip_width));
+  row_costs_.resize(static_cast<std::size_t>(m));
+  const int16_t* wm = win_means_.data();
+  int32_t* cs = costs_.data();
+  uint16_t* rc = row_costs_.data();
+  for (int j = 0; j < side; ++j) {
+    const uint8_t* row = other.ptr<uint8_t>(y - r + j) + strip_x0;
+    for (int k = 0; k < strip_width; ++k) {
+      strip_scaled_[static_cast<std::size_t>(k)] = static_cast<int16_t>(kQuarter * static_cast<int32_t>(row[k]));
+    }
+    std::fill(row_costs_.begin(), row_costs_.end(), static_cast<uint16_t>(0));
+    for (int i = 0; i < side; ++i) {
+      const int16_t lv = ref_zero_mean_[static_cast<std::size_t>(j * side + i)];
+      const int16_t* sv = strip_scaled_.data() + i;
+      for (int e = 0; e < m; ++e) {
+        const int16_t diff = static_cast<int16_t>(lv - sv[e] + wm[e]);
+        rc[e] = static_cast<uint16_t>(rc[e] + static_cast<uint16_t>(diff < 0 ? -diff : diff));
+      }
+    }
+    for (int e = 0; e < m; ++e) cs[e] += rc[e];
+  }
+
+  int best = 0;
+  for (int e = 1; e < m; ++e) {
+    if (costs_[static_cast<std::size_t>(e)] < costs_[static_cast<std::size_t>(best)]) best = e;
+  }
+  int64_t second = std::numeric_limits<int64_t>::max();
+  for (int e = 0; e < m; ++e) {
+    if (std::abs(e - best) <= 1) continue;
+    second = std::min<int64_t>(second, costs_[static_cast<std::size_t>(e)]);
+  }
+  out.ok = true;
+  out.best_column = c_lo + best;
+  out.best_cost = costs_[static_cast<std::size_t>(best)];
+  out.second_cost = second;
+  return out;
+}
+
+float SparseStereoMatcher::match(const cv::Mat& left, const cv::Mat& right, cv::Point2f point_px,
+                                 SparseMatchStatus* status) {
+  CV_Assert(left.type() == CV_8UC1 && right.type() == CV_8UC1 && left.size() == right.size());
+  auto fail = [&](SparseMatchStatus s) {
+    if (status) *status = s;
+    return 0.0f;
+  };
+  const int r = config_.half_window;
+  const int n = (2 * r + 1) * (2 * r + 1);
+  const int x = static_cast<int>(std::lround(point_px.x));
+  const int y = static_cast<int>(std::lround(point_px.y));
+  if (!(point_px.x == point_px.x) || x < r || y < r || x >= left.cols - r || y >= left.rows - r) {
+    return fail(SparseMatchStatus::kOutside);
+  }
+  const Search s = search(left, right, x, y, -1, config_.min_disparity, config_.max_disparity());
+  if (!s.ok) return fail(SparseMatchStatus::kOutside);
+  if (s.texture < config_.min_texture) return fail(SparseMatchStatus::kNoTexture);
+  const double mean_cost = static_cast<double>(s.best_cost) / (static_cast<double>(kQuarter) * n);
+  if (mean_cost > config_.max_mean_cost || mean_cost > config_.max_cost_ratio * s.texture) {
+    return fail(SparseMatchStatus::kHighCost);
+  }
+  if (s.second_cost != std::numeric_limits<int64_t>::max() &&
+      static_cast<double>(s.second_cost) <= static_cast<double>(s.best_cost) * (1.0 + config_.uniqueness_margin)) {
+    return fail(SparseMatchStatus::kNotUnique);
+  }
+  const int e = s.best_column - s.first_column;
+  const int m = static_cast<int>(costs_.size());
+  if (e <= 0 || e >= m - 1) return fail(SparseMatchStatus::kRange);  // minimum at the end of the range
+  const int d_int = x - s.best_column;
+  double d = d_int;
+  if (config_.subpixel) {
+    const double c_minus = static_cast<double>(costs_[static_cast<std::size_t>(e - 1)]);
+    const double c_zero = static_cast<double>(costs_[static_cast<std::size_t>(e)]);
+    const double c_plus = static_cast<double>(costs_[static_cast<std::size_t>(e + 1)]);
+    const double denom = c_minus - 2.0 * c_zero + c_plus;
+    if (denom > 0) {
+      const double offset = std::clamp(0.5 * (c_minus - c_plus) / denom, -0.5, 0.5);  // in columns
+      d = d_int - offset;
+    }
+  }
+  if (config_.lr_max_diff_px >= 0) {
+    const int xr = s.best_column;
+    const Search back = search(right, left, xr, y, +1, config_.min_disparity, config_.max_disparity());
+    if (!back.ok || std::abs((back.best_column - xr) - d_int) > config_.lr_max_diff_px) {
+      return fail(SparseMatchStatus::kLeftRight);
+    }
+  }
+  if (d <= 0) return fail(SparseMatchStatus::kRange);
+  if (status) *status = SparseMatchStatus::kOk;
+  return static_cast<float>(d);
+}
+
+void SparseStereoMatcher::match(const cv::Mat& left, const cv::Mat& right, const std::vector<cv::Point2f>& points_px,
+                                std::vector<float>& disparity_px) {
+  disparity_px.resize(points_px.size());
+  for (std::size_t i = 0; i < points_px.size(); ++i) disparity_px[i] = match(left, right, points_px[i]);
+}
+
+}  // namespace agvslam::stereo

@@ -1,0 +1,89 @@
+// params/stereo.yaml loading: defaults, overrides, and errors that name the file and the field.
+#include <gtest/gtest.h>
+
+#include <filesystem>
+#include <fstream>
+
+#include "agvslam/core/error.h"
+#include "agvslam/stereo/stereo_config.h"
+#include "common/test_data.h"
+
+namespace agvslam::stereo {
+namespace {
+namespace fs = std::filesystem;
+
+class TempYaml {
+ public:
+  explicit TempYaml(const std::string& text) {
+    dir_ = agvslam::test::make_temp_dir("agvslam-stereo-config");
+    path_ = (fs::path(dir_) / "stereo.yaml").string();
+    std::ofstream(path_) << text;
+  }
+  ~TempYaml() {
+    std::error_code ec;
+    fs::remove_all(dir_, ec);
+  }
+  TempYaml(const TempYaml&) = delete;
+  TempYaml& operator=(const TempYaml&) = delete;
+  const std::string& path() const { return path_; }
+
+ private:
+  std::string dir_, path_;
+};
+
+void expect_error(const std::string& text, const std::string& field) {
+  TempYaml f(text);
+  try {
+    load_stereo_config(f.path());
+    ADD_FAILURE() << "no error for " << text;
+  } catch (const InputError& e) {
+    EXPECT_EQ(e.source(), f.path());
+    EXPECT_EQ(e.where(), field) << e.what();
+    EXPECT_FALSE(e.expected().empty());
+  }
+}
+
+TEST(StereoConfig, ShippedParamsFileLoadsAndMatchesTheDefaults) {
+  const StereoConfig c = load_stereo_config(std::string(AGVSLAM_SOURCE_DIR) + "/params/stereo.yaml");
+  const StereoConfig d;
+  EXPECT_EQ(c.sgbm.num_disparities, d.sgbm.num_disparities);
+  EXPECT_EQ(c.sgbm.block_size, d.sgbm.block_size);
+  EXPECT_EQ(c.sgbm.mode, d.sgbm.mode);
+  EXPECT_EQ(c.sgbm.roi_margin_px, d.sgbm.roi_margin_px);
+  EXPECT_EQ(c.sparse.half_window, d.sparse.half_window);
+  EXPECT_DOUBLE_EQ(c.sparse.max_mean_cost, d.sparse.max_mean_cost);
+  EXPECT_EQ(c.sparse.num_disparities, d.sparse.num_disparities);
+  const auto lines = c.describe();
+  ASSERT_EQ(lines.size(), 2u);
+  EXPECT_NE(lines[0].find("sgbm_3way"), std::string::npos);
+  EXPECT_NE(lines[1].find("9x9"), std::string::npos);
+}
+
+TEST(StereoConfig, OverridesOnlyTheGivenKeys) {
+  TempYaml f("sgbm:\n  num_disparities: 128\n  mode: hh\nsparse:\n  half_window: 3\n  subpixel: false\n");
+  const StereoConfig c = load_stereo_config(f.path());
+  EXPECT_EQ(c.sgbm.num_disparities, 128);
+  EXPECT_EQ(c.sgbm.mode, SgbmMode::kHh);
+  EXPECT_EQ(c.sgbm.block_size, SgbmConfig{}.block_size);
+  EXPECT_EQ(c.sparse.half_window, 3);
+  EXPECT_FALSE(c.sparse.subpixel);
+}
+
+TEST(StereoConfig, BadValuesNameFileAndField) {
+  expect_error("sgbm:\n  num_disparities: 60\n", "sgbm.num_disparities");
+  expect_error("sgbm:\n  block_size: 4\n", "sgbm.block_size");
+  expect_error("sgbm:\n  mode: fancy\n", "sgbm.mode");
+  expect_error("sgbm:\n  block_size: five\n", "sgbm.block_size");
+  expect_error("sgbm:\n  blocksize: 5\n", "sgbm.blocksize");
+  expect_error("sparse:\n  max_mean_cost: -1\n", "sparse.max_mean_cost");
+  expect_error("sparse:\n  max_mean_cost: .nan\n", "sparse.max_mean_cost");
+  expect_error("stereo:\n  x: 1\n", "stereo");
+  expect_error("sgbm: [1, 2\n", "line 2");
+}
+
+TEST(StereoConfig, MissingFileIsAnInputError) {
+  EXPECT_THROW(load_stereo_config("/nonexistent/stereo.yaml"), InputError);
+}
+
+}  // namespace
+}  // namespace agvslam::stereo
