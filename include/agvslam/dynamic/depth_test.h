@@ -1,0 +1,83 @@
+#pragma once
+// Depth-consistency test (beyond paper 004; the reprojection idea of paper 001, DM-SLAM).
+//
+// The epipolar test cannot see motion along the epipolar line (a person walking straight ahead of a forward-
+// driving AGV). With stereo, a tracked point has a disparity in both frames, hence a 3-D position in the
+// previous camera. The ego-motion T_cur_prev is estimated from all tracks by PnP RANSAC (3-D previous
+// points -> 2-D current points) and refined on the inliers; a point is dynamic when its predicted position
+// disagrees with what is observed:
+//   reprojection offset |pi(T X_prev) - p_cur|          > a_reproj_px + b_reproj * d, or
+//   disparity residual  |bf / Z_pred - d_cur|           > a_disp_px  + b_disp  * d.
+// As in the epipolar test, the constant terms can adapt to the robust scale of this frame's residuals.
+
+#include <cstdint>
+#include <opencv2/core.hpp>
+#include <string>
+#include <vector>
+
+#include "agvslam/core/camera.h"
+#include "agvslam/core/se3.h"
+
+namespace agvslam::dynamic {
+
+// params/dynamic.yaml, section `depth_test`.
+struct DepthTestConfig {
+  int min_points = 12;                // tracks with both disparities needed to estimate the motion
+  double min_disparity_px = 2.0;      // farther points (depth too uncertain) are neither used nor tested
+  double ransac_reprojection_px = 2.0;
+  int ransac_iterations = 200;
+  double ransac_confidence = 0.999;
+  double a_reproj_px = 1.5;           // reprojection threshold: constant (px) ...
+  double b_reproj = 0.03;             // ... + slope per px of disparity
+  double a_disp_px = 1.0;             // disparity residual threshold: constant (px) ...
+  double b_disp = 0.03;               // ... + slope per px of disparity (relative depth error)
+  bool adaptive = true;               // raise the constants to k * robust sigma of this frame's residuals
+  double adaptive_k = 3.0;
+  double max_scale = 3.0;             // adaptive constants are at most max_scale x the configured ones
+
+  void validate(const std::string& source) const;
+  std::string describe() const;
+};
+
+struct DepthTestResult {
+  bool valid = false;                       // false: too few points, or PnP failed
+  SE3d T_cur_prev = SE3d::Identity();       // estimated ego-motion (previous camera -> current camera)
+  int used = 0;                             // tracks with both disparities
+  int inliers = 0;                          // PnP inliers
+  double a_reproj_used_px = 0, a_disp_used_px = 0;
+  std::vector<double> reprojection_px;      // per track, -1 where not tested
+  std::vector<double> disparity_residual_px;  // per track, -1 where not tested (no current disparity)
+  std::vector<uint8_t> dynamic;
+};
+
+class DepthConsistencyTest {
+ public:
+  explicit DepthConsistencyTest(const DepthTestConfig& config = {});
+  const DepthTestConfig& config() const { return config_; }
+
+  // camera: rectified left camera; bf_px_m = fx * baseline. usable[i] == 0 excludes a track. A track is
+  // tested when its previous disparity is >= min_disparity_px; the disparity residual needs the current one.
+  void run(const PinholeCamera& camera, double bf_px_m, const std::vector<cv::Point2f>& prev_pts,
+           const std::vector<float>& prev_disparity_px, const std::vector<cv::Point2f>& cur_pts,
+           const std::vector<float>& cur_disparity_px, const std::vector<uint8_t>& usable, DepthTestResult& result);
+
+  // Residuals of one track under a motion (-1 where not computable: no previous disparity, or no current
+  // one for the disparity residual).
+  static void residuals(const PinholeCamera& camera, double bf_px_m, const SE3d& T_cur_prev, const cv::Point2f& prev_px,
+                        float prev_disparity_px, const cv::Point2f& cur_px, float cur_disparity_px,
+                        double& reprojection_px, double& disparity_residual_px);
+  // The decision of run() for a track with these residuals, using the motion and thresholds of `fitted`
+  // (for tracks added after run(), e.g. around dynamic points). disparity_px: the track's disparity.
+  bool is_dynamic(const DepthTestResult& fitted, double reprojection_px, double disparity_residual_px,
+                  double disparity_px) const;
+
+ private:
+  DepthTestConfig config_;
+  std::vector<cv::Point3f> object_;
+  std::vector<cv::Point2f> image_;
+  std::vector<int> index_;
+  std::vector<int> inliers_;
+  std::vector<double> scratch_;
+};
+
+}  // namespace agvslam::dynamic

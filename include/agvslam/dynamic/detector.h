@@ -1,0 +1,207 @@
+#pragma once
+// The dynamic-region detector of paper 004 (III.A-B) on consecutive rectified stereo frames:
+//
+//   previous frame: quadtree FAST corners (+ their disparity), LK pyramid
+//   current frame:  LK pyramid -> LK tracks (forward-backward checked) -> disparity at the tracked points
+//                   -> epipolar test (F by RANSAC, T_epi = a + b d, adaptive a)  \  a point is dynamic if
+//                   -> depth-consistency test (PnP ego-motion, reprojection and   /  either test says so
+//                      disparity residuals)
+//                   -> [densification around small groups of dynamic points]
+//                   -> groups of dynamic points -> dynamic ROIs (> 4 points)
+//                   -> per ROI: SGBM on the ROI crop, SLIC, disparity planes, boundary types, search to the
+//                      occlusion boundaries (+ disparity band, static veto) -> dynamic region (rectangle, or
+//                      superpixel outline inside it)
+//                   -> DynamicMask; then quadtree FAST on the current frame for the next call.
+//
+// Disparity is computed only where it is used: a block matcher at the points, SGBM inside the ROIs (a
+// whole-frame SGBM is available for debugging with detector.full_frame_disparity). The first frame, and any
+// frame after reset(), gives an empty mask.
+
+#include <cstdint>
+#include <opencv2/core.hpp>
+#include <string>
+#include <vector>
+
+#include "agvslam/core/camera.h"
+#include "agvslam/core/stereo_frame.h"
+#include "agvslam/dynamic/boundary.h"
+#include "agvslam/dynamic/depth_test.h"
+#include "agvslam/dynamic/disparity_plane.h"
+#include "agvslam/dynamic/epipolar.h"
+#include "agvslam/dynamic/quadtree_fast.h"
+#include "agvslam/dynamic/region_search.h"
+#include "agvslam/dynamic/roi_grouping.h"
+#include "agvslam/dynamic/slic.h"
+#include "agvslam/stereo/sgbm.h"
+#include "agvslam/stereo/sparse_stereo.h"
+#include "agvslam/stereo/stereo_config.h"
+
+namespace agvslam::dynamic {
+
+// params/dynamic.yaml, section `detector`.
+struct DetectorOptions {
+  bool use_epipolar_test = true;      // paper 004's test
+  bool use_depth_test = true;         // the depth-consistency test (beyond the paper)
+  bool full_frame_disparity = false;  // debugging: whole-frame SGBM instead of points + ROIs
+  int max_rois = 8;                   // at most this many ROIs per frame (the largest groups)
+  double roi_disparity_margin_px = 8; // ROI SGBM searches [0, max point disparity + margin] (<= configured range)
+  double roi_scale = 0.5;             // 1 or 0.5: SGBM and SLIC of the ROIs at this resolution (planes, boundaries
+                                      // and regions stay at full resolution)
+  int mask_dilation_px = 0;           // grow the final mask by this many pixels
+  // Densification (beyond the paper): a small object gets only a few of the N quadtree points, fewer than a
+  // ROI needs. Around each small group (2 .. grouping.min_points - 1) of seed points, up to
+  // densify_max_points extra FAST corners (features.min_threshold) of the previous frame within
+  // densify_radius_px + densify_radius_disparity_factor * d of the group are tracked and tested with this
+  // frame's F, motion and thresholds. Seeds are the points both tests flag (when both ran): a track that slid
+  // along an edge can fool one test, rarely both. Isolated single points (usually noise) are not densified.
+  bool densify = true;
+  double densify_radius_px = 24;
+  double densify_radius_disparity_factor = 1.0;
+  int densify_max_points = 24;
+  double densify_min_distance_px = 5;  // from existing tracks and from each other
+
+  void validate(const std::string& source) const;
+  std::string describe() const;
+};
+
+// Everything in params/dynamic.yaml: one struct per stage.
+struct DynamicDetectorConfig {
+  QuadtreeFastConfig features;
+  LkTrackerConfig tracking;
+  EpipolarTestConfig epipolar;
+  DepthTestConfig depth_test;
+  RoiGroupingConfig grouping;
+  SlicConfig slic;
+  PlaneFitConfig planes;
+  BoundaryConfig boundaries;
+  RegionSearchConfig regions;
+  DetectorOptions detector;
+
+  void validate(const std::string& source) const;
+  // One line per stage, for the start-up echo.
+  std::vector<std::string> describe() const;
+};
+
+// Loads params/dynamic.yaml over the defaults (absent keys keep their default). Throws InputError naming the
+// file and the field ("epipolar.a_epi_px") for a missing file, bad YAML, an unknown key, or a value of the
+// wrong type or out of range.
+DynamicDetectorConfig load_dynamic_config(const std::string& path);
+
+// One LK track from the previous frame into the current one.
+struct TrackedPoint {
+  cv::Point2f prev_px, cur_px;
+  float prev_disparity_px = 0, cur_disparity_px = 0;  // 0 = unknown
+  bool tracked = false;          // LK converged and passed the forward-backward check
+  bool densified = false;        // added around a small group of dynamic points (not a quadtree corner)
+  double d_epi_px = 0, t_epi_px = 0;
+  double reprojection_px = -1, disparity_residual_px = -1;  // depth test, -1 = not tested
+  bool dynamic_epipolar = false, dynamic_depth = false;
+  bool dynamic = false;          // the union of the enabled tests
+  int group = -1;                // index into DetectorResult::rois, -1 = none
+};
+
+// The segmentation of one dynamic ROI (debugging output; coordinates of `labels` are ROI-local).
+struct RoiSegmentation {
+  cv::Rect roi;
+  std::vector<int> points;                 // indices into DetectorResult::points
+  double mean_disparity_px = 0;
+  cv::Mat disparity_px;                    // CV_32FC1, ROI size (SGBM on the crop), 0 = none
+  cv::Mat labels;                          // CV_32SC1, ROI size
+  int superpixels = 0;
+  SlicStats slic;
+  std::vector<DisparityPlane> planes;      // per superpixel
+  std::vector<SuperpixelBoundary> boundaries;
+  DynamicRegion region;
+};
+
+struct DynamicMask {
+  cv::Mat image;                  // CV_8UC1, 255 = dynamic, the size of the input frame
+  std::vector<cv::Rect> regions;  // the dynamic rectangles (paper's output)
+  int pixel_count() const { return image.empty() ? 0 : cv::countNonZero(image); }
+};
+
+struct StageTimings {
+  double pyramid_ms = 0, tracking_ms = 0, point_disparity_ms = 0, epipolar_ms = 0, depth_test_ms = 0,
+         densify_ms = 0, grouping_ms = 0, roi_disparity_ms = 0, slic_ms = 0, planes_ms = 0, boundaries_ms = 0, regions_ms = 0,
+         features_ms = 0, total_ms = 0;
+  std::string describe() const;
+};
+
+struct DetectorResult {
+  std::size_t frame_index = 0;
+  int64_t t_ns = 0;
+  bool has_previous = false;     // false on the first frame: nothing can be tested
+  DynamicMask mask;
+  std::vector<TrackedPoint> points;
+  std::vector<RoiSegmentation> rois;
+  EpipolarResult epipolar;
+  DepthTestResult depth;
+  cv::Mat full_disparity_px;     // only with detector.full_frame_disparity
+  StageTimings timings;
+
+  int dynamic_point_count() const;
+};
+
+class DynamicDetector {
+ public:
+  // calibration: of the rectified frames that detect() receives. Validates both configurations
+  // (InputError naming the struct and field).
+  explicit DynamicDetector(const StereoCalibration& calibration, const DynamicDetectorConfig& config = {},
+                           const stereo::StereoConfig& stereo_config = {});
+
+  const DynamicDetectorConfig& config() const { return config_; }
+  const stereo::StereoConfig& stereo_config() const { return stereo_config_; }
+
+  // Runs the pipeline on the next frame (CV_8UC1 left/right of the calibration's size). The previous frame is
+  // kept internally.
+  DetectorResult detect(const StereoFrame& frame);
+  // Same, reusing the buffers of `result` (no per-frame allocation once sizes have settled).
+  void detect(const StereoFrame& frame, DetectorResult& result);
+
+  // Forgets the previous frame (the next detect() gives an empty mask).
+  void reset();
+
+ private:
+  void densify(const StereoFrame& frame, DetectorResult& result);
+  void measure_point_disparities(const StereoFrame& frame, const std::vector<cv::Point2f>& pts, std::vector<float>& out,
+                                 const cv::Mat& full_disparity_px);
+
+  StereoCalibration calibration_;
+  DynamicDetectorConfig config_;
+  stereo::StereoConfig stereo_config_;
+  QuadtreeFast features_;
+  LkTracker tracker_;
+  EpipolarTest epipolar_;
+  DepthConsistencyTest depth_test_;
+  Slic slic_;
+  Slic slic_half_;  // superpixel size halved, for roi_scale 0.5
+  stereo::StereoSgbm sgbm_;
+  stereo::SparseStereoMatcher sparse_;
+  SuperpixelGraph graph_;
+
+  bool has_previous_ = false;
+  std::vector<cv::Mat> prev_pyramid_, cur_pyramid_;
+  std::vector<Corner> corners_;
+  std::vector<cv::Point2f> prev_pts_;        // corners of the previous frame
+  std::vector<float> prev_disparity_px_;     // their disparity in the previous frame
+  std::vector<cv::Point2f> cur_pts_;
+  std::vector<uint8_t> tracked_;
+  std::vector<float> cur_disparity_px_;
+  std::vector<uint8_t> usable_;
+  std::vector<cv::Point2f> dyn_pts_;
+  std::vector<float> dyn_disp_;
+  std::vector<int> dyn_index_;
+  std::vector<cv::Point2f> group_pts_, static_pts_;
+  std::vector<float> group_disp_, static_disp_;
+  cv::Mat dilated_, small_grey_, small_labels_;
+  cv::Mat prev_left_, prev_right_;            // the previous frame (for densification)
+  std::vector<cv::KeyPoint> keypoints_;
+  std::vector<cv::Point2f> extra_prev_, extra_cur_;
+  std::vector<uint8_t> extra_ok_;
+  std::vector<float> extra_prev_disp_, extra_cur_disp_;
+  std::vector<cv::Point2f> seed_pts_;
+  std::vector<float> seed_disp_;
+  std::vector<int> seed_index_;
+};
+
+}  // namespace agvslam::dynamic

@@ -1,0 +1,95 @@
+#pragma once
+// Dynamic regions from dynamic points and boundary types (paper 004, III.B, last paragraph): from each
+// dynamic point, search along +x, -x, +y and -y through the superpixel label image and stop at the first
+// occlusion-type boundary (or the ROI edge); the minimum rectangle enclosing the found boundary points is
+// the dynamic region. Also the tighter outline: the superpixels reached from the points' superpixels
+// without crossing an occlusion boundary (a flood over coplanar and hinge boundaries), kept inside the
+// rectangle.
+// A point starts a search only from a superpixel whose plane agrees with the point's disparity (within
+// start_radius_px of the point, the best-agreeing one): FAST corners often sit on an object's outline, where
+// the pixel's own superpixel may belong to the background.
+//
+// Disparity band (beyond the paper, regions.disparity_band): the object's disparities are known from its
+// dynamic points, so the search also stops on entering a superpixel whose plane lies outside the band
+// [min d - tol, max d + tol] of the group, and superpixels without a plane (no SGBM disparity: textureless,
+// or the half-occluded strip beside a foreground object) are crossed but do not extend the region. This
+// makes the outline robust to a missed occlusion boundary (a superpixel straddling the object edge) and to
+// the half-occluded background, which has no disparity at all.
+
+#include <array>
+#include <opencv2/core.hpp>
+#include <string>
+#include <vector>
+
+#include "agvslam/dynamic/boundary.h"
+#include "agvslam/dynamic/disparity_plane.h"
+
+namespace agvslam::dynamic {
+
+enum class MaskMode { kRectangle, kSuperpixels };
+std::string to_string(MaskMode mode);
+bool parse_mask_mode(const std::string& text, MaskMode& mode);
+
+// params/dynamic.yaml, section `regions`.
+struct RegionSearchConfig {
+  int start_radius_px = 3;            // superpixels within this distance of a point are start candidates
+  double start_tolerance_px = 1.5;    // |d_point - plane| allowed for a start superpixel ...
+  double start_tolerance_rel = 0.1;   // ... + this fraction of d_point
+  bool stop_at_unknown = false;       // treat boundaries of superpixels without a plane as occlusions
+  bool disparity_band = true;         // also stop at superpixels outside the group's disparity band
+  double band_tolerance_px = 1.5;     // band = [min d - tol(min d), max d + tol(max d)], tol(d) = px + rel * d
+  double band_tolerance_rel = 0.05;
+  MaskMode mask_mode = MaskMode::kSuperpixels;
+  // Static veto (beyond the paper): a superpixel that holds a tracked point which passed the motion tests,
+  // with a disparity agreeing with the superpixel's plane (start tolerance), is static: the search stops on
+  // entering it and the outline never includes it. Separates a person from a shelf at the same depth,
+  // where no occlusion boundary exists.
+  bool static_veto = true;
+
+  void validate(const std::string& source) const;
+  std::string describe() const;
+};
+
+// Optional disparity band for the search (see above); planes are in full-image coordinates.
+struct DisparityBand {
+  bool enabled = false;
+  double lo_px = 0, hi_px = 0;
+  const std::vector<DisparityPlane>* planes = nullptr;
+  cv::Point origin;  // full-image position of the label image's top-left pixel
+  const std::vector<char>* vetoed = nullptr;  // per label: static superpixel (the search stops before it)
+};
+
+// The four stop points (ROI-local) of the search from `start` (ROI-local): +x, -x, +y, -y. Each is the last
+// pixel before the first occlusion boundary in that direction, or the last pixel of the ROI. With a band,
+// also the last pixel before a superpixel outside the band, and never a pixel of a superpixel without plane.
+std::array<cv::Point, 4> search_to_occlusion(const cv::Mat& labels, const SuperpixelGraph& graph, cv::Point start,
+                                             bool stop_at_unknown, const DisparityBand& band = {});
+
+// The superpixel to start from for a point (full-image coordinates) with disparity d_px; -1 when none agrees.
+int choose_start_superpixel(const cv::Mat& labels, cv::Point origin, const std::vector<DisparityPlane>& planes,
+                            cv::Point2f point_px, float d_px, const RegionSearchConfig& config);
+
+struct DynamicRegion {
+  cv::Rect rectangle;              // full-image coordinates (empty when no point could start)
+  std::vector<int> superpixels;    // the flood from the start superpixels (labels of this ROI)
+  std::vector<int> start_superpixels;
+  std::vector<int> vetoed_superpixels;  // static superpixels (static veto)
+  std::vector<cv::Point> stop_points;  // full-image coordinates, 4 per started point
+  int started_points = 0;
+  double band_lo_px = 0, band_hi_px = 0;  // the disparity band used (when enabled)
+};
+
+// points_px/disparity_px: the group's dynamic points (full image). labels/planes/graph: the ROI's
+// segmentation (origin = ROI top-left in the full image). static_points_px/static_disparity_px (optional):
+// tracked points that passed the motion tests, for the static veto.
+DynamicRegion find_dynamic_region(const cv::Mat& labels, cv::Point origin, const SuperpixelGraph& graph,
+                                  const std::vector<DisparityPlane>& planes, const std::vector<cv::Point2f>& points_px,
+                                  const std::vector<float>& disparity_px, const RegionSearchConfig& config,
+                                  const std::vector<cv::Point2f>& static_points_px = {},
+                                  const std::vector<float>& static_disparity_px = {});
+
+// Sets the region's pixels to 255 in `mask` (full image, CV_8UC1): the rectangle, or the flooded superpixels
+// inside the rectangle.
+void paint_region(const DynamicRegion& region, const cv::Mat& labels, cv::Point origin, MaskMode mode, cv::Mat& mask);
+
+}  // namespace agvslam::dynamic

@@ -1,0 +1,44 @@
+#pragma once
+// Dynamic regions of interest (paper 004, III.A, eq. 4): two dynamic points belong to the same object when
+//   |p_i - p_j| <= T_s = a_s + b_s * d   and   |d_i - d_j| <= T_disp,
+// groups are the connected components of that relation (union-find), and a group of more than four points
+// (min_points = 5) is a dynamic ROI: its bounding rectangle plus a margin that grows with the disparity
+// (nearer objects are larger, and their outline lies further from the outermost corners).
+// d in T_s is the mean of the two disparities (the relation must be symmetric); T_disp may grow with the
+// disparity (t_disp_rel, 0 = the paper's constant) because the disparity spread of an object of fixed depth
+// extent grows as d^2.
+
+#include <opencv2/core.hpp>
+#include <string>
+#include <vector>
+
+namespace agvslam::dynamic {
+
+// params/dynamic.yaml, section `grouping`.
+struct RoiGroupingConfig {
+  double a_s_px = 40.0;          // eq. 4 constant (px)
+  double b_s = 1.5;              // eq. 4 slope (px per px of disparity)
+  double t_disp_px = 3.0;        // T_disp constant (px)
+  double t_disp_rel = 0.1;       // ... + t_disp_rel * d (0 = the paper's constant threshold)
+  int min_points = 5;            // "more than four dynamic features"
+  int margin_px = 16;            // ROI = bounding box + margin_px + margin_disparity_factor * d
+  double margin_disparity_factor = 0.5;
+
+  void validate(const std::string& source) const;
+  std::string describe() const;
+};
+
+struct DynamicGroup {
+  std::vector<int> members;      // indices into the points given to group_dynamic_points
+  cv::Rect bounds;               // bounding box of the members (px, inclusive of the points)
+  cv::Rect roi;                  // bounds + margin, clipped to the image
+  double mean_disparity_px = 0;
+};
+
+// points_px/disparity_px: the dynamic points (disparity <= 0: unknown, such points are not grouped).
+// Returns the groups with at least min_points members, largest first.
+std::vector<DynamicGroup> group_dynamic_points(const std::vector<cv::Point2f>& points_px,
+                                               const std::vector<float>& disparity_px, cv::Size image_size,
+                                               const RoiGroupingConfig& config);
+
+}  // namespace agvslam::dynamic

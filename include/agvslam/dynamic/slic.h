@@ -1,0 +1,86 @@
+#pragma once
+// SLIC superpixels on a grey image (paper 004, III.B, eqs. 5-7), in two variants that share everything but
+// the assignment step:
+//   plain        each iteration, every cluster centre evaluates D_SLIC (eq. 5) on all pixels of its
+//                2S x 2S window and the nearest centre wins (Achanta et al.);
+//   incremental  (the paper's variant) only "unstable" pixels are evaluated. The first round is a full
+//                assignment (before it no pixel has a cluster); then the edge pixels of the clustering are
+//                unstable and, after each assignment, per eq. 7, a 4-neighbour p
+//                of an evaluated pixel q becomes unstable when cluster(p) != cluster(q) or q is still
+//                unstable (its cluster changed); everything else becomes stable. An unstable pixel is
+//                compared with every centre whose 2S x 2S window contains it, as in the plain variant. Cluster centres are kept as
+//                running sums, updated only for the pixels that changed.
+// Both stop after `iterations` rounds or when a round changes fewer than min_change_fraction of the pixels
+// (0: only when no label changes); both end with the connectivity
+// step (4-connected components, fragments smaller than min_segment_fraction * S^2 merged into a neighbour).
+// D_SLIC = sqrt((dg / N_c)^2 + (ds / N_s)^2) with N_s = S = sqrt(m n / K) (eq. 6); the square root is
+// monotonic and not taken.
+
+#include <cstdint>
+#include <opencv2/core.hpp>
+#include <string>
+#include <vector>
+
+namespace agvslam::dynamic {
+
+// params/dynamic.yaml, section `slic`.
+struct SlicConfig {
+  int superpixel_size_px = 12;       // S (eq. 6): K = m n / S^2 seeds
+  int max_superpixels = 800;         // per ROI; S grows when a large ROI would need more
+  double max_color_distance = 16.0;  // N_c (grey levels): lower = superpixels follow intensity edges more
+  int iterations = 10;
+  double min_change_fraction = 0.02; // converged when a round changes fewer than this fraction of the pixels
+  bool incremental = false;          // the paper's unstable-pixel update (false = plain SLIC, faster here)
+  double min_segment_fraction = 0.25;
+
+  void validate(const std::string& source) const;
+  std::string describe() const;
+};
+
+struct SlicStats {
+  int64_t distance_evaluations = 0;                  // D_SLIC computations in total
+  std::vector<int64_t> evaluations_per_iteration;
+  std::vector<int> changed_per_iteration;           // pixels whose cluster changed
+  int iterations = 0;
+  int step_px = 0;                                   // S actually used
+  int seeds = 0;                                     // K
+  int superpixels = 0;                               // after the connectivity step
+};
+
+class Slic {
+ public:
+  explicit Slic(const SlicConfig& config = {});
+  const SlicConfig& config() const { return config_; }
+
+  // grey: CV_8UC1 (typically a ROI crop). labels: CV_32SC1 of the same size, 0 .. count-1, each label one
+  // 4-connected region. Returns the number of superpixels. Uses config().incremental.
+  int segment(const cv::Mat& grey, cv::Mat& labels, SlicStats* stats = nullptr);
+  // Same with the variant chosen explicitly.
+  int segment(const cv::Mat& grey, cv::Mat& labels, bool incremental, SlicStats* stats);
+
+ private:
+  struct Centre {
+    float g = 0, x = 0, y = 0;
+  };
+  struct Window {
+    int x0, x1, y0, y1;
+  };
+  struct Sums {
+    double g = 0, x = 0, y = 0;
+    int64_t n = 0;
+  };
+  int enforce_connectivity(cv::Mat& labels, int min_size);
+
+  SlicConfig config_;
+  std::vector<Centre> centres_;
+  std::vector<Sums> sums_;
+  std::vector<float> dist_;
+  std::vector<int32_t> old_label_;
+  std::vector<uint8_t> flag_;
+  std::vector<int32_t> unstable_, next_unstable_;
+  std::vector<int32_t> relabel_, queue_;
+  std::vector<Window> window_;
+  std::vector<int> bucket_start_, bucket_fill_, bucket_items_, bucket_of_;
+};
+
+}  // namespace agvslam::dynamic

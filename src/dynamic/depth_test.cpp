@@ -1,0 +1,169 @@
+#include "agvslam/dynamic/depth_test.h"
+
+#include <algorithm>
+#include <cmath>
+#include <cstdio>
+#include <opencv2/calib3d.hpp>
+#include <opencv2/core/eigen.hpp>
+
+#include "agvslam/core/error.h"
+#include "agvslam/dynamic/epipolar.h"
+
+namespace agvslam::dynamic {
+
+void DepthTestConfig::validate(const std::string& source) const {
+  auto require = [&](bool ok, const char* field, const char* expected) {
+    if (!ok) throw InputError(source, std::string("depth_test.") + field, expected);
+  };
+  require(min_points >= 6 && min_points <= 10000, "min_points", "expected an integer in [6, 10000]");
+  require(min_disparity_px > 0 && min_disparity_px <= 100, "min_disparity_px", "expected a number in (0, 100] px");
+  require(ransac_reprojection_px > 0 && ransac_reprojection_px <= 20, "ransac_reprojection_px",
+          "expected a number in (0, 20] px");
+  require(ransac_iterations >= 10 && ransac_iterations <= 100000, "ransac_iterations", "expected an integer in [10, 100000]");
+  require(ransac_confidence > 0.5 && ransac_confidence < 1, "ransac_confidence", "expected a number in (0.5, 1)");
+  require(a_reproj_px > 0 && a_reproj_px <= 50, "a_reproj_px", "expected a number in (0, 50] px");
+  require(b_reproj >= 0 && b_reproj <= 1, "b_reproj", "expected a number in [0, 1]");
+  require(a_disp_px > 0 && a_disp_px <= 50, "a_disp_px", "expected a number in (0, 50] px");
+  require(b_disp >= 0 && b_disp <= 1, "b_disp", "expected a number in [0, 1]");
+  require(adaptive_k > 0 && adaptive_k <= 20, "adaptive_k", "expected a number in (0, 20]");
+  require(max_scale >= 1 && max_scale <= 100, "max_scale", "expected a number in [1, 100]");
+}
+
+std::string DepthTestConfig::describe() const {
+  char buf[360];
+  std::snprintf(buf, sizeof(buf),
+                "depth_test: PnP RANSAC %.2f px / %d iterations on >= %d tracks with d >= %.1f px; dynamic if "
+                "reprojection > %.2f + %.3f d px or disparity residual > %.2f + %.3f d px (adaptive %s, k %.1f, "
+                "<= %.1fx)",
+                ransac_reprojection_px, ransac_iterations, min_points, min_disparity_px,
+                a_reproj_px, b_reproj, a_disp_px, b_disp, adaptive ? "on" : "off", adaptive_k, max_scale);
+  return buf;
+}
+
+DepthConsistencyTest::DepthConsistencyTest(const DepthTestConfig& config) : config_(config) {
+  config_.validate("DepthTestConfig");
+}
+
+void DepthConsistencyTest::run(const PinholeCamera& camera, double bf_px_m, const std::vector<cv::Point2f>& prev_pts,
+                               const std::vector<float>& prev_disparity_px, const std::vector<cv::Point2f>& cur_pts,
+                               const std::vector<float>& cur_disparity_px, const std::vector<uint8_t>& usable,
+                               DepthTestResult& result) {
+  const std::size_t n = prev_pts.size();
+  CV_Assert(cur_pts.size() == n && usable.size() == n && prev_disparity_px.size() == n && cur_disparity_px.size() == n);
+  result.valid = false;
+  result.T_cur_prev = SE3d::Identity();
+  result.used = 0;
+  result.inliers = 0;
+  result.a_reproj_used_px = config_.a_reproj_px;
+  result.a_disp_used_px = config_.a_disp_px;
+  result.reprojection_px.assign(n, -1.0);
+  result.disparity_residual_px.assign(n, -1.0);
+  result.dynamic.assign(n, 0);
+  if (!(bf_px_m > 0) || !camera.valid()) return;
+
+  object_.clear();
+  image_.clear();
+  index_.clear();
+  for (std::size_t i = 0; i < n; ++i) {
+    if (!usable[i] || !(prev_disparity_px[i] >= config_.min_disparity_px)) continue;
+    const double z = bf_px_m / prev_disparity_px[i];
+    object_.emplace_back(static_cast<float>((prev_pts[i].x - camera.cx) / camera.fx * z),
+                         static_cast<float>((prev_pts[i].y - camera.cy) / camera.fy * z), static_cast<float>(z));
+    image_.push_back(cur_pts[i]);
+    index_.push_back(static_cast<int>(i));
+  }
+  result.used = static_cast<int>(index_.size());
+  if (result.used < config_.min_points) return;
+
+  const cv::Matx33d K = camera.K();
+  cv::Mat rvec, tvec;
+  inliers_.clear();
+  bool ok = false;
+  try {
+    ok = cv::solvePnPRansac(object_, image_, K, cv::noArray(), rvec, tvec, false, config_.ransac_iterations,
+                            static_cast<float>(config_.ransac_reprojection_px), config_.ransac_confidence, inliers_,
+                            cv::SOLVEPNP_AP3P);
+  } catch (const cv::Exception&) {
+    ok = false;  // degenerate configurations (e.g. all points collinear)
+  }
+  if (!ok || static_cast<int>(inliers_.size()) < 6) return;
+  // Least-squares refinement on the inliers.
+  std::vector<cv::Point3f> obj_in;
+  std::vector<cv::Point2f> img_in;
+  obj_in.reserve(inliers_.size());
+  img_in.reserve(inliers_.size());
+  for (int k : inliers_) {
+    obj_in.push_back(object_[static_cast<std::size_t>(k)]);
+    img_in.push_back(image_[static_cast<std::size_t>(k)]);
+  }
+  cv::solvePnPRefineLM(obj_in, img_in, K, cv::noArray(), rvec, tvec);
+  result.inliers = static_cast<int>(inliers_.size());
+
+  cv::Matx33d R;
+  cv::Rodrigues(rvec, R);
+  const cv::Vec3d t(tvec.at<double>(0), tvec.at<double>(1), tvec.at<double>(2));
+  Eigen::Matrix3d R_e;
+  cv::cv2eigen(cv::Mat(R), R_e);
+  result.T_cur_prev = make_se3(R_e, Eigen::Vector3d(t[0], t[1], t[2]));
+  result.valid = true;
+
+  // Residuals of every tested track, then the (adaptive) thresholds.
+  for (int idx : index_) {
+    const std::size_t i = static_cast<std::size_t>(idx);
+    residuals(camera, bf_px_m, result.T_cur_prev, prev_pts[i], prev_disparity_px[i], cur_pts[i], cur_disparity_px[i],
+              result.reprojection_px[i], result.disparity_residual_px[i]);
+  }
+  double a_reproj = config_.a_reproj_px, a_disp = config_.a_disp_px;
+  if (config_.adaptive) {
+    scratch_.clear();
+    for (int idx : index_) scratch_.push_back(result.reprojection_px[static_cast<std::size_t>(idx)]);
+    a_reproj = std::clamp(config_.adaptive_k * robust_sigma(scratch_), config_.a_reproj_px,
+                          config_.max_scale * config_.a_reproj_px);
+    scratch_.clear();
+    for (int idx : index_) {
+      const double r = result.disparity_residual_px[static_cast<std::size_t>(idx)];
+      if (r >= 0) scratch_.push_back(r);
+    }
+    if (!scratch_.empty()) {
+      a_disp = std::clamp(config_.adaptive_k * robust_sigma(scratch_), config_.a_disp_px, config_.max_scale * config_.a_disp_px);
+    }
+  }
+  result.a_reproj_used_px = a_reproj;
+  result.a_disp_used_px = a_disp;
+  for (int idx : index_) {
+    const std::size_t i = static_cast<std::size_t>(idx);
+    result.dynamic[i] = is_dynamic(result, result.reprojection_px[i], result.disparity_residual_px[i],
+                                   cur_disparity_px[i] > 0 ? cur_disparity_px[i] : prev_disparity_px[i]);
+  }
+}
+
+void DepthConsistencyTest::residuals(const PinholeCamera& camera, double bf_px_m, const SE3d& T_cur_prev,
+                                     const cv::Point2f& prev_px, float prev_disparity_px, const cv::Point2f& cur_px,
+                                     float cur_disparity_px, double& reprojection_px, double& disparity_residual_px) {
+  reprojection_px = -1;
+  disparity_residual_px = -1;
+  if (!(prev_disparity_px > 0)) return;
+  const double z = bf_px_m / prev_disparity_px;
+  const Eigen::Vector3d X((prev_px.x - camera.cx) / camera.fx * z, (prev_px.y - camera.cy) / camera.fy * z, z);
+  const Eigen::Vector3d Xc = T_cur_prev * X;
+  if (!(Xc.z() > 1e-3)) {  // behind the camera under the estimated motion: inconsistent
+    reprojection_px = 1e6;
+    return;
+  }
+  const double u = camera.fx * Xc.x() / Xc.z() + camera.cx;
+  const double v = camera.fy * Xc.y() / Xc.z() + camera.cy;
+  reprojection_px = std::hypot(u - cur_px.x, v - cur_px.y);
+  if (cur_disparity_px > 0) disparity_residual_px = std::abs(bf_px_m / Xc.z() - cur_disparity_px);
+}
+
+bool DepthConsistencyTest::is_dynamic(const DepthTestResult& fitted, double reprojection_px,
+                                      double disparity_residual_px, double disparity_px) const {
+  if (!fitted.valid || reprojection_px < 0) return false;
+  const bool off_2d = reprojection_px > fitted.a_reproj_used_px + config_.b_reproj * disparity_px;
+  const bool off_depth = disparity_residual_px >= 0 &&
+                         disparity_residual_px > fitted.a_disp_used_px + config_.b_disp * disparity_px;
+  return off_2d || off_depth;
+}
+
+
+}  // namespace agvslam::dynamic

@@ -1,0 +1,449 @@
+#include "agvslam/dynamic/detector.h"
+
+#include <algorithm>
+#include <chrono>
+#include <cmath>
+#include <cstdio>
+#include <opencv2/features2d.hpp>
+#include <opencv2/imgproc.hpp>
+
+#include "agvslam/core/error.h"
+
+namespace agvslam::dynamic {
+
+namespace {
+using Clock = std::chrono::steady_clock;
+double ms_since(Clock::time_point t0) {
+  return std::chrono::duration<double, std::milli>(Clock::now() - t0).count();
+}
+}  // namespace
+
+void DetectorOptions::validate(const std::string& source) const {
+  auto require = [&](bool ok, const char* field, const char* expected) {
+    if (!ok) throw InputError(source, std::string("detector.") + field, expected);
+  };
+  require(use_epipolar_test || use_depth_test, "use_epipolar_test", "expected at least one of the two tests enabled");
+  require(max_rois >= 0 && max_rois <= 256, "max_rois", "expected an integer in [0, 256]");
+  require(mask_dilation_px >= 0 && mask_dilation_px <= 64, "mask_dilation_px", "expected an integer in [0, 64] px");
+  require(roi_scale == 1.0 || roi_scale == 0.5, "roi_scale", "expected 1 or 0.5");
+  require(densify_radius_px >= 0 && densify_radius_px <= 500, "densify_radius_px", "expected a number in [0, 500] px");
+  require(densify_radius_disparity_factor >= 0 && densify_radius_disparity_factor <= 50, "densify_radius_disparity_factor",
+          "expected a number in [0, 50]");
+  require(densify_max_points >= 0 && densify_max_points <= 1000, "densify_max_points", "expected an integer in [0, 1000]");
+  require(densify_min_distance_px >= 0 && densify_min_distance_px <= 100, "densify_min_distance_px",
+          "expected a number in [0, 100] px");
+  require(roi_disparity_margin_px >= 0 && roi_disparity_margin_px <= 1024, "roi_disparity_margin_px",
+          "expected a number in [0, 1024] px (a large value searches the whole configured range)");
+}
+
+std::string DetectorOptions::describe() const {
+  char densify_text[160] = "off";
+  if (densify) {
+    std::snprintf(densify_text, sizeof(densify_text), "<= %d points within %.0f + %.2f d px, %.0f px apart",
+                  densify_max_points, densify_radius_px, densify_radius_disparity_factor, densify_min_distance_px);
+  }
+  char buf[420];
+  std::snprintf(buf, sizeof(buf),
+                "detector: epipolar test %s, depth test %s, disparity %s, <= %d ROIs searched up to max point "
+                "disparity + %.1f px at scale %.1f, mask dilation %d px, densification %s",
+                use_epipolar_test ? "on" : "off", use_depth_test ? "on" : "off",
+                full_frame_disparity ? "whole frame (debug)" : "points + ROIs", max_rois, roi_disparity_margin_px,
+                roi_scale, mask_dilation_px, densify_text);
+  return buf;
+}
+
+void DynamicDetectorConfig::validate(const std::string& source) const {
+  features.validate(source);
+  tracking.validate(source);
+  epipolar.validate(source);
+  depth_test.validate(source);
+  grouping.validate(source);
+  slic.validate(source);
+  planes.validate(source);
+  boundaries.validate(source);
+  regions.validate(source);
+  detector.validate(source);
+}
+
+std::vector<std::string> DynamicDetectorConfig::describe() const {
+  return {features.describe(), tracking.describe(),   epipolar.describe(), depth_test.describe(),
+          grouping.describe(), slic.describe(),       planes.describe(),   boundaries.describe(),
+          regions.describe(),  detector.describe()};
+}
+
+std::string StageTimings::describe() const {
+  char buf[400];
+  std::snprintf(buf, sizeof(buf),
+                "total %.2f ms: pyramid %.2f, tracking %.2f, point disparity %.2f, epipolar %.2f, depth test %.2f, "
+                "densify %.2f, grouping %.2f, ROI disparity %.2f, SLIC %.2f, planes %.2f, boundaries %.2f, regions %.2f, "
+                "features %.2f",
+                total_ms, pyramid_ms, tracking_ms, point_disparity_ms, epipolar_ms, depth_test_ms, densify_ms, grouping_ms,
+                roi_disparity_ms, slic_ms, planes_ms, boundaries_ms, regions_ms, features_ms);
+  return buf;
+}
+
+int DetectorResult::dynamic_point_count() const {
+  int n = 0;
+  for (const TrackedPoint& p : points) n += p.dynamic;
+  return n;
+}
+
+DynamicDetector::DynamicDetector(const StereoCalibration& calibration, const DynamicDetectorConfig& config,
+                                 const stereo::StereoConfig& stereo_config)
+    : calibration_(calibration),
+      config_(config),
+      stereo_config_(stereo_config),
+      features_(config.features),
+      tracker_(config.tracking),
+      epipolar_(config.epipolar),
+      depth_test_(config.depth_test),
+      slic_(config.slic),
+      slic_half_([&] {
+        SlicConfig half = config.slic;
+        half.superpixel_size_px = std::max(3, (config.slic.superpixel_size_px + 1) / 2);
+        return half;
+      }()),
+      sgbm_(stereo_config.sgbm),
+      sparse_(stereo_config.sparse) {
+  config_.validate("DynamicDetectorConfig");
+  stereo_config_.validate("StereoConfig");
+  if (config_.detector.use_depth_test && !(calibration_.bf() > 0)) {
+    throw InputError("StereoCalibration", "baseline_m", "expected a positive focal length and baseline for the depth test");
+  }
+}
+
+void DynamicDetector::reset() {
+  has_previous_ = false;
+  prev_left_.release();
+  prev_right_.release();
+  prev_pts_.clear();
+  prev_disparity_px_.clear();
+}
+
+DetectorResult DynamicDetector::detect(const StereoFrame& frame) {
+  DetectorResult result;
+  detect(frame, result);
+  return result;
+}
+
+void DynamicDetector::measure_point_disparities(const StereoFrame& frame, const std::vector<cv::Point2f>& pts,
+                                                std::vector<float>& out, const cv::Mat& full_disparity_px) {
+  out.assign(pts.size(), 0.0f);
+  for (std::size_t i = 0; i < pts.size(); ++i) {
+    if (!usable_.empty() && i < usable_.size() && !usable_[i]) continue;
+    if (!full_disparity_px.empty()) {
+      const int x = static_cast<int>(std::lround(pts[i].x)), y = static_cast<int>(std::lround(pts[i].y));
+      if (x >= 0 && y >= 0 && x < full_disparity_px.cols && y < full_disparity_px.rows) {
+        out[i] = full_disparity_px.at<float>(y, x);
+      }
+    } else {
+      out[i] = sparse_.match(frame.left, frame.right, pts[i]);
+    }
+  }
+}
+
+void DynamicDetector::detect(const StereoFrame& frame, DetectorResult& result) {
+  const auto t_start = Clock::now();
+  CV_Assert(frame.left.type() == CV_8UC1 && frame.right.type() == CV_8UC1 && frame.left.size() == frame.right.size());
+  const cv::Size size = frame.left.size();
+  const DetectorOptions& opt = config_.detector;
+
+  result.frame_index = frame.index;
+  result.t_ns = frame.t_ns;
+  // A frame of another size than the previous one (a new camera mode) starts over.
+  if (has_previous_ && (prev_pyramid_.empty() || prev_pyramid_.front().size() != size)) reset();
+  result.has_previous = has_previous_ && !prev_pts_.empty();
+  result.points.clear();
+  result.rois.clear();
+  result.mask.regions.clear();
+  result.mask.image.create(size, CV_8UC1);
+  result.mask.image.setTo(0);
+  result.epipolar = EpipolarResult{};
+  result.depth = DepthTestResult{};
+  result.timings = StageTimings{};
+  StageTimings& tm = result.timings;
+
+  auto t = Clock::now();
+  if (opt.full_frame_disparity) {
+    sgbm_.compute(frame.left, frame.right, result.full_disparity_px);
+  } else {
+    result.full_disparity_px.release();
+  }
+  tm.point_disparity_ms += ms_since(t);
+
+  t = Clock::now();
+  tracker_.build_pyramid(frame.left, cur_pyramid_);
+  tm.pyramid_ms = ms_since(t);
+
+  if (result.has_previous) {
+    // Tracks and their disparity in the current frame.
+    t = Clock::now();
+    tracker_.track(prev_pyramid_, cur_pyramid_, prev_pts_, cur_pts_, tracked_);
+    tm.tracking_ms = ms_since(t);
+    t = Clock::now();
+    usable_ = tracked_;
+    measure_point_disparities(frame, cur_pts_, cur_disparity_px_, result.full_disparity_px);
+    usable_.clear();
+    tm.point_disparity_ms += ms_since(t);
+
+    // The two motion tests.
+    t = Clock::now();
+    epipolar_.run(prev_pts_, cur_pts_, tracked_, cur_disparity_px_, result.epipolar);
+    tm.epipolar_ms = ms_since(t);
+    t = Clock::now();
+    if (opt.use_depth_test) {
+      depth_test_.run(calibration_.left, calibration_.bf(), prev_pts_, prev_disparity_px_, cur_pts_, cur_disparity_px_,
+                      tracked_, result.depth);
+    }
+    tm.depth_test_ms = ms_since(t);
+
+    const std::size_t n = prev_pts_.size();
+    result.points.resize(n);
+    dyn_pts_.clear();
+    dyn_disp_.clear();
+    dyn_index_.clear();
+    for (std::size_t i = 0; i < n; ++i) {
+      TrackedPoint& p = result.points[i];
+      p = TrackedPoint{};
+      p.prev_px = prev_pts_[i];
+      p.cur_px = cur_pts_[i];
+      p.prev_disparity_px = prev_disparity_px_[i];
+      p.cur_disparity_px = cur_disparity_px_[i];
+      p.tracked = tracked_[i] != 0;
+      if (!p.tracked) continue;
+      if (result.epipolar.valid) {
+        p.d_epi_px = result.epipolar.d_epi_px[i];
+        p.t_epi_px = result.epipolar.t_epi_px[i];
+        p.dynamic_epipolar = result.epipolar.dynamic[i] != 0;
+      }
+      if (result.depth.valid) {
+        p.reprojection_px = result.depth.reprojection_px[i];
+        p.disparity_residual_px = result.depth.disparity_residual_px[i];
+        p.dynamic_depth = result.depth.dynamic[i] != 0;
+      }
+      p.dynamic = (opt.use_epipolar_test && p.dynamic_epipolar) || (opt.use_depth_test && p.dynamic_depth);
+      if (p.dynamic) {
+        dyn_pts_.push_back(p.cur_px);
+        dyn_disp_.push_back(p.cur_disparity_px);
+        dyn_index_.push_back(static_cast<int>(i));
+      }
+    }
+
+    t = Clock::now();
+    if (opt.densify && opt.densify_max_points > 0 && !prev_left_.empty()) densify(frame, result);
+    tm.densify_ms = ms_since(t);
+
+    // Dynamic ROIs.
+    t = Clock::now();
+    std::vector<DynamicGroup> groups = group_dynamic_points(dyn_pts_, dyn_disp_, size, config_.grouping);
+    if (static_cast<int>(groups.size()) > opt.max_rois) groups.resize(static_cast<std::size_t>(opt.max_rois));
+    tm.grouping_ms = ms_since(t);
+
+    result.rois.resize(groups.size());
+    for (std::size_t g = 0; g < groups.size(); ++g) {
+      RoiSegmentation& seg = result.rois[g];
+      const DynamicGroup& group = groups[g];
+      seg.roi = group.roi;
+      seg.mean_disparity_px = group.mean_disparity_px;
+      seg.points.clear();
+      group_pts_.clear();
+      group_disp_.clear();
+      for (int m : group.members) {
+        const int idx = dyn_index_[static_cast<std::size_t>(m)];
+        seg.points.push_back(idx);
+        result.points[static_cast<std::size_t>(idx)].group = static_cast<int>(g);
+        group_pts_.push_back(dyn_pts_[static_cast<std::size_t>(m)]);
+        group_disp_.push_back(dyn_disp_[static_cast<std::size_t>(m)]);
+      }
+      if (seg.roi.empty()) continue;
+
+      t = Clock::now();
+      if (opt.full_frame_disparity) {
+        result.full_disparity_px(seg.roi).copyTo(seg.disparity_px);
+      } else {
+        float max_d = 0;
+        for (float dd : group_disp_) max_d = std::max(max_d, dd);
+        sgbm_.compute_roi(frame.left, frame.right, seg.roi, seg.disparity_px,
+                          static_cast<int>(std::ceil(max_d + opt.roi_disparity_margin_px)), opt.roi_scale);
+      }
+      tm.roi_disparity_ms += ms_since(t);
+
+      t = Clock::now();
+      if (opt.roi_scale == 1.0) {
+        seg.superpixels = slic_.segment(frame.left(seg.roi), seg.labels, &seg.slic);
+      } else {
+        cv::resize(frame.left(seg.roi), small_grey_, cv::Size(), opt.roi_scale, opt.roi_scale, cv::INTER_AREA);
+        seg.superpixels = slic_half_.segment(small_grey_, small_labels_, &seg.slic);
+        cv::resize(small_labels_, seg.labels, seg.roi.size(), 0, 0, cv::INTER_NEAREST);
+      }
+      tm.slic_ms += ms_since(t);
+
+      t = Clock::now();
+      fit_superpixel_planes(seg.labels, seg.superpixels, seg.disparity_px, seg.roi.tl(), config_.planes, seg.planes,
+                            opt.roi_scale == 1.0 ? 1 : 2);
+      tm.planes_ms += ms_since(t);
+
+      t = Clock::now();
+      graph_.build(seg.labels, seg.superpixels, seg.roi.tl());
+      label_boundaries(graph_, seg.planes, config_.boundaries);
+      seg.boundaries = graph_.boundaries();
+      tm.boundaries_ms += ms_since(t);
+
+      t = Clock::now();
+      static_pts_.clear();
+      static_disp_.clear();
+      for (const TrackedPoint& p : result.points) {
+        if (!p.tracked || p.dynamic || !seg.roi.contains(cv::Point(cvRound(p.cur_px.x), cvRound(p.cur_px.y)))) continue;
+        static_pts_.push_back(p.cur_px);
+        static_disp_.push_back(p.cur_disparity_px);
+      }
+      seg.region = find_dynamic_region(seg.labels, seg.roi.tl(), graph_, seg.planes, group_pts_, group_disp_,
+                                       config_.regions, static_pts_, static_disp_);
+      if (!seg.region.rectangle.empty()) {
+        paint_region(seg.region, seg.labels, seg.roi.tl(), config_.regions.mask_mode, result.mask.image);
+        result.mask.regions.push_back(seg.region.rectangle & cv::Rect(cv::Point(0, 0), size));
+      }
+      tm.regions_ms += ms_since(t);
+    }
+    if (opt.mask_dilation_px > 0 && !result.mask.regions.empty()) {
+      const int k = 2 * opt.mask_dilation_px + 1;
+      cv::dilate(result.mask.image, dilated_, cv::getStructuringElement(cv::MORPH_ELLIPSE, cv::Size(k, k)));
+      dilated_.copyTo(result.mask.image);
+    }
+  }
+
+  // Corners of this frame, tracked by the next call.
+  t = Clock::now();
+  features_.detect(frame.left, corners_);
+  prev_pts_.resize(corners_.size());
+  for (std::size_t i = 0; i < corners_.size(); ++i) prev_pts_[i] = corners_[i].pt;
+  tm.features_ms = ms_since(t);
+  t = Clock::now();
+  if (opt.use_depth_test) {
+    measure_point_disparities(frame, prev_pts_, prev_disparity_px_, result.full_disparity_px);
+  } else {
+    prev_disparity_px_.assign(prev_pts_.size(), 0.0f);
+  }
+  tm.point_disparity_ms += ms_since(t);
+
+  std::swap(prev_pyramid_, cur_pyramid_);
+  if (opt.densify) {
+    frame.left.copyTo(prev_left_);
+    frame.right.copyTo(prev_right_);
+  }
+  has_previous_ = true;
+  tm.total_ms = ms_since(t_start);
+}
+
+void DynamicDetector::densify(const StereoFrame& frame, DetectorResult& result) {
+  const DetectorOptions& opt = config_.detector;
+  // Seeds: dynamic points with strong evidence. When both tests ran, a point both flag (a track that slid
+  // along an edge can fool one of them, rarely both); otherwise every dynamic point.
+  const bool both = opt.use_epipolar_test && opt.use_depth_test && result.epipolar.valid && result.depth.valid;
+  seed_pts_.clear();
+  seed_disp_.clear();
+  seed_index_.clear();
+  for (std::size_t k = 0; k < dyn_index_.size(); ++k) {
+    const TrackedPoint& p = result.points[static_cast<std::size_t>(dyn_index_[k])];
+    if (both && !(p.dynamic_epipolar && p.dynamic_depth)) continue;
+    seed_pts_.push_back(dyn_pts_[k]);
+    seed_disp_.push_back(dyn_disp_[k]);
+    seed_index_.push_back(dyn_index_[k]);
+  }
+  if (seed_pts_.size() < 2) return;
+  const int min_points = config_.grouping.min_points;
+  RoiGroupingConfig small = config_.grouping;
+  small.min_points = 2;
+  const std::vector<DynamicGroup> groups = group_dynamic_points(seed_pts_, seed_disp_, frame.left.size(), small);
+  const int b = config_.features.border_px;
+  const cv::Rect inner(b, b, frame.left.cols - 2 * b, frame.left.rows - 2 * b);
+  const float min_d2 = static_cast<float>(opt.densify_min_distance_px * opt.densify_min_distance_px);
+  extra_prev_.clear();
+  for (const DynamicGroup& g : groups) {
+    if (static_cast<int>(g.members.size()) >= min_points) continue;  // already a ROI
+    // The window around the group's previous positions.
+    float x0 = 1e9f, y0 = 1e9f, x1 = -1e9f, y1 = -1e9f;
+    // Groups that are ROIs already need no help; count all dynamic points near the seeds for that.
+    int near_dynamic = 0;
+    for (const cv::Point2f& q : dyn_pts_) {
+      for (int m : g.members) {
+        const cv::Point2f d = q - seed_pts_[static_cast<std::size_t>(m)];
+        if (d.dot(d) <= static_cast<float>(config_.grouping.a_s_px * config_.grouping.a_s_px)) {
+          ++near_dynamic;
+          break;
+        }
+      }
+    }
+    if (near_dynamic >= 2 * min_points) continue;
+    for (int m : g.members) {
+      const cv::Point2f& p = result.points[static_cast<std::size_t>(seed_index_[static_cast<std::size_t>(m)])].prev_px;
+      x0 = std::min(x0, p.x);
+      y0 = std::min(y0, p.y);
+      x1 = std::max(x1, p.x);
+      y1 = std::max(y1, p.y);
+    }
+    const int r = static_cast<int>(std::lround(opt.densify_radius_px + opt.densify_radius_disparity_factor * g.mean_disparity_px));
+    const cv::Rect window = cv::Rect(cv::Point(static_cast<int>(x0) - r, static_cast<int>(y0) - r),
+                                     cv::Point(static_cast<int>(x1) + r + 1, static_cast<int>(y1) + r + 1)) & inner;
+    if (window.width < 8 || window.height < 8) continue;
+    keypoints_.clear();
+    cv::FAST(prev_left_(window), keypoints_, config_.features.min_threshold, true);
+    std::sort(keypoints_.begin(), keypoints_.end(),
+              [](const cv::KeyPoint& a, const cv::KeyPoint& c) { return a.response > c.response; });
+    const std::size_t first_new = extra_prev_.size();
+    for (const cv::KeyPoint& kp : keypoints_) {
+      if (static_cast<int>(extra_prev_.size() - first_new) >= opt.densify_max_points) break;
+      const cv::Point2f p(kp.pt.x + static_cast<float>(window.x), kp.pt.y + static_cast<float>(window.y));
+      bool near = false;
+      for (const cv::Point2f& q : prev_pts_) {
+        const cv::Point2f d = q - p;
+        if (d.dot(d) < min_d2) {
+          near = true;
+          break;
+        }
+      }
+      for (std::size_t k = 0; k < extra_prev_.size() && !near; ++k) {
+        const cv::Point2f d = extra_prev_[k] - p;
+        near = d.dot(d) < min_d2;
+      }
+      if (!near) extra_prev_.push_back(p);
+    }
+  }
+  if (extra_prev_.empty()) return;
+
+  tracker_.track(prev_pyramid_, cur_pyramid_, extra_prev_, extra_cur_, extra_ok_);
+  extra_prev_disp_.assign(extra_prev_.size(), 0.0f);
+  extra_cur_disp_.assign(extra_prev_.size(), 0.0f);
+  for (std::size_t i = 0; i < extra_prev_.size(); ++i) {
+    if (!extra_ok_[i]) continue;
+    extra_cur_disp_[i] = sparse_.match(frame.left, frame.right, extra_cur_[i]);
+    if (opt.use_depth_test) extra_prev_disp_[i] = sparse_.match(prev_left_, prev_right_, extra_prev_[i]);
+  }
+  for (std::size_t i = 0; i < extra_prev_.size(); ++i) {
+    if (!extra_ok_[i]) continue;
+    TrackedPoint p;
+    p.prev_px = extra_prev_[i];
+    p.cur_px = extra_cur_[i];
+    p.prev_disparity_px = extra_prev_disp_[i];
+    p.cur_disparity_px = extra_cur_disp_[i];
+    p.tracked = true;
+    p.densified = true;
+    p.dynamic_epipolar = epipolar_.test_track(result.epipolar, p.prev_px, p.cur_px, p.cur_disparity_px, &p.d_epi_px, &p.t_epi_px);
+    if (opt.use_depth_test && result.depth.valid) {
+      DepthConsistencyTest::residuals(calibration_.left, calibration_.bf(), result.depth.T_cur_prev, p.prev_px,
+                                      p.prev_disparity_px, p.cur_px, p.cur_disparity_px, p.reprojection_px,
+                                      p.disparity_residual_px);
+      p.dynamic_depth = depth_test_.is_dynamic(result.depth, p.reprojection_px, p.disparity_residual_px,
+                                               p.cur_disparity_px > 0 ? p.cur_disparity_px : p.prev_disparity_px);
+    }
+    p.dynamic = (opt.use_epipolar_test && p.dynamic_epipolar) || (opt.use_depth_test && p.dynamic_depth);
+    result.points.push_back(p);
+    if (p.dynamic) {
+      dyn_pts_.push_back(p.cur_px);
+      dyn_disp_.push_back(p.cur_disparity_px);
+      dyn_index_.push_back(static_cast<int>(result.points.size() - 1));
+    }
+  }
+}
+
+}  // namespace agvslam::dynamic

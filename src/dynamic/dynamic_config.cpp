@@ -1,0 +1,136 @@
+// params/dynamic.yaml -> DynamicDetectorConfig.
+#include "agvslam/core/error.h"
+#include "agvslam/dynamic/detector.h"
+#include "agvslam/stereo/params_reader.h"
+
+namespace agvslam::dynamic {
+
+DynamicDetectorConfig load_dynamic_config(const std::string& path) {
+  const stereo::ParamsReader in(path);
+  in.check_sections({"features", "tracking", "epipolar", "depth_test", "grouping", "slic", "planes", "boundaries",
+                     "regions", "detector"});
+  DynamicDetectorConfig c;
+  const char* px = "a number (px)";
+  const char* num = "a number";
+  const char* integer = "an integer";
+  const char* flag = "true or false";
+
+  in.check_keys("features", {"target_count", "cell_size_px", "threshold", "min_threshold", "border_px"});
+  in.read("features", "target_count", c.features.target_count, integer);
+  in.read("features", "cell_size_px", c.features.cell_size_px, "an integer (px)");
+  in.read("features", "threshold", c.features.threshold, "an integer (grey levels)");
+  in.read("features", "min_threshold", c.features.min_threshold, "an integer (grey levels)");
+  in.read("features", "border_px", c.features.border_px, "an integer (px)");
+
+  in.check_keys("tracking", {"window_px", "levels", "max_iterations", "epsilon", "fb_max_error_px", "min_eigen_threshold"});
+  in.read("tracking", "window_px", c.tracking.window_px, "an integer (px)");
+  in.read("tracking", "levels", c.tracking.levels, integer);
+  in.read("tracking", "max_iterations", c.tracking.max_iterations, integer);
+  in.read("tracking", "epsilon", c.tracking.epsilon, px);
+  in.read("tracking", "fb_max_error_px", c.tracking.fb_max_error_px, px);
+  in.read("tracking", "min_eigen_threshold", c.tracking.min_eigen_threshold, num);
+
+  in.check_keys("epipolar", {"a_epi_px", "b_epi", "ransac_threshold_px", "ransac_confidence", "ransac_max_iterations",
+                             "min_tracks", "min_parallax_px", "adaptive", "adaptive_k", "a_epi_max_px"});
+  in.read("epipolar", "a_epi_px", c.epipolar.a_epi_px, px);
+  in.read("epipolar", "b_epi", c.epipolar.b_epi, num);
+  in.read("epipolar", "ransac_threshold_px", c.epipolar.ransac_threshold_px, px);
+  in.read("epipolar", "ransac_confidence", c.epipolar.ransac_confidence, num);
+  in.read("epipolar", "ransac_max_iterations", c.epipolar.ransac_max_iterations, integer);
+  in.read("epipolar", "min_tracks", c.epipolar.min_tracks, integer);
+  in.read("epipolar", "min_parallax_px", c.epipolar.min_parallax_px, px);
+  in.read("epipolar", "adaptive", c.epipolar.adaptive, flag);
+  in.read("epipolar", "adaptive_k", c.epipolar.adaptive_k, num);
+  in.read("epipolar", "a_epi_max_px", c.epipolar.a_epi_max_px, px);
+
+  in.check_keys("depth_test", {"min_points", "min_disparity_px", "ransac_reprojection_px", "ransac_iterations",
+                               "ransac_confidence", "a_reproj_px", "b_reproj", "a_disp_px", "b_disp", "adaptive",
+                               "adaptive_k", "max_scale"});
+  DepthTestConfig& d = c.depth_test;
+  in.read("depth_test", "min_points", d.min_points, integer);
+  in.read("depth_test", "min_disparity_px", d.min_disparity_px, px);
+  in.read("depth_test", "ransac_reprojection_px", d.ransac_reprojection_px, px);
+  in.read("depth_test", "ransac_iterations", d.ransac_iterations, integer);
+  in.read("depth_test", "ransac_confidence", d.ransac_confidence, num);
+  in.read("depth_test", "a_reproj_px", d.a_reproj_px, px);
+  in.read("depth_test", "b_reproj", d.b_reproj, num);
+  in.read("depth_test", "a_disp_px", d.a_disp_px, px);
+  in.read("depth_test", "b_disp", d.b_disp, num);
+  in.read("depth_test", "adaptive", d.adaptive, flag);
+  in.read("depth_test", "adaptive_k", d.adaptive_k, num);
+  in.read("depth_test", "max_scale", d.max_scale, num);
+
+  in.check_keys("grouping", {"a_s_px", "b_s", "t_disp_px", "t_disp_rel", "min_points", "margin_px",
+                             "margin_disparity_factor"});
+  in.read("grouping", "a_s_px", c.grouping.a_s_px, px);
+  in.read("grouping", "b_s", c.grouping.b_s, num);
+  in.read("grouping", "t_disp_px", c.grouping.t_disp_px, px);
+  in.read("grouping", "t_disp_rel", c.grouping.t_disp_rel, num);
+  in.read("grouping", "min_points", c.grouping.min_points, integer);
+  in.read("grouping", "margin_px", c.grouping.margin_px, "an integer (px)");
+  in.read("grouping", "margin_disparity_factor", c.grouping.margin_disparity_factor, num);
+
+  in.check_keys("slic", {"superpixel_size_px", "max_superpixels", "max_color_distance", "iterations",
+                         "min_change_fraction", "incremental", "min_segment_fraction"});
+  in.read("slic", "superpixel_size_px", c.slic.superpixel_size_px, "an integer (px)");
+  in.read("slic", "max_superpixels", c.slic.max_superpixels, integer);
+  in.read("slic", "max_color_distance", c.slic.max_color_distance, "a number (grey levels)");
+  in.read("slic", "iterations", c.slic.iterations, integer);
+  in.read("slic", "min_change_fraction", c.slic.min_change_fraction, num);
+  in.read("slic", "incremental", c.slic.incremental, flag);
+  in.read("slic", "min_segment_fraction", c.slic.min_segment_fraction, num);
+
+  in.check_keys("planes", {"ransac_iterations", "confidence", "inlier_threshold_px", "min_valid_pixels",
+                           "min_valid_fraction", "min_inlier_fraction", "max_samples", "seed"});
+  in.read("planes", "ransac_iterations", c.planes.ransac_iterations, integer);
+  in.read("planes", "confidence", c.planes.confidence, num);
+  in.read("planes", "inlier_threshold_px", c.planes.inlier_threshold_px, px);
+  in.read("planes", "min_valid_pixels", c.planes.min_valid_pixels, integer);
+  in.read("planes", "min_valid_fraction", c.planes.min_valid_fraction, num);
+  in.read("planes", "min_inlier_fraction", c.planes.min_inlier_fraction, num);
+  in.read("planes", "max_samples", c.planes.max_samples, integer);
+  int seed = static_cast<int>(c.planes.seed);
+  in.read("planes", "seed", seed, "a non-negative integer");
+  if (seed < 0) throw InputError(path, "planes.seed", "expected a non-negative integer");
+  c.planes.seed = static_cast<uint32_t>(seed);
+
+  in.check_keys("boundaries", {"lambda_occ", "lambda_hinge", "lambda_pen"});
+  in.read("boundaries", "lambda_occ", c.boundaries.lambda_occ, "a number (px^2)");
+  in.read("boundaries", "lambda_hinge", c.boundaries.lambda_hinge, "a number (px^2)");
+  in.read("boundaries", "lambda_pen", c.boundaries.lambda_pen, "a number (px^2)");
+
+  in.check_keys("regions", {"start_radius_px", "start_tolerance_px", "start_tolerance_rel", "stop_at_unknown",
+                            "disparity_band", "band_tolerance_px", "band_tolerance_rel", "static_veto", "mask_mode"});
+  in.read("regions", "start_radius_px", c.regions.start_radius_px, "an integer (px)");
+  in.read("regions", "start_tolerance_px", c.regions.start_tolerance_px, px);
+  in.read("regions", "start_tolerance_rel", c.regions.start_tolerance_rel, num);
+  in.read("regions", "stop_at_unknown", c.regions.stop_at_unknown, flag);
+  in.read("regions", "disparity_band", c.regions.disparity_band, flag);
+  in.read("regions", "band_tolerance_px", c.regions.band_tolerance_px, px);
+  in.read("regions", "band_tolerance_rel", c.regions.band_tolerance_rel, num);
+  in.read("regions", "static_veto", c.regions.static_veto, flag);
+  std::string mode = to_string(c.regions.mask_mode);
+  in.read("regions", "mask_mode", mode, "rectangle or superpixels");
+  if (!parse_mask_mode(mode, c.regions.mask_mode)) throw InputError(path, "regions.mask_mode", "expected rectangle or superpixels");
+
+  in.check_keys("detector", {"use_epipolar_test", "use_depth_test", "full_frame_disparity", "max_rois",
+                             "roi_disparity_margin_px", "roi_scale", "mask_dilation_px", "densify", "densify_radius_px",
+                             "densify_radius_disparity_factor", "densify_max_points", "densify_min_distance_px"});
+  in.read("detector", "use_epipolar_test", c.detector.use_epipolar_test, flag);
+  in.read("detector", "use_depth_test", c.detector.use_depth_test, flag);
+  in.read("detector", "full_frame_disparity", c.detector.full_frame_disparity, flag);
+  in.read("detector", "max_rois", c.detector.max_rois, integer);
+  in.read("detector", "roi_disparity_margin_px", c.detector.roi_disparity_margin_px, px);
+  in.read("detector", "roi_scale", c.detector.roi_scale, "1 or 0.5");
+  in.read("detector", "mask_dilation_px", c.detector.mask_dilation_px, "an integer (px)");
+  in.read("detector", "densify", c.detector.densify, flag);
+  in.read("detector", "densify_radius_px", c.detector.densify_radius_px, px);
+  in.read("detector", "densify_radius_disparity_factor", c.detector.densify_radius_disparity_factor, num);
+  in.read("detector", "densify_max_points", c.detector.densify_max_points, integer);
+  in.read("detector", "densify_min_distance_px", c.detector.densify_min_distance_px, px);
+
+  c.validate(path);
+  return c;
+}
+
+}  // namespace agvslam::dynamic

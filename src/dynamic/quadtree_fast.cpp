@@ -1,0 +1,184 @@
+#include "agvslam/dynamic/quadtree_fast.h"
+
+#include <algorithm>
+#include <cmath>
+#include <cstdio>
+#include <opencv2/features2d.hpp>
+
+#include "agvslam/core/error.h"
+
+namespace agvslam::dynamic {
+
+void QuadtreeFastConfig::validate(const std::string& source) const {
+  auto require = [&](bool ok, const char* field, const char* expected) {
+    if (!ok) throw InputError(source, std::string("features.") + field, expected);
+  };
+  require(target_count >= 8 && target_count <= 20000, "target_count", "expected an integer in [8, 20000]");
+  require(cell_size_px >= 8 && cell_size_px <= 512, "cell_size_px", "expected an integer in [8, 512] px");
+  require(threshold >= 1 && threshold <= 255, "threshold", "expected an integer in [1, 255] grey levels");
+  require(min_threshold >= 1 && min_threshold <= threshold, "min_threshold",
+          "expected an integer in [1, threshold] grey levels");
+  require(border_px >= 3 && border_px <= 256, "border_px", "expected an integer in [3, 256] px");
+}
+
+std::string QuadtreeFastConfig::describe() const {
+  char buf[200];
+  std::snprintf(buf, sizeof(buf), "features: quadtree FAST, N = %d, cells %d px, threshold %d (fallback %d), border %d px",
+                target_count, cell_size_px, threshold, min_threshold, border_px);
+  return buf;
+}
+
+namespace {
+
+struct Node {
+  cv::Rect2f rect;
+  std::vector<int> members;
+};
+
+bool splittable(const Node& n) { return n.members.size() > 1 && (n.rect.width > 0.5f || n.rect.height > 0.5f); }
+
+void split(const Node& parent, const std::vector<Corner>& candidates, std::vector<Node>& out) {
+  const float hw = parent.rect.width * 0.5f, hh = parent.rect.height * 0.5f;
+  const float mx = parent.rect.x + hw, my = parent.rect.y + hh;
+  Node child[4];
+  child[0].rect = {parent.rect.x, parent.rect.y, hw, hh};
+  child[1].rect = {mx, parent.rect.y, hw, hh};
+  child[2].rect = {parent.rect.x, my, hw, hh};
+  child[3].rect = {mx, my, hw, hh};
+  for (int i : parent.members) {
+    const cv::Point2f& p = candidates[static_cast<std::size_t>(i)].pt;
+    const int q = (p.x < mx ? 0 : 1) + (p.y < my ? 0 : 2);
+    child[q].members.push_back(i);
+  }
+  for (Node& c : child) {
+    if (!c.members.empty()) out.push_back(std::move(c));
+  }
+}
+
+}  // namespace
+
+std::vector<Corner> distribute_quadtree(const std::vector<Corner>& candidates, const cv::Rect2f& area,
+                                        int target_count, std::vector<cv::Rect2f>* node_rects) {
+  std::vector<Corner> result;
+  if (node_rects) node_rects->clear();
+  if (candidates.empty() || target_count <= 0 || area.width <= 0 || area.height <= 0) return result;
+
+  // (2) Initial nodes: about square, side = area height.
+  const int initial = std::max(1, static_cast<int>(std::lround(area.width / area.height)));
+  const float w = area.width / static_cast<float>(initial);
+  std::vector<Node> nodes(static_cast<std::size_t>(initial));
+  for (int i = 0; i < initial; ++i) nodes[static_cast<std::size_t>(i)].rect = {area.x + w * static_cast<float>(i), area.y, w, area.height};
+  for (std::size_t i = 0; i < candidates.size(); ++i) {
+    const cv::Point2f& p = candidates[i].pt;
+    const int k = std::clamp(static_cast<int>((p.x - area.x) / w), 0, initial - 1);
+    nodes[static_cast<std::size_t>(k)].members.push_back(static_cast<int>(i));
+  }
+  nodes.erase(std::remove_if(nodes.begin(), nodes.end(), [](const Node& n) { return n.members.empty(); }), nodes.end());
+
+  // (3)-(4) Split rounds until N nodes hold a corner. Within a round the fullest nodes split first, so the
+  // round that reaches N splits where the corners are densest.
+  std::vector<Node> next;
+  std::vector<int> order;
+  while (static_cast<int>(nodes.size()) < target_count) {
+    order.clear();
+    for (std::size_t i = 0; i < nodes.size(); ++i) {
+      if (splittable(nodes[i])) order.push_back(static_cast<int>(i));
+    }
+    if (order.empty()) break;
+    std::stable_sort(order.begin(), order.end(), [&](int a, int b) {
+      return nodes[static_cast<std::size_t>(a)].members.size() > nodes[static_cast<std::size_t>(b)].members.size();
+    });
+    std::vector<char> split_this(nodes.size(), 0);
+    int count = static_cast<int>(nodes.size());
+    std::vector<std::vector<Node>> children_of(nodes.size());
+    for (int i : order) {
+      if (count >= target_count) break;
+      split(nodes[static_cast<std::size_t>(i)], candidates, children_of[static_cast<std::size_t>(i)]);
+      split_this[static_cast<std::size_t>(i)] = 1;
+      count += static_cast<int>(children_of[static_cast<std::size_t>(i)].size()) - 1;
+    }
+    next.clear();
+    for (std::size_t i = 0; i < nodes.size(); ++i) {
+      if (!split_this[i]) {
+        next.push_back(std::move(nodes[i]));
+      } else {
+        for (Node& c : children_of[i]) next.push_back(std::move(c));
+      }
+    }
+    nodes.swap(next);
+  }
+
+  // Strongest corner per node; trim the overshoot of the last round by dropping the weakest winners.
+  std::vector<std::pair<Corner, cv::Rect2f>> winners;
+  winners.reserve(nodes.size());
+  for (const Node& n : nodes) {
+    int best = n.members.front();
+    for (int i : n.members) {
+      if (candidates[static_cast<std::size_t>(i)].response > candidates[static_cast<std::size_t>(best)].response) best = i;
+    }
+    winners.emplace_back(candidates[static_cast<std::size_t>(best)], n.rect);
+  }
+  std::stable_sort(winners.begin(), winners.end(),
+                   [](const auto& a, const auto& b) { return a.first.response > b.first.response; });
+  if (static_cast<int>(winners.size()) > target_count) winners.resize(static_cast<std::size_t>(target_count));
+  result.reserve(winners.size());
+  for (const auto& w2 : winners) {
+    result.push_back(w2.first);
+    if (node_rects) node_rects->push_back(w2.second);
+  }
+  return result;
+}
+
+QuadtreeFast::QuadtreeFast(const QuadtreeFastConfig& config) : config_(config) { config_.validate("QuadtreeFastConfig"); }
+
+void QuadtreeFast::detect(const cv::Mat& grey, std::vector<Corner>& corners, QuadtreeStats* stats, bool collect_nodes) {
+  CV_Assert(grey.type() == CV_8UC1);
+  corners.clear();
+  const int b = config_.border_px;
+  const cv::Rect area(b, b, grey.cols - 2 * b, grey.rows - 2 * b);
+  if (area.width < 8 || area.height < 8) return;
+
+  // (1) FAST once at the fallback threshold (with non-maximum suppression) on the area plus the 3 px the
+  // FAST circle needs; the per-cell choice below then keeps, in each cell, the corners that pass the normal
+  // threshold, or all of them where none does. This equals running FAST per cell with the two thresholds
+  // (up to non-maximum suppression between a strong and a weak corner).
+  const cv::Rect with_ring = cv::Rect(area.x - 3, area.y - 3, area.width + 6, area.height + 6) &
+                             cv::Rect(0, 0, grey.cols, grey.rows);
+  keypoints_.clear();
+  cv::FAST(grey(with_ring), keypoints_, config_.min_threshold, true, cv::FastFeatureDetector::TYPE_9_16);
+
+  const int cs = config_.cell_size_px;
+  const int cells_x = (area.width + cs - 1) / cs, cells_y = (area.height + cs - 1) / cs;
+  cell_best_.assign(static_cast<std::size_t>(cells_x * cells_y), -1.0f);
+  auto cell_of = [&](const cv::Point2f& p) {
+    const int cx = std::clamp(static_cast<int>(p.x - static_cast<float>(area.x)) / cs, 0, cells_x - 1);
+    const int cy = std::clamp(static_cast<int>(p.y - static_cast<float>(area.y)) / cs, 0, cells_y - 1);
+    return static_cast<std::size_t>(cy * cells_x + cx);
+  };
+  candidates_.clear();
+  for (cv::KeyPoint& kp : keypoints_) {
+    kp.pt.x += static_cast<float>(with_ring.x);
+    kp.pt.y += static_cast<float>(with_ring.y);
+    if (!area.contains(cv::Point(static_cast<int>(kp.pt.x), static_cast<int>(kp.pt.y)))) continue;
+    float& best = cell_best_[cell_of(kp.pt)];
+    best = std::max(best, kp.response);
+    candidates_.push_back({kp.pt, kp.response});
+  }
+  const float strong = static_cast<float>(config_.threshold);
+  int weak_cells = 0;
+  for (float best : cell_best_) weak_cells += best >= 0 && best < strong;
+  candidates_.erase(std::remove_if(candidates_.begin(), candidates_.end(),
+                                   [&](const Corner& c) {
+                                     return c.response < strong && cell_best_[cell_of(c.pt)] >= strong;
+                                   }),
+                    candidates_.end());
+
+  std::vector<cv::Rect2f>* rects = (stats && collect_nodes) ? &stats->node_rects : nullptr;
+  corners = distribute_quadtree(candidates_, cv::Rect2f(area), config_.target_count, rects);
+  if (stats) {
+    stats->candidates = static_cast<int>(candidates_.size());
+    stats->weak_cells = weak_cells;
+  }
+}
+
+}  // namespace agvslam::dynamic

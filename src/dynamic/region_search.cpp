@@ -1,0 +1,269 @@
+#include "agvslam/dynamic/region_search.h"
+
+#include <algorithm>
+#include <cmath>
+#include <cstdio>
+
+#include "agvslam/core/error.h"
+
+namespace agvslam::dynamic {
+
+std::string to_string(MaskMode mode) { return mode == MaskMode::kRectangle ? "rectangle" : "superpixels"; }
+
+bool parse_mask_mode(const std::string& text, MaskMode& mode) {
+  if (text == "rectangle") {
+    mode = MaskMode::kRectangle;
+    return true;
+  }
+  if (text == "superpixels") {
+    mode = MaskMode::kSuperpixels;
+    return true;
+  }
+  return false;
+}
+
+void RegionSearchConfig::validate(const std::string& source) const {
+  auto require = [&](bool ok, const char* field, const char* expected) {
+    if (!ok) throw InputError(source, std::string("regions.") + field, expected);
+  };
+  require(start_radius_px >= 0 && start_radius_px <= 50, "start_radius_px", "expected an integer in [0, 50] px");
+  require(start_tolerance_px > 0 && start_tolerance_px <= 100, "start_tolerance_px", "expected a number in (0, 100] px");
+  require(start_tolerance_rel >= 0 && start_tolerance_rel <= 10, "start_tolerance_rel", "expected a number in [0, 10]");
+  require(band_tolerance_px >= 0 && band_tolerance_px <= 100, "band_tolerance_px", "expected a number in [0, 100] px");
+  require(band_tolerance_rel >= 0 && band_tolerance_rel <= 10, "band_tolerance_rel", "expected a number in [0, 10]");
+}
+
+std::string RegionSearchConfig::describe() const {
+  char buf[300];
+  char band[80] = "off";
+  if (disparity_band) std::snprintf(band, sizeof(band), "+-(%.2f + %.3f d) px", band_tolerance_px, band_tolerance_rel);
+  std::snprintf(buf, sizeof(buf),
+                "regions: start superpixel within %d px agreeing to %.2f + %.2f d px, unknown boundaries %s, "
+                "disparity band %s, static veto %s, mask = %s",
+                start_radius_px, start_tolerance_px, start_tolerance_rel, stop_at_unknown ? "stop" : "pass", band,
+                static_veto ? "on" : "off", to_string(mask_mode).c_str());
+  return buf;
+}
+
+namespace {
+bool stops(const SuperpixelGraph& graph, int a, int b, bool stop_at_unknown) {
+  if (a == b) return false;
+  const BoundaryType t = graph.type(a, b);
+  return is_occlusion(t) || (stop_at_unknown && t == BoundaryType::kUnknown);
+}
+}  // namespace
+
+namespace {
+// -1: no plane; 0: plane inside the band; 1: plane outside the band (disparity evaluated at pixel p).
+int band_state(const DisparityBand& band, int label, cv::Point p) {
+  const DisparityPlane& plane = (*band.planes)[static_cast<std::size_t>(label)];
+  if (!plane.valid) return -1;
+  const double d = plane.disparity_at(p.x + band.origin.x, p.y + band.origin.y);
+  return (d < band.lo_px || d > band.hi_px) ? 1 : 0;
+}
+}  // namespace
+
+std::array<cv::Point, 4> search_to_occlusion(const cv::Mat& labels, const SuperpixelGraph& graph, cv::Point start,
+                                             bool stop_at_unknown, const DisparityBand& band) {
+  CV_Assert(labels.type() == CV_32SC1);
+  CV_Assert(start.x >= 0 && start.y >= 0 && start.x < labels.cols && start.y < labels.rows);
+  const bool use_band = band.enabled && band.planes != nullptr;
+  std::array<cv::Point, 4> out;
+  const int dx[4] = {1, -1, 0, 0};
+  const int dy[4] = {0, 0, 1, -1};
+  for (int dir = 0; dir < 4; ++dir) {
+    cv::Point p = start;
+    cv::Point last_good = start;
+    int label = labels.at<int32_t>(p);
+    while (true) {
+      const cv::Point q(p.x + dx[dir], p.y + dy[dir]);
+      if (q.x < 0 || q.y < 0 || q.x >= labels.cols || q.y >= labels.rows) break;
+      const int next = labels.at<int32_t>(q);
+      if (next != label) {
+        if (stops(graph, label, next, stop_at_unknown)) break;
+        if (use_band && band_state(band, next, q) == 1) break;
+        if (band.vetoed && (*band.vetoed)[static_cast<std::size_t>(next)]) break;
+      }
+      label = next;
+      p = q;
+      if (!use_band || band_state(band, label, p) != -1) last_good = p;
+    }
+    out[static_cast<std::size_t>(dir)] = use_band ? last_good : p;
+  }
+  return out;
+}
+
+int choose_start_superpixel(const cv::Mat& labels, cv::Point origin, const std::vector<DisparityPlane>& planes,
+                            cv::Point2f point_px, float d_px, const RegionSearchConfig& config) {
+  if (!(d_px > 0)) return -1;
+  const int cx = static_cast<int>(std::lround(point_px.x)) - origin.x;
+  const int cy = static_cast<int>(std::lround(point_px.y)) - origin.y;
+  const double tolerance = config.start_tolerance_px + config.start_tolerance_rel * d_px;
+  auto error_of = [&](int k) {
+    if (k < 0 || k >= static_cast<int>(planes.size()) || !planes[static_cast<std::size_t>(k)].valid) return 1e30;
+    return std::abs(planes[static_cast<std::size_t>(k)].disparity_at(point_px.x, point_px.y) - d_px);
+  };
+  // The point's own superpixel when its plane agrees, else the best-agreeing one nearby.
+  if (cx >= 0 && cy >= 0 && cx < labels.cols && cy < labels.rows) {
+    const int own = labels.at<int32_t>(cy, cx);
+    if (error_of(own) <= tolerance) return own;
+  }
+  const int r = config.start_radius_px;
+  int best = -1;
+  double best_err = tolerance;
+  for (int y = std::max(0, cy - r); y <= std::min(labels.rows - 1, cy + r); ++y) {
+    for (int x = std::max(0, cx - r); x <= std::min(labels.cols - 1, cx + r); ++x) {
+      if ((x - cx) * (x - cx) + (y - cy) * (y - cy) > r * r) continue;
+      const int k = labels.at<int32_t>(y, x);
+      const double err = error_of(k);
+      if (err <= best_err) {
+        best_err = err;
+        best = k;
+      }
+    }
+  }
+  return best;
+}
+
+DynamicRegion find_dynamic_region(const cv::Mat& labels, cv::Point origin, const SuperpixelGraph& graph,
+                                  const std::vector<DisparityPlane>& planes, const std::vector<cv::Point2f>& points_px,
+                                  const std::vector<float>& disparity_px, const RegionSearchConfig& config,
+                                  const std::vector<cv::Point2f>& static_points_px,
+                                  const std::vector<float>& static_disparity_px) {
+  CV_Assert(points_px.size() == disparity_px.size());
+  CV_Assert(static_points_px.size() == static_disparity_px.size());
+  DynamicRegion region;
+  // Static veto: superpixels holding a static point whose disparity agrees with their plane.
+  std::vector<char> vetoed(static_cast<std::size_t>(graph.count()), 0);
+  if (config.static_veto) {
+    for (std::size_t i = 0; i < static_points_px.size(); ++i) {
+      const float d = static_disparity_px[i];
+      if (!(d > 0)) continue;
+      const int x = static_cast<int>(std::lround(static_points_px[i].x)) - origin.x;
+      const int y = static_cast<int>(std::lround(static_points_px[i].y)) - origin.y;
+      if (x < 0 || y < 0 || x >= labels.cols || y >= labels.rows) continue;
+      const int k = labels.at<int32_t>(y, x);
+      if (k < 0 || k >= graph.count() || vetoed[static_cast<std::size_t>(k)]) continue;
+      const DisparityPlane& plane = planes[static_cast<std::size_t>(k)];
+      const double tolerance = config.start_tolerance_px + config.start_tolerance_rel * d;
+      if (plane.valid && std::abs(plane.disparity_at(static_points_px[i].x, static_points_px[i].y) - d) <= tolerance) {
+        vetoed[static_cast<std::size_t>(k)] = 1;
+        region.vetoed_superpixels.push_back(k);
+      }
+    }
+  }
+  int x0 = 1 << 30, y0 = 1 << 30, x1 = -(1 << 30), y1 = -(1 << 30);
+  std::vector<char> is_start(static_cast<std::size_t>(graph.count()), 0);
+  std::vector<int> start_label(points_px.size(), -1);
+  double d_min = 1e30, d_max = -1e30;
+  for (std::size_t i = 0; i < points_px.size(); ++i) {
+    start_label[i] = choose_start_superpixel(labels, origin, planes, points_px[i], disparity_px[i], config);
+    if (start_label[i] >= 0 && vetoed[static_cast<std::size_t>(start_label[i])]) start_label[i] = -1;
+    if (start_label[i] < 0) continue;
+    d_min = std::min(d_min, static_cast<double>(disparity_px[i]));
+    d_max = std::max(d_max, static_cast<double>(disparity_px[i]));
+  }
+  DisparityBand band;
+  band.enabled = config.disparity_band && d_max >= d_min;
+  band.planes = &planes;
+  band.origin = origin;
+  band.vetoed = &vetoed;
+  if (band.enabled) {
+    band.lo_px = d_min - (config.band_tolerance_px + config.band_tolerance_rel * d_min);
+    band.hi_px = d_max + (config.band_tolerance_px + config.band_tolerance_rel * d_max);
+    region.band_lo_px = band.lo_px;
+    region.band_hi_px = band.hi_px;
+  }
+  for (std::size_t i = 0; i < points_px.size(); ++i) {
+    const int k = start_label[i];
+    if (k < 0) continue;
+    // Start inside the chosen superpixel: the point's pixel if it belongs to it, else its nearest pixel.
+    cv::Point start(static_cast<int>(std::lround(points_px[i].x)) - origin.x,
+                    static_cast<int>(std::lround(points_px[i].y)) - origin.y);
+    start.x = std::clamp(start.x, 0, labels.cols - 1);
+    start.y = std::clamp(start.y, 0, labels.rows - 1);
+    if (labels.at<int32_t>(start) != k) {
+      int best_d2 = 1 << 30;
+      cv::Point best = start;
+      const int r = config.start_radius_px;
+      for (int y = std::max(0, start.y - r); y <= std::min(labels.rows - 1, start.y + r); ++y) {
+        for (int x = std::max(0, start.x - r); x <= std::min(labels.cols - 1, start.x + r); ++x) {
+          const int d2 = (x - start.x) * (x - start.x) + (y - start.y) * (y - start.y);
+          if (labels.at<int32_t>(y, x) == k && d2 < best_d2) {
+            best_d2 = d2;
+            best = cv::Point(x, y);
+          }
+        }
+      }
+      start = best;
+    }
+    ++region.started_points;
+    if (!is_start[static_cast<std::size_t>(k)]) {
+      is_start[static_cast<std::size_t>(k)] = 1;
+      region.start_superpixels.push_back(k);
+    }
+    const auto stops = search_to_occlusion(labels, graph, start, config.stop_at_unknown, band);
+    for (const cv::Point& s : stops) {
+      x0 = std::min(x0, s.x);
+      y0 = std::min(y0, s.y);
+      x1 = std::max(x1, s.x);
+      y1 = std::max(y1, s.y);
+      region.stop_points.push_back(s + origin);
+    }
+  }
+  if (region.started_points == 0) return region;
+  region.rectangle = cv::Rect(cv::Point(x0, y0) + origin, cv::Point(x1 + 1, y1 + 1) + origin);
+
+  // Flood over non-occlusion boundaries, among superpixels whose centre lies inside the rectangle.
+  std::vector<char> seen(static_cast<std::size_t>(graph.count()), 0);
+  std::vector<int> queue = region.start_superpixels;
+  for (int k : queue) seen[static_cast<std::size_t>(k)] = 1;
+  const cv::Rect2d rect(region.rectangle);
+  for (std::size_t head = 0; head < queue.size(); ++head) {
+    const int k = queue[head];
+    region.superpixels.push_back(k);
+    for (const auto& nb : graph.neighbours(k)) {
+      const int m = nb.first;
+      if (seen[static_cast<std::size_t>(m)] || vetoed[static_cast<std::size_t>(m)]) continue;
+      const BoundaryType t = graph.boundaries()[static_cast<std::size_t>(nb.second)].type;
+      if (is_occlusion(t) || (config.stop_at_unknown && t == BoundaryType::kUnknown)) continue;
+      const cv::Point2d c = graph.region(m).centroid();
+      if (!rect.contains(c)) continue;
+      if (band.enabled) {
+        const DisparityPlane& plane = planes[static_cast<std::size_t>(m)];
+        const double d = plane.disparity_at(c.x, c.y);
+        if (plane.valid && (d < band.lo_px || d > band.hi_px)) continue;
+      }
+      seen[static_cast<std::size_t>(m)] = 1;
+      queue.push_back(m);
+    }
+  }
+  return region;
+}
+
+void paint_region(const DynamicRegion& region, const cv::Mat& labels, cv::Point origin, MaskMode mode, cv::Mat& mask) {
+  CV_Assert(mask.type() == CV_8UC1);
+  const cv::Rect image(cv::Point(0, 0), mask.size());
+  const cv::Rect rect = region.rectangle & image;
+  if (rect.empty()) return;
+  if (mode == MaskMode::kRectangle) {
+    mask(rect).setTo(255);
+    return;
+  }
+  int max_label = -1;
+  for (int k : region.superpixels) max_label = std::max(max_label, k);
+  std::vector<char> member(static_cast<std::size_t>(max_label + 1), 0);
+  for (int k : region.superpixels) member[static_cast<std::size_t>(k)] = 1;
+  const cv::Rect roi_rect(origin, labels.size());
+  const cv::Rect area = rect & roi_rect;
+  for (int y = area.y; y < area.y + area.height; ++y) {
+    const int32_t* l = labels.ptr<int32_t>(y - origin.y);
+    uint8_t* m = mask.ptr<uint8_t>(y);
+    for (int x = area.x; x < area.x + area.width; ++x) {
+      const int k = l[x - origin.x];
+      if (k >= 0 && k <= max_label && member[static_cast<std::size_t>(k)]) m[x] = 255;
+    }
+  }
+}
+
+}  // namespace agvslam::dynamic

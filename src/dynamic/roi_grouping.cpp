@@ -1,0 +1,100 @@
+#include "agvslam/dynamic/roi_grouping.h"
+
+#include <algorithm>
+#include <cmath>
+#include <cstdio>
+#include <numeric>
+
+#include "agvslam/core/error.h"
+
+namespace agvslam::dynamic {
+
+void RoiGroupingConfig::validate(const std::string& source) const {
+  auto require = [&](bool ok, const char* field, const char* expected) {
+    if (!ok) throw InputError(source, std::string("grouping.") + field, expected);
+  };
+  require(a_s_px > 0 && a_s_px <= 2000, "a_s_px", "expected a number in (0, 2000] px");
+  require(b_s >= 0 && b_s <= 100, "b_s", "expected a number in [0, 100]");
+  require(t_disp_px >= 0 && t_disp_px <= 500, "t_disp_px", "expected a number in [0, 500] px");
+  require(t_disp_rel >= 0 && t_disp_rel <= 10, "t_disp_rel", "expected a number in [0, 10]");
+  require(min_points >= 1 && min_points <= 1000, "min_points", "expected an integer in [1, 1000]");
+  require(margin_px >= 0 && margin_px <= 1000, "margin_px", "expected an integer in [0, 1000] px");
+  require(margin_disparity_factor >= 0 && margin_disparity_factor <= 100, "margin_disparity_factor",
+          "expected a number in [0, 100]");
+}
+
+std::string RoiGroupingConfig::describe() const {
+  char buf[280];
+  std::snprintf(buf, sizeof(buf),
+                "grouping: T_s = %.1f + %.2f d px, T_disp = %.2f + %.3f d px, ROI when >= %d points, margin %d + %.2f d px",
+                a_s_px, b_s, t_disp_px, t_disp_rel, min_points, margin_px, margin_disparity_factor);
+  return buf;
+}
+
+namespace {
+int find_root(std::vector<int>& parent, int i) {
+  while (parent[static_cast<std::size_t>(i)] != i) {
+    parent[static_cast<std::size_t>(i)] = parent[static_cast<std::size_t>(parent[static_cast<std::size_t>(i)])];
+    i = parent[static_cast<std::size_t>(i)];
+  }
+  return i;
+}
+}  // namespace
+
+std::vector<DynamicGroup> group_dynamic_points(const std::vector<cv::Point2f>& points_px,
+                                               const std::vector<float>& disparity_px, cv::Size image_size,
+                                               const RoiGroupingConfig& config) {
+  CV_Assert(points_px.size() == disparity_px.size());
+  const int n = static_cast<int>(points_px.size());
+  std::vector<int> parent(static_cast<std::size_t>(n));
+  std::iota(parent.begin(), parent.end(), 0);
+  for (int i = 0; i < n; ++i) {
+    const float di = disparity_px[static_cast<std::size_t>(i)];
+    if (!(di > 0)) continue;
+    for (int j = i + 1; j < n; ++j) {
+      const float dj = disparity_px[static_cast<std::size_t>(j)];
+      if (!(dj > 0)) continue;
+      const double d = 0.5 * (static_cast<double>(di) + dj);
+      const double t_disp = config.t_disp_px + config.t_disp_rel * d;
+      if (std::abs(static_cast<double>(di) - dj) > t_disp) continue;
+      const double t_s = config.a_s_px + config.b_s * d;  // eq. 4
+      const cv::Point2f delta = points_px[static_cast<std::size_t>(i)] - points_px[static_cast<std::size_t>(j)];
+      if (static_cast<double>(delta.dot(delta)) > t_s * t_s) continue;
+      const int ri = find_root(parent, i), rj = find_root(parent, j);
+      if (ri != rj) parent[static_cast<std::size_t>(std::max(ri, rj))] = std::min(ri, rj);
+    }
+  }
+  std::vector<std::vector<int>> by_root(static_cast<std::size_t>(n));
+  for (int i = 0; i < n; ++i) {
+    if (disparity_px[static_cast<std::size_t>(i)] > 0) by_root[static_cast<std::size_t>(find_root(parent, i))].push_back(i);
+  }
+  std::vector<DynamicGroup> groups;
+  const cv::Rect image(cv::Point(0, 0), image_size);
+  for (auto& members : by_root) {
+    if (static_cast<int>(members.size()) < config.min_points) continue;
+    DynamicGroup g;
+    g.members = std::move(members);
+    float x0 = 1e9f, y0 = 1e9f, x1 = -1e9f, y1 = -1e9f;
+    double sum_d = 0;
+    for (int i : g.members) {
+      const cv::Point2f& p = points_px[static_cast<std::size_t>(i)];
+      x0 = std::min(x0, p.x);
+      y0 = std::min(y0, p.y);
+      x1 = std::max(x1, p.x);
+      y1 = std::max(y1, p.y);
+      sum_d += disparity_px[static_cast<std::size_t>(i)];
+    }
+    g.mean_disparity_px = sum_d / static_cast<double>(g.members.size());
+    g.bounds = cv::Rect(cv::Point(static_cast<int>(std::floor(x0)), static_cast<int>(std::floor(y0))),
+                        cv::Point(static_cast<int>(std::floor(x1)) + 1, static_cast<int>(std::floor(y1)) + 1));
+    const int margin = config.margin_px + static_cast<int>(std::lround(config.margin_disparity_factor * g.mean_disparity_px));
+    g.roi = cv::Rect(g.bounds.x - margin, g.bounds.y - margin, g.bounds.width + 2 * margin,
+                     g.bounds.height + 2 * margin) & image;
+    groups.push_back(std::move(g));
+  }
+  std::stable_sort(groups.begin(), groups.end(),
+                   [](const DynamicGroup& a, const DynamicGroup& b) { return a.members.size() > b.members.size(); });
+  return groups;
+}
+
+}  // namespace agvslam::dynamic

@@ -1,0 +1,346 @@
+#include "agvslam/dynamic/slic.h"
+
+#include <algorithm>
+#include <cmath>
+#include <cstdio>
+#include <cstring>
+#include <limits>
+
+#include "agvslam/core/error.h"
+
+namespace agvslam::dynamic {
+
+void SlicConfig::validate(const std::string& source) const {
+  auto require = [&](bool ok, const char* field, const char* expected) {
+    if (!ok) throw InputError(source, std::string("slic.") + field, expected);
+  };
+  require(superpixel_size_px >= 3 && superpixel_size_px <= 200, "superpixel_size_px", "expected an integer in [3, 200] px");
+  require(max_superpixels >= 1 && max_superpixels <= 100000, "max_superpixels", "expected an integer in [1, 100000]");
+  require(max_color_distance > 0 && max_color_distance <= 255, "max_color_distance",
+          "expected a number in (0, 255] grey levels");
+  require(iterations >= 1 && iterations <= 100, "iterations", "expected an integer in [1, 100]");
+  require(min_change_fraction >= 0 && min_change_fraction < 1, "min_change_fraction", "expected a number in [0, 1)");
+  require(min_segment_fraction >= 0 && min_segment_fraction <= 1, "min_segment_fraction", "expected a number in [0, 1]");
+}
+
+std::string SlicConfig::describe() const {
+  char buf[240];
+  std::snprintf(buf, sizeof(buf),
+                "slic: %s, S = %d px (at most %d per ROI), N_c = %.1f grey levels, <= %d iterations (until < %.1f %% "
+                "change), fragments < %.2f S^2 merged",
+                incremental ? "incremental (unstable pixels only)" : "plain", superpixel_size_px, max_superpixels,
+                max_color_distance, iterations, 100 * min_change_fraction, min_segment_fraction);
+  return buf;
+}
+
+Slic::Slic(const SlicConfig& config) : config_(config) { config_.validate("SlicConfig"); }
+
+int Slic::segment(const cv::Mat& grey, cv::Mat& labels, SlicStats* stats) {
+  return segment(grey, labels, config_.incremental, stats);
+}
+
+int Slic::segment(const cv::Mat& grey, cv::Mat& labels, bool incremental, SlicStats* stats) {
+  CV_Assert(grey.type() == CV_8UC1);
+  if (stats) *stats = SlicStats{};
+  const int W = grey.cols, H = grey.rows;
+  if (W == 0 || H == 0) {
+    labels.release();
+    return 0;
+  }
+  const std::size_t P = static_cast<std::size_t>(W) * static_cast<std::size_t>(H);
+
+  // Seeds on a regular grid (eq. 6).
+  double S = config_.superpixel_size_px;
+  if (static_cast<double>(P) / (S * S) > config_.max_superpixels) S = std::sqrt(static_cast<double>(P) / config_.max_superpixels);
+  const int nx = std::max(1, static_cast<int>(std::lround(W / S)));
+  const int ny = std::max(1, static_cast<int>(std::lround(H / S)));
+  const int K = nx * ny;
+  const double sx = static_cast<double>(W) / nx, sy = static_cast<double>(H) / ny;
+  const double step = std::sqrt(static_cast<double>(P) / K);  // N_s = S_step
+  const int win = std::max(1, static_cast<int>(std::lround(step)));
+  const float inv_nc2 = static_cast<float>(1.0 / (config_.max_color_distance * config_.max_color_distance));
+  const float inv_ns2 = static_cast<float>(1.0 / (step * step));
+
+  labels.create(H, W, CV_32SC1);
+  CV_Assert(labels.isContinuous());
+  int32_t* lab = labels.ptr<int32_t>();
+  const bool grey_continuous = grey.isContinuous();
+  cv::Mat grey_copy;
+  if (!grey_continuous) grey_copy = grey.clone();
+  const uint8_t* img = grey_continuous ? grey.ptr<uint8_t>() : grey_copy.ptr<uint8_t>();
+
+  // Grid labels, seed centres (3x3 mean grey) and running sums.
+  std::vector<int> cell_x(static_cast<std::size_t>(W)), cell_y(static_cast<std::size_t>(H));
+  for (int x = 0; x < W; ++x) cell_x[static_cast<std::size_t>(x)] = std::min(nx - 1, static_cast<int>(x / sx));
+  for (int y = 0; y < H; ++y) cell_y[static_cast<std::size_t>(y)] = std::min(ny - 1, static_cast<int>(y / sy));
+  for (int y = 0; y < H; ++y) {
+    for (int x = 0; x < W; ++x) lab[y * W + x] = cell_y[static_cast<std::size_t>(y)] * nx + cell_x[static_cast<std::size_t>(x)];
+  }
+  centres_.resize(static_cast<std::size_t>(K));
+  for (int j = 0; j < ny; ++j) {
+    for (int i = 0; i < nx; ++i) {
+      Centre& c = centres_[static_cast<std::size_t>(j * nx + i)];
+      c.x = static_cast<float>((i + 0.5) * sx - 0.5);
+      c.y = static_cast<float>((j + 0.5) * sy - 0.5);
+      const int cx = std::clamp(static_cast<int>(std::lround(c.x)), 0, W - 1);
+      const int cy = std::clamp(static_cast<int>(std::lround(c.y)), 0, H - 1);
+      int sum = 0, n = 0;
+      for (int v = std::max(0, cy - 1); v <= std::min(H - 1, cy + 1); ++v) {
+        for (int u = std::max(0, cx - 1); u <= std::min(W - 1, cx + 1); ++u) {
+          sum += img[v * W + u];
+          ++n;
+        }
+      }
+      c.g = static_cast<float>(sum) / static_cast<float>(n);
+    }
+  }
+  sums_.assign(static_cast<std::size_t>(K), Sums{});
+  for (int y = 0; y < H; ++y) {
+    for (int x = 0; x < W; ++x) {
+      Sums& s = sums_[static_cast<std::size_t>(lab[y * W + x])];
+      s.g += img[y * W + x];
+      s.x += x;
+      s.y += y;
+      ++s.n;
+    }
+  }
+
+  dist_.resize(P);
+  old_label_.resize(P);
+  flag_.assign(P, 0);
+  unstable_.clear();
+  const float inf = std::numeric_limits<float>::infinity();
+  int64_t total_evals = 0;
+  int iterations_run = 0;
+  for (int it = 0; it < config_.iterations; ++it) {
+    // The first round is a full assignment in both variants (before it no pixel has a cluster, so "edge
+    // pixels" are not defined); the incremental variant then revisits only unstable pixels.
+    const bool full = !incremental || it == 0;
+    if (!full && unstable_.empty()) break;
+    int64_t evals = 0;
+    // Step (2): assignment.
+    if (full) {
+      std::fill(dist_.begin(), dist_.end(), inf);
+      std::memcpy(old_label_.data(), lab, P * sizeof(int32_t));
+      for (int k = 0; k < K; ++k) {
+        const Centre& c = centres_[static_cast<std::size_t>(k)];
+        const int x0 = std::max(0, static_cast<int>(std::floor(c.x)) - win);
+        const int x1 = std::min(W - 1, static_cast<int>(std::ceil(c.x)) + win);
+        const int y0 = std::max(0, static_cast<int>(std::floor(c.y)) - win);
+        const int y1 = std::min(H - 1, static_cast<int>(std::ceil(c.y)) + win);
+        for (int y = y0; y <= y1; ++y) {
+          const float dy = static_cast<float>(y) - c.y;
+          const float dy2 = dy * dy * inv_ns2;
+          const uint8_t* g_row = img + y * W;
+          float* d_row = dist_.data() + y * W;
+          int32_t* l_row = lab + y * W;
+          for (int x = x0; x <= x1; ++x) {  // branch-free so that it vectorises
+            const float dg = static_cast<float>(g_row[x]) - c.g;
+            const float dx = static_cast<float>(x) - c.x;
+            const float D = dg * dg * inv_nc2 + dx * dx * inv_ns2 + dy2;  // eq. 5, squared
+            const float old = d_row[x];
+            const int32_t take = -static_cast<int32_t>(D < old);  // all ones when this centre is nearer
+            d_row[x] = std::min(D, old);
+            l_row[x] = (l_row[x] & ~take) | (k & take);
+          }
+          evals += x1 - x0 + 1;
+        }
+      }
+    } else {
+      // Only the unstable pixels, each against the centres whose 2S x 2S window contains it (the same
+      // candidates as in the plain variant), found through a bucket grid of the centres: a centre within
+      // win + 1 of a pixel lies in the pixel's bucket or one of the 8 around it.
+      window_.resize(static_cast<std::size_t>(K));
+      const int bucket = win + 1;
+      const int bx = W / bucket + 1, by = H / bucket + 1;
+      bucket_start_.assign(static_cast<std::size_t>(bx * by + 1), 0);
+      bucket_of_.resize(static_cast<std::size_t>(K));
+      for (int k = 0; k < K; ++k) {
+        const Centre& c = centres_[static_cast<std::size_t>(k)];
+        Window& w = window_[static_cast<std::size_t>(k)];  // integer windows, as in the plain variant
+        w = {static_cast<int>(std::floor(c.x)) - win, static_cast<int>(std::ceil(c.x)) + win,
+             static_cast<int>(std::floor(c.y)) - win, static_cast<int>(std::ceil(c.y)) + win};
+        const int cbx = std::clamp((w.x0 + w.x1) / 2 / bucket, 0, bx - 1);
+        const int cby = std::clamp((w.y0 + w.y1) / 2 / bucket, 0, by - 1);
+        bucket_of_[static_cast<std::size_t>(k)] = cby * bx + cbx;
+        ++bucket_start_[static_cast<std::size_t>(cby * bx + cbx + 1)];
+      }
+      for (std::size_t b = 1; b < bucket_start_.size(); ++b) bucket_start_[b] += bucket_start_[b - 1];
+      bucket_items_.resize(static_cast<std::size_t>(K));
+      bucket_fill_.assign(bucket_start_.begin(), bucket_start_.end() - 1);
+      for (int k = 0; k < K; ++k) {
+        int& slot = bucket_fill_[static_cast<std::size_t>(bucket_of_[static_cast<std::size_t>(k)])];
+        bucket_items_[static_cast<std::size_t>(slot++)] = k;
+      }
+      for (int32_t q : unstable_) old_label_[static_cast<std::size_t>(q)] = lab[q];
+      for (int32_t q : unstable_) {
+        const int y = q / W;
+        const int x = q - y * W;
+        const float g = static_cast<float>(img[q]);
+        const int qbx = x / bucket, qby = y / bucket;
+        float best = inf;
+        int32_t best_k = lab[q];
+        for (int vy = std::max(0, qby - 1); vy <= std::min(by - 1, qby + 1); ++vy) {
+          for (int vx = std::max(0, qbx - 1); vx <= std::min(bx - 1, qbx + 1); ++vx) {
+            const int b = vy * bx + vx;
+            const int end_b = bucket_start_[static_cast<std::size_t>(b + 1)];
+            for (int item = bucket_start_[static_cast<std::size_t>(b)]; item < end_b; ++item) {
+              const int k = bucket_items_[static_cast<std::size_t>(item)];
+              const Window& w = window_[static_cast<std::size_t>(k)];
+              if (x < w.x0 || x > w.x1 || y < w.y0 || y > w.y1) continue;
+              ++evals;
+              const Centre& c = centres_[static_cast<std::size_t>(k)];
+              const float dg = g - c.g;
+              const float dx = static_cast<float>(x) - c.x, dy = static_cast<float>(y) - c.y;
+              const float D = dg * dg * inv_nc2 + (dx * dx + dy * dy) * inv_ns2;  // eq. 5, squared
+              if (D < best || (D == best && k < best_k)) {
+                best = D;
+                best_k = k;
+              }
+            }
+          }
+        }
+        lab[q] = best_k;
+      }
+    }
+
+    // Step (3): cluster centres.
+    int changed = 0;
+    if (full) {
+      for (std::size_t p = 0; p < P; ++p) changed += lab[p] != old_label_[p];
+      sums_.assign(static_cast<std::size_t>(K), Sums{});
+      for (int y = 0; y < H; ++y) {
+        for (int x = 0; x < W; ++x) {
+          Sums& s = sums_[static_cast<std::size_t>(lab[y * W + x])];
+          s.g += img[y * W + x];
+          s.x += x;
+          s.y += y;
+          ++s.n;
+        }
+      }
+    } else {
+      for (int32_t q : unstable_) {
+        const int32_t now = lab[q], before = old_label_[static_cast<std::size_t>(q)];
+        if (now == before) continue;
+        ++changed;
+        const int x = q % W, y = q / W;
+        Sums& a = sums_[static_cast<std::size_t>(before)];
+        Sums& b = sums_[static_cast<std::size_t>(now)];
+        a.g -= img[q];
+        a.x -= x;
+        a.y -= y;
+        --a.n;
+        b.g += img[q];
+        b.x += x;
+        b.y += y;
+        ++b.n;
+      }
+    }
+    for (int k = 0; k < K; ++k) {
+      const Sums& s = sums_[static_cast<std::size_t>(k)];
+      if (s.n <= 0) continue;
+      Centre& c = centres_[static_cast<std::size_t>(k)];
+      const double inv = 1.0 / static_cast<double>(s.n);
+      c.g = static_cast<float>(s.g * inv);
+      c.x = static_cast<float>(s.x * inv);
+      c.y = static_cast<float>(s.y * inv);
+    }
+    total_evals += evals;
+    iterations_run = it + 1;
+    if (stats) {
+      stats->evaluations_per_iteration.push_back(evals);
+      stats->changed_per_iteration.push_back(changed);
+    }
+    if (changed == 0 || changed < config_.min_change_fraction * static_cast<double>(P)) break;
+
+    if (incremental && it == 0) {
+      // Step (1): the edge pixels of the clustering are unstable.
+      unstable_.clear();
+      for (int y = 0; y < H; ++y) {
+        for (int x = 0; x < W; ++x) {
+          const int32_t l = lab[y * W + x];
+          const bool edge = (x > 0 && lab[y * W + x - 1] != l) || (x + 1 < W && lab[y * W + x + 1] != l) ||
+                            (y > 0 && lab[(y - 1) * W + x] != l) || (y + 1 < H && lab[(y + 1) * W + x] != l);
+          if (edge) {
+            flag_[static_cast<std::size_t>(y * W + x)] = 1;
+            unstable_.push_back(y * W + x);
+          }
+        }
+      }
+    } else if (incremental) {
+      // Eq. 7: p (4-neighbour of an evaluated q) is unstable next round when cluster(p) != cluster(q) or q is
+      // still unstable (its cluster changed this round). Bit 1 of flag_ marks the next round's set.
+      next_unstable_.clear();
+      auto mark = [&](int32_t p) {
+        uint8_t& f = flag_[static_cast<std::size_t>(p)];
+        if (f & 2) return;
+        f |= 2;
+        next_unstable_.push_back(p);
+      };
+      for (int32_t q : unstable_) {
+        const int32_t lq = lab[q];
+        const bool still_unstable = lq != old_label_[static_cast<std::size_t>(q)];
+        const int y = q / W;
+        const int x = q - y * W;
+        if (still_unstable) mark(q);
+        if (x > 0 && (still_unstable || lab[q - 1] != lq)) mark(q - 1);
+        if (x + 1 < W && (still_unstable || lab[q + 1] != lq)) mark(q + 1);
+        if (y > 0 && (still_unstable || lab[q - W] != lq)) mark(q - W);
+        if (y + 1 < H && (still_unstable || lab[q + W] != lq)) mark(q + W);
+      }
+      for (int32_t q : unstable_) flag_[static_cast<std::size_t>(q)] &= static_cast<uint8_t>(~1u);
+      for (int32_t p : next_unstable_) flag_[static_cast<std::size_t>(p)] = 1;
+      unstable_.swap(next_unstable_);
+    }
+  }
+
+  const int min_size = static_cast<int>(config_.min_segment_fraction * step * step);
+  const int count = enforce_connectivity(labels, min_size);
+  if (stats) {
+    stats->distance_evaluations = total_evals;
+    stats->iterations = iterations_run;
+    stats->step_px = static_cast<int>(std::lround(step));
+    stats->seeds = K;
+    stats->superpixels = count;
+  }
+  return count;
+}
+
+int Slic::enforce_connectivity(cv::Mat& labels, int min_size) {
+  const int W = labels.cols, H = labels.rows;
+  const std::size_t P = static_cast<std::size_t>(W) * static_cast<std::size_t>(H);
+  int32_t* lab = labels.ptr<int32_t>();
+  relabel_.assign(P, -1);
+  queue_.clear();
+  int next_label = 0;
+  for (int start = 0; start < static_cast<int>(P); ++start) {
+    if (relabel_[static_cast<std::size_t>(start)] >= 0) continue;
+    const int32_t old = lab[start];
+    const int sx = start % W, sy = start / W;
+    int32_t adjacent = -1;
+    if (sx > 0) adjacent = relabel_[static_cast<std::size_t>(start - 1)];
+    if (adjacent < 0 && sy > 0) adjacent = relabel_[static_cast<std::size_t>(start - W)];
+    queue_.clear();
+    queue_.push_back(start);
+    relabel_[static_cast<std::size_t>(start)] = next_label;
+    for (std::size_t head = 0; head < queue_.size(); ++head) {
+      const int q = queue_[head];
+      const int x = q % W, y = q / W;
+      const int nbr[4] = {x > 0 ? q - 1 : -1, x + 1 < W ? q + 1 : -1, y > 0 ? q - W : -1, y + 1 < H ? q + W : -1};
+      for (int p : nbr) {
+        if (p < 0 || relabel_[static_cast<std::size_t>(p)] >= 0 || lab[p] != old) continue;
+        relabel_[static_cast<std::size_t>(p)] = next_label;
+        queue_.push_back(p);
+      }
+    }
+    if (static_cast<int>(queue_.size()) < min_size && adjacent >= 0) {
+      for (int q : queue_) relabel_[static_cast<std::size_t>(q)] = adjacent;
+    } else {
+      ++next_label;
+    }
+  }
+  std::memcpy(lab, relabel_.data(), P * sizeof(int32_t));
+  return next_label;
+}
+
+}  // namespace agvslam::dynamic

@@ -1,0 +1,130 @@
+// Depth-consistency test: PnP ego-motion from tracks with stereo depth; points whose 3-D position disagrees
+// with it (motion along the viewing ray, invisible to the epipolar test) are flagged.
+#include <gtest/gtest.h>
+
+#include <opencv2/calib3d.hpp>
+
+#include "agvslam/core/error.h"
+#include "agvslam/dynamic/depth_test.h"
+#include "agvslam/dynamic/epipolar.h"
+
+namespace agvslam::dynamic {
+namespace {
+
+struct Scene {
+  PinholeCamera cam;
+  double bf = 0;
+  SE3d T_cur_prev = SE3d::Identity();
+  std::vector<cv::Point2f> prev, cur;
+  std::vector<float> d_prev, d_cur;
+  std::vector<uint8_t> usable;
+};
+
+cv::Point2f project(const PinholeCamera& c, const Eigen::Vector3d& X) {
+  const Eigen::Vector2d p = c.project(X);
+  return {static_cast<float>(p.x()), static_cast<float>(p.y())};
+}
+
+// n static points; the first `movers` move by `motion_m` (in the previous camera frame) between the frames.
+// Depths in [z_min, 12] m.
+Scene make_scene(int n, int movers, const Eigen::Vector3d& motion_m, double noise_px, uint64_t seed, double z_min = 2.0,
+                 double z_max = 12.0) {
+  Scene s;
+  s.cam.fx = s.cam.fy = 460;
+  s.cam.cx = 375.5;
+  s.cam.cy = 239.5;
+  s.cam.width = 752;
+  s.cam.height = 480;
+  s.bf = 460 * 0.12;
+  // The camera drives 0.15 m straight ahead and turns 1 degree.
+  SE3d T_prev_cur = SE3d::Identity();
+  T_prev_cur.linear() = Eigen::AngleAxisd(1.0 * M_PI / 180, Eigen::Vector3d::UnitY()).toRotationMatrix();
+  T_prev_cur.translation() = Eigen::Vector3d(0, 0, 0.15);
+  s.T_cur_prev = T_prev_cur.inverse();
+  cv::RNG rng(seed);
+  for (int i = 0; i < n; ++i) {
+    Eigen::Vector3d X(rng.uniform(-3.0, 3.0), rng.uniform(-1.5, 0.8), rng.uniform(z_min, z_max));
+    const Eigen::Vector3d X_moved = i < movers ? Eigen::Vector3d(X + motion_m) : X;
+    const Eigen::Vector3d Xc = s.T_cur_prev * X_moved;
+    const auto noise = [&] { return static_cast<float>(rng.gaussian(noise_px)); };
+    s.prev.push_back(project(s.cam, X) + cv::Point2f(noise(), noise()));
+    s.cur.push_back(project(s.cam, Xc) + cv::Point2f(noise(), noise()));
+    s.d_prev.push_back(static_cast<float>(s.bf / X.z()) + 0.5f * noise());
+    s.d_cur.push_back(static_cast<float>(s.bf / Xc.z()) + 0.5f * noise());
+    s.usable.push_back(1);
+  }
+  return s;
+}
+
+TEST(DepthTest, RecoversTheEgoMotionAndPassesStaticPoints) {
+  const Scene s = make_scene(150, 0, Eigen::Vector3d::Zero(), 0.2, 3);
+  DepthConsistencyTest test;
+  DepthTestResult r;
+  test.run(s.cam, s.bf, s.prev, s.d_prev, s.cur, s.d_cur, s.usable, r);
+  ASSERT_TRUE(r.valid);
+  EXPECT_EQ(r.used, 150);
+  EXPECT_GT(r.inliers, 140);
+  EXPECT_LT((r.T_cur_prev.translation() - s.T_cur_prev.translation()).norm(), 0.01);
+  EXPECT_LT(rotation_angle_rad(r.T_cur_prev.inverse() * s.T_cur_prev), 0.2 * M_PI / 180);
+  int flagged = 0;
+  for (uint8_t f : r.dynamic) flagged += f;
+  EXPECT_LE(flagged, 2);
+}
+
+TEST(DepthTest, FlagsMotionAlongTheViewingRayThatTheEpipolarTestMisses) {
+  // 20 points 2-3.5 m away walk 0.4 m towards the camera along the optical axis: their image motion is
+  // radial from the principal point, (almost) along the epipolar lines through the focus of expansion.
+  // (The disparity change of such a walker is bf dz / z^2: 1.8-5.5 px here, but only 0.15 px at 12 m.)
+  Scene s = make_scene(150, 0, Eigen::Vector3d::Zero(), 0.15, 4);
+  const Scene moving = make_scene(20, 20, Eigen::Vector3d(0, 0, -0.4), 0.15, 5, 2.0, 3.5);
+  for (std::size_t i = 0; i < moving.prev.size(); ++i) {
+    s.prev.insert(s.prev.begin(), moving.prev[i]);
+    s.cur.insert(s.cur.begin(), moving.cur[i]);
+    s.d_prev.insert(s.d_prev.begin(), moving.d_prev[i]);
+    s.d_cur.insert(s.d_cur.begin(), moving.d_cur[i]);
+    s.usable.insert(s.usable.begin(), 1);
+  }
+  DepthConsistencyTest test;
+  DepthTestResult r;
+  test.run(s.cam, s.bf, s.prev, s.d_prev, s.cur, s.d_cur, s.usable, r);
+  ASSERT_TRUE(r.valid);
+  int movers = 0, statics = 0;
+  for (std::size_t i = 0; i < s.prev.size(); ++i) (i < 20 ? movers : statics) += r.dynamic[i];
+  EXPECT_GE(movers, 19);
+  EXPECT_LE(statics, 2);
+  for (std::size_t i = 0; i < 20; ++i) EXPECT_GT(r.disparity_residual_px[i], 1.0);
+
+  // The epipolar test on the same tracks flags far fewer of the movers (motion mostly along the lines).
+  EpipolarTestConfig ec;
+  EpipolarResult er;
+  EpipolarTest(ec).run(s.prev, s.cur, s.usable, s.d_cur, er);
+  ASSERT_TRUE(er.valid);
+  int epi_movers = 0;
+  for (std::size_t i = 0; i < 20; ++i) epi_movers += er.dynamic[i];
+  EXPECT_LT(epi_movers, movers);
+}
+
+TEST(DepthTest, NeedsEnoughPointsWithDepth) {
+  Scene s = make_scene(30, 0, Eigen::Vector3d::Zero(), 0.1, 6);
+  for (std::size_t i = 0; i < 25; ++i) s.d_prev[i] = 0;  // no previous disparity
+  DepthTestResult r;
+  DepthConsistencyTest().run(s.cam, s.bf, s.prev, s.d_prev, s.cur, s.d_cur, s.usable, r);
+  EXPECT_FALSE(r.valid);
+  EXPECT_EQ(r.used, 5);
+  for (uint8_t f : r.dynamic) EXPECT_EQ(f, 0);
+  for (double v : r.reprojection_px) EXPECT_EQ(v, -1.0);
+}
+
+TEST(DepthTest, InvalidConfigNamesTheField) {
+  DepthTestConfig c;
+  c.max_scale = 0.5;
+  EXPECT_THROW(c.validate("x.yaml"), InputError);
+  try {
+    c.validate("x.yaml");
+  } catch (const InputError& e) {
+    EXPECT_EQ(e.where(), "depth_test.max_scale");
+  }
+}
+
+}  // namespace
+}  // namespace agvslam::dynamic

@@ -1,0 +1,99 @@
+// params/dynamic.yaml loading: the shipped file, overrides, and errors naming the file and the field.
+#include <gtest/gtest.h>
+
+#include <filesystem>
+#include <fstream>
+
+#include "agvslam/core/error.h"
+#include "agvslam/dynamic/detector.h"
+#include "common/test_data.h"
+
+namespace agvslam::dynamic {
+namespace {
+namespace fs = std::filesystem;
+
+class TempYaml {
+ public:
+  explicit TempYaml(const std::string& text) {
+    dir_ = agvslam::test::make_temp_dir("agvslam-dynamic-config");
+    path_ = (fs::path(dir_) / "dynamic.yaml").string();
+    std::ofstream(path_) << text;
+  }
+  ~TempYaml() {
+    std::error_code ec;
+    fs::remove_all(dir_, ec);
+  }
+  TempYaml(const TempYaml&) = delete;
+  TempYaml& operator=(const TempYaml&) = delete;
+  const std::string& path() const { return path_; }
+
+ private:
+  std::string dir_, path_;
+};
+
+void expect_error(const std::string& text, const std::string& field) {
+  TempYaml f(text);
+  try {
+    load_dynamic_config(f.path());
+    ADD_FAILURE() << "no error for:\n" << text;
+  } catch (const InputError& e) {
+    EXPECT_EQ(e.source(), f.path());
+    EXPECT_EQ(e.where(), field) << e.what();
+  }
+}
+
+TEST(DynamicConfig, ShippedParamsFileEqualsTheDefaults) {
+  const DynamicDetectorConfig c = load_dynamic_config(std::string(AGVSLAM_SOURCE_DIR) + "/params/dynamic.yaml");
+  const DynamicDetectorConfig d;
+  // Every stage's description is identical, so every value is (descriptions print all of them).
+  EXPECT_EQ(c.describe(), d.describe());
+  EXPECT_EQ(c.features.target_count, d.features.target_count);
+  EXPECT_EQ(c.slic.incremental, d.slic.incremental);
+  EXPECT_EQ(c.regions.mask_mode, d.regions.mask_mode);
+  EXPECT_EQ(c.planes.seed, d.planes.seed);
+  EXPECT_EQ(c.describe().size(), 10u);
+}
+
+TEST(DynamicConfig, OverridesOnlyTheGivenKeys) {
+  TempYaml f(
+      "epipolar:\n  a_epi_px: 1.5\n  adaptive: false\nslic:\n  incremental: true\nregions:\n  mask_mode: rectangle\n"
+      "detector:\n  roi_scale: 1\n");
+  const DynamicDetectorConfig c = load_dynamic_config(f.path());
+  EXPECT_DOUBLE_EQ(c.epipolar.a_epi_px, 1.5);
+  EXPECT_FALSE(c.epipolar.adaptive);
+  EXPECT_TRUE(c.slic.incremental);
+  EXPECT_EQ(c.regions.mask_mode, MaskMode::kRectangle);
+  EXPECT_DOUBLE_EQ(c.detector.roi_scale, 1.0);
+  EXPECT_EQ(c.features.target_count, QuadtreeFastConfig{}.target_count);
+}
+
+TEST(DynamicConfig, BadValuesNameFileAndField) {
+  expect_error("epipolar:\n  a_epi_px: -1\n", "epipolar.a_epi_px");
+  expect_error("epipolar:\n  a_epi_px: one\n", "epipolar.a_epi_px");
+  expect_error("boundaries:\n  lambda_occ: 0.1\n", "boundaries.lambda_occ");  // must exceed lambda_hinge
+  expect_error("grouping:\n  min_points: 0\n", "grouping.min_points");
+  expect_error("slic:\n  superpixel_size: 12\n", "slic.superpixel_size");  // unknown key
+  expect_error("regions:\n  mask_mode: blob\n", "regions.mask_mode");
+  expect_error("detector:\n  roi_scale: 0.3\n", "detector.roi_scale");
+  expect_error("detector:\n  use_epipolar_test: false\n  use_depth_test: false\n", "detector.use_epipolar_test");
+  expect_error("planes:\n  seed: -4\n", "planes.seed");
+  expect_error("features: 3\n", "features");
+  expect_error("superpixels:\n  size: 3\n", "superpixels");
+  EXPECT_THROW(load_dynamic_config("/nonexistent/dynamic.yaml"), InputError);
+}
+
+TEST(DynamicConfig, DetectorRejectsAnInvalidConfiguration) {
+  DynamicDetectorConfig c;
+  c.slic.iterations = 0;
+  StereoCalibration calib;
+  calib.left.fx = calib.left.fy = 400;
+  calib.left.width = 640;
+  calib.left.height = 480;
+  calib.baseline_m = 0.1;
+  EXPECT_THROW(DynamicDetector(calib, c), InputError);
+  calib.baseline_m = 0;  // the depth test needs a baseline
+  EXPECT_THROW(DynamicDetector(calib, DynamicDetectorConfig{}), InputError);
+}
+
+}  // namespace
+}  // namespace agvslam::dynamic

@@ -1,0 +1,205 @@
+// Epipolar test (paper 004, eqs. 1-3), LK tracking, adaptive threshold, static-camera fallback.
+#include <gtest/gtest.h>
+
+#include <opencv2/calib3d.hpp>
+#include <opencv2/imgproc.hpp>
+
+#include "agvslam/dynamic/epipolar.h"
+#include "synthetic_scene.h"
+
+namespace agvslam::dynamic {
+namespace {
+
+cv::Matx33d skew(const cv::Vec3d& t) { return {0, -t[2], t[1], t[2], 0, -t[0], -t[1], t[0], 0}; }
+
+struct TwoViews {
+  cv::Matx33d K{450, 0, 376, 0, 450, 240, 0, 0, 1};
+  cv::Matx33d R;  // R_cur_prev
+  cv::Vec3d t;    // t_cur_prev
+  cv::Matx33d F;  // x_cur^T F x_prev = 0
+  TwoViews() {
+    cv::Mat r;
+    cv::Rodrigues(cv::Vec3d(0.01, -0.03, 0.005), r);
+    R = cv::Matx33d(r);
+    t = cv::Vec3d(0.2, 0.03, 0.5);
+    F = K.inv().t() * skew(t) * R * K.inv();
+  }
+  cv::Point2f project(const cv::Vec3d& X_cam) const {
+    const cv::Vec3d p = K * X_cam;
+    return {static_cast<float>(p[0] / p[2]), static_cast<float>(p[1] / p[2])};
+  }
+  // Unit normal of the epipolar line of p_prev in the current image.
+  cv::Point2f line_normal(const cv::Point2f& p_prev) const {
+    const cv::Vec3d l = F * cv::Vec3d(p_prev.x, p_prev.y, 1);
+    const double n = std::hypot(l[0], l[1]);
+    return {static_cast<float>(l[0] / n), static_cast<float>(l[1] / n)};
+  }
+};
+
+TEST(EpipolarDistance, ZeroOnTheLineAndTheOffsetOffIt) {
+  const TwoViews v;
+  cv::RNG rng(5);
+  for (int i = 0; i < 50; ++i) {
+    const cv::Vec3d X(rng.uniform(-3.0, 3.0), rng.uniform(-2.0, 2.0), rng.uniform(2.0, 15.0));
+    const cv::Point2f p_prev = v.project(X);
+    const cv::Point2f p_cur = v.project(v.R * X + v.t);
+    EXPECT_NEAR(epipolar_distance_px(v.F, p_prev, p_cur), 0.0, 2e-3);
+    const double offset = rng.uniform(0.5, 10.0);
+    const cv::Point2f n = v.line_normal(p_prev);
+    EXPECT_NEAR(epipolar_distance_px(v.F, p_prev, p_cur + static_cast<float>(offset) * n), offset, 2e-3);
+    EXPECT_NEAR(epipolar_distance_px(v.F, p_prev, p_cur - static_cast<float>(offset) * n), offset, 2e-3);
+    // Moving along the line changes nothing.
+    const cv::Point2f along(-n.y, n.x);
+    EXPECT_NEAR(epipolar_distance_px(v.F, p_prev, p_cur + 7.0f * along), 0.0, 2e-3);
+    // Scale of F does not matter.
+    EXPECT_NEAR(epipolar_distance_px(v.F * 1e4, p_prev, p_cur + static_cast<float>(offset) * n), offset, 2e-3);
+  }
+}
+
+struct Tracks {
+  std::vector<cv::Point2f> prev, cur;
+  std::vector<uint8_t> usable;
+  std::vector<float> disparity;
+  std::vector<int> moving;  // indices of moved points
+};
+
+Tracks make_tracks(const TwoViews& v, int n, double noise_px, int movers, double move_px, uint64_t seed) {
+  Tracks t;
+  cv::RNG rng(seed);
+  for (int i = 0; i < n; ++i) {
+    const cv::Vec3d X(rng.uniform(-4.0, 4.0), rng.uniform(-2.5, 2.5), rng.uniform(2.0, 20.0));
+    cv::Point2f a = v.project(X), b = v.project(v.R * X + v.t);
+    b += cv::Point2f(static_cast<float>(rng.gaussian(noise_px)), static_cast<float>(rng.gaussian(noise_px)));
+    if (i < movers) {
+      b += static_cast<float>(move_px) * v.line_normal(a);
+      t.moving.push_back(i);
+    }
+    t.prev.push_back(a);
+    t.cur.push_back(b);
+    t.usable.push_back(1);
+    t.disparity.push_back(static_cast<float>(450 * 0.12 / X[2]));
+  }
+  return t;
+}
+
+TEST(EpipolarTest, FlagsPointsOffTheirEpipolarLines) {
+  const TwoViews v;
+  const Tracks t = make_tracks(v, 200, 0.15, 20, 6.0, 7);
+  EpipolarTestConfig c;
+  c.adaptive = false;
+  EpipolarTest test(c);
+  EpipolarResult r;
+  test.run(t.prev, t.cur, t.usable, t.disparity, r);
+  ASSERT_TRUE(r.valid);
+  EXPECT_FALSE(r.static_camera);
+  EXPECT_GE(r.inliers, 170);
+  int flagged_movers = 0, flagged_static = 0;
+  for (std::size_t i = 0; i < t.prev.size(); ++i) {
+    const bool mover = static_cast<int>(i) < 20;
+    (mover ? flagged_movers : flagged_static) += r.dynamic[i];
+    EXPECT_NEAR(r.t_epi_px[i], c.a_epi_px + c.b_epi * t.disparity[i], 1e-9);  // eq. 3
+  }
+  EXPECT_EQ(flagged_movers, 20);
+  EXPECT_LE(flagged_static, 2);
+}
+
+TEST(EpipolarTest, AdaptiveThresholdFollowsTheResidualScale) {
+  const TwoViews v;
+  // Noisy tracks (sigma 0.8 px per axis): with the fixed a_epi = 1 px many static points would be flagged.
+  const Tracks t = make_tracks(v, 300, 0.8, 15, 12.0, 8);
+  EpipolarTestConfig fixed;
+  fixed.adaptive = false;
+  fixed.ransac_threshold_px = 2.0;
+  EpipolarTestConfig adaptive = fixed;
+  adaptive.adaptive = true;
+  adaptive.a_epi_max_px = 5.0;
+  EpipolarResult rf, ra;
+  EpipolarTest(fixed).run(t.prev, t.cur, t.usable, t.disparity, rf);
+  EpipolarTest(adaptive).run(t.prev, t.cur, t.usable, t.disparity, ra);
+  auto static_flags = [&](const EpipolarResult& r) {
+    int n = 0;
+    for (std::size_t i = 15; i < r.dynamic.size(); ++i) n += r.dynamic[i];
+    return n;
+  };
+  EXPECT_GT(static_flags(rf), 15);
+  EXPECT_LE(static_flags(ra), 3);
+  // The distance of a point to its line is ~ N(0, 0.8): sigma estimate about 0.8, a = 3 sigma.
+  EXPECT_NEAR(ra.robust_sigma_px, 0.8, 0.2);
+  EXPECT_NEAR(ra.a_epi_used_px, 3 * ra.robust_sigma_px, 1e-9);
+  int movers = 0;
+  for (int i = 0; i < 15; ++i) movers += ra.dynamic[static_cast<std::size_t>(i)];
+  EXPECT_GE(movers, 14);
+  // Clamped below by a_epi_px when the residuals are tiny.
+  const Tracks clean = make_tracks(v, 100, 0.0, 0, 0.0, 9);
+  EpipolarResult rc;
+  EpipolarTest(adaptive).run(clean.prev, clean.cur, clean.usable, clean.disparity, rc);
+  EXPECT_DOUBLE_EQ(rc.a_epi_used_px, adaptive.a_epi_px);
+}
+
+TEST(EpipolarTest, StaticCameraUsesTheTrackLength) {
+  std::vector<cv::Point2f> prev, cur;
+  std::vector<uint8_t> usable;
+  std::vector<float> d;
+  cv::RNG rng(4);
+  for (int i = 0; i < 60; ++i) {
+    const cv::Point2f p(rng.uniform(20.f, 700.f), rng.uniform(20.f, 460.f));
+    prev.push_back(p);
+    cur.push_back(p + cv::Point2f(static_cast<float>(rng.gaussian(0.05)), static_cast<float>(rng.gaussian(0.05))));
+    usable.push_back(1);
+    d.push_back(10.f);
+  }
+  for (int i = 0; i < 5; ++i) cur[static_cast<std::size_t>(i)] += cv::Point2f(3.f, 1.f);  // movers
+  usable[59] = 0;
+  cur[59] += cv::Point2f(30.f, 0.f);  // unusable: ignored
+  EpipolarResult r;
+  EpipolarTest().run(prev, cur, usable, d, r);
+  ASSERT_TRUE(r.valid);
+  EXPECT_TRUE(r.static_camera);
+  for (int i = 0; i < 59; ++i) EXPECT_EQ(r.dynamic[static_cast<std::size_t>(i)] != 0, i < 5) << i;
+  EXPECT_EQ(r.dynamic[59], 0);
+  EXPECT_NEAR(r.d_epi_px[0], std::hypot(3.0, 1.0), 0.3);
+}
+
+TEST(EpipolarTest, TooFewTracksIsNotATest) {
+  std::vector<cv::Point2f> p(10, cv::Point2f(5, 5));
+  std::vector<uint8_t> u(10, 1);
+  std::vector<float> d(10, 1.f);
+  EpipolarResult r;
+  EpipolarTest().run(p, p, u, d, r);
+  EXPECT_FALSE(r.valid);
+  for (uint8_t f : r.dynamic) EXPECT_EQ(f, 0);
+}
+
+TEST(RobustSigma, IsTheScaledMedian) {
+  std::vector<double> r = {0.1, 0.2, 0.3, 100.0, 0.4};
+  EXPECT_NEAR(robust_sigma(r), 1.4826 * 0.3, 1e-12);
+  std::vector<double> empty;
+  EXPECT_EQ(robust_sigma(empty), 0.0);
+}
+
+TEST(LkTracker, TracksAKnownShiftAndRejectsFlatPoints) {
+  const cv::Mat tex = testing::make_texture(512, 128, 140, 31)(cv::Rect(0, 0, 400, 300)).clone();
+  cv::Mat flat_patch = tex.clone();
+  flat_patch(cv::Rect(0, 0, 60, 60)).setTo(100);
+  cv::Mat moved;
+  const cv::Point2f shift(3.3f, -2.1f);
+  const cv::Mat M = (cv::Mat_<double>(2, 3) << 1, 0, shift.x, 0, 1, shift.y);
+  cv::warpAffine(flat_patch, moved, M, flat_patch.size(), cv::INTER_CUBIC, cv::BORDER_REFLECT);
+  LkTracker tracker;
+  std::vector<cv::Mat> p0, p1;
+  tracker.build_pyramid(flat_patch, p0);
+  tracker.build_pyramid(moved, p1);
+  std::vector<cv::Point2f> prev = {{100, 100}, {200, 150}, {300, 220}, {150, 250}, {25, 25}};
+  std::vector<cv::Point2f> cur;
+  std::vector<uint8_t> ok;
+  tracker.track(p0, p1, prev, cur, ok);
+  for (int i = 0; i < 4; ++i) {
+    ASSERT_TRUE(ok[static_cast<std::size_t>(i)]) << i;
+    EXPECT_NEAR(cur[static_cast<std::size_t>(i)].x, prev[static_cast<std::size_t>(i)].x + shift.x, 0.1);
+    EXPECT_NEAR(cur[static_cast<std::size_t>(i)].y, prev[static_cast<std::size_t>(i)].y + shift.y, 0.1);
+  }
+  EXPECT_FALSE(ok[4]) << "a point in a flat region cannot be tracked";
+}
+
+}  // namespace
+}  // namespace agvslam::dynamic
