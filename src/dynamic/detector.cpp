@@ -158,6 +158,9 @@ void DynamicDetector::detect(const StereoFrame& frame, DetectorResult& result) {
   result.mask.regions.clear();
   result.mask.image.create(size, CV_8UC1);
   result.mask.image.setTo(0);
+  result.mask.instances.create(size, CV_8UC1);
+  result.mask.instances.setTo(0);
+  result.ground_plane = DisparityPlane{};
   result.epipolar = EpipolarResult{};
   result.depth = DepthTestResult{};
   result.timings = StageTimings{};
@@ -239,6 +242,18 @@ void DynamicDetector::detect(const StereoFrame& frame, DetectorResult& result) {
     if (static_cast<int>(groups.size()) > opt.max_rois) groups.resize(static_cast<std::size_t>(opt.max_rois));
     tm.grouping_ms = ms_since(t);
 
+    // The floor in disparity space, from the static points below the principal point (ground veto).
+    if (!groups.empty() && config_.regions.ground_veto) {
+      static_pts_.clear();
+      static_disp_.clear();
+      for (const TrackedPoint& p : result.points) {
+        if (!p.tracked || p.dynamic || !(p.cur_disparity_px > 0)) continue;
+        static_pts_.push_back(p.cur_px);
+        static_disp_.push_back(p.cur_disparity_px);
+      }
+      result.ground_plane = fit_ground_plane(static_pts_, static_disp_, calibration_.left.cy);
+    }
+
     result.rois.resize(groups.size());
     for (std::size_t g = 0; g < groups.size(); ++g) {
       RoiSegmentation& seg = result.rois[g];
@@ -298,18 +313,21 @@ void DynamicDetector::detect(const StereoFrame& frame, DetectorResult& result) {
         static_disp_.push_back(p.cur_disparity_px);
       }
       seg.region = find_dynamic_region(seg.labels, seg.roi.tl(), graph_, seg.planes, group_pts_, group_disp_,
-                                       config_.regions, static_pts_, static_disp_);
+                                       config_.regions, static_pts_, static_disp_,
+                                       result.ground_plane.valid ? &result.ground_plane : nullptr);
       if (!seg.region.rectangle.empty()) {
-        paint_region(seg.region, seg.labels, seg.roi.tl(), config_.regions.mask_mode, result.mask.image);
         result.mask.regions.push_back(seg.region.rectangle & cv::Rect(cv::Point(0, 0), size));
+        paint_region(seg.region, seg.labels, seg.roi.tl(), config_.regions.mask_mode, result.mask.instances,
+                     static_cast<uint8_t>(std::min<std::size_t>(result.mask.regions.size(), 255)));
       }
       tm.regions_ms += ms_since(t);
     }
     if (opt.mask_dilation_px > 0 && !result.mask.regions.empty()) {
       const int k = 2 * opt.mask_dilation_px + 1;
-      cv::dilate(result.mask.image, dilated_, cv::getStructuringElement(cv::MORPH_ELLIPSE, cv::Size(k, k)));
-      dilated_.copyTo(result.mask.image);
+      cv::dilate(result.mask.instances, dilated_, cv::getStructuringElement(cv::MORPH_ELLIPSE, cv::Size(k, k)));
+      dilated_.copyTo(result.mask.instances);
     }
+    cv::compare(result.mask.instances, 0, result.mask.image, cv::CMP_GT);
   }
 
   // Corners of this frame, tracked by the next call.

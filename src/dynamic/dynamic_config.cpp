@@ -61,7 +61,7 @@ DynamicDetectorConfig load_dynamic_config(const std::string& path) {
   in.read("depth_test", "max_scale", d.max_scale, num);
 
   in.check_keys("grouping", {"a_s_px", "b_s", "t_disp_px", "t_disp_rel", "min_points", "margin_px",
-                             "margin_disparity_factor"});
+                             "margin_disparity_factor", "merge_overlapping"});
   in.read("grouping", "a_s_px", c.grouping.a_s_px, px);
   in.read("grouping", "b_s", c.grouping.b_s, num);
   in.read("grouping", "t_disp_px", c.grouping.t_disp_px, px);
@@ -69,6 +69,7 @@ DynamicDetectorConfig load_dynamic_config(const std::string& path) {
   in.read("grouping", "min_points", c.grouping.min_points, integer);
   in.read("grouping", "margin_px", c.grouping.margin_px, "an integer (px)");
   in.read("grouping", "margin_disparity_factor", c.grouping.margin_disparity_factor, num);
+  in.read("grouping", "merge_overlapping", c.grouping.merge_overlapping, flag);
 
   in.check_keys("slic", {"superpixel_size_px", "max_superpixels", "max_color_distance", "iterations",
                          "min_change_fraction", "incremental", "min_segment_fraction"});
@@ -100,7 +101,8 @@ DynamicDetectorConfig load_dynamic_config(const std::string& path) {
   in.read("boundaries", "lambda_pen", c.boundaries.lambda_pen, "a number (px^2)");
 
   in.check_keys("regions", {"start_radius_px", "start_tolerance_px", "start_tolerance_rel", "stop_at_unknown",
-                            "disparity_band", "band_tolerance_px", "band_tolerance_rel", "static_veto", "mask_mode"});
+                            "disparity_band", "band_tolerance_px", "band_tolerance_rel", "static_veto", "ground_veto", "ground_tolerance_px", "ground_tolerance_rel",
+                            "ground_slope_tolerance", "enclosed_unknown_only", "mask_mode"});
   in.read("regions", "start_radius_px", c.regions.start_radius_px, "an integer (px)");
   in.read("regions", "start_tolerance_px", c.regions.start_tolerance_px, px);
   in.read("regions", "start_tolerance_rel", c.regions.start_tolerance_rel, num);
@@ -109,6 +111,11 @@ DynamicDetectorConfig load_dynamic_config(const std::string& path) {
   in.read("regions", "band_tolerance_px", c.regions.band_tolerance_px, px);
   in.read("regions", "band_tolerance_rel", c.regions.band_tolerance_rel, num);
   in.read("regions", "static_veto", c.regions.static_veto, flag);
+  in.read("regions", "ground_veto", c.regions.ground_veto, flag);
+  in.read("regions", "ground_tolerance_px", c.regions.ground_tolerance_px, px);
+  in.read("regions", "ground_tolerance_rel", c.regions.ground_tolerance_rel, num);
+  in.read("regions", "ground_slope_tolerance", c.regions.ground_slope_tolerance, num);
+  in.read("regions", "enclosed_unknown_only", c.regions.enclosed_unknown_only, flag);
   std::string mode = to_string(c.regions.mask_mode);
   in.read("regions", "mask_mode", mode, "rectangle or superpixels");
   if (!parse_mask_mode(mode, c.regions.mask_mode)) throw InputError(path, "regions.mask_mode", "expected rectangle or superpixels");

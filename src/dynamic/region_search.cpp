@@ -31,17 +31,24 @@ void RegionSearchConfig::validate(const std::string& source) const {
   require(start_tolerance_rel >= 0 && start_tolerance_rel <= 10, "start_tolerance_rel", "expected a number in [0, 10]");
   require(band_tolerance_px >= 0 && band_tolerance_px <= 100, "band_tolerance_px", "expected a number in [0, 100] px");
   require(band_tolerance_rel >= 0 && band_tolerance_rel <= 10, "band_tolerance_rel", "expected a number in [0, 10]");
+  require(ground_tolerance_px >= 0 && ground_tolerance_px <= 100, "ground_tolerance_px", "expected a number in [0, 100] px");
+  require(ground_tolerance_rel >= 0 && ground_tolerance_rel <= 10, "ground_tolerance_rel", "expected a number in [0, 10]");
+  require(ground_slope_tolerance >= 0 && ground_slope_tolerance <= 10, "ground_slope_tolerance",
+          "expected a number in [0, 10]");
 }
 
 std::string RegionSearchConfig::describe() const {
-  char buf[300];
+  char buf[512];
   char band[80] = "off";
   if (disparity_band) std::snprintf(band, sizeof(band), "+-(%.2f + %.3f d) px", band_tolerance_px, band_tolerance_rel);
   std::snprintf(buf, sizeof(buf),
                 "regions: start superpixel within %d px agreeing to %.2f + %.2f d px, unknown boundaries %s, "
-                "disparity band %s, static veto %s, mask = %s",
+                "disparity band %s, static veto %s, ground veto %s (%.2f + %.3f d px, slope +-%.0f %%), planeless "
+                "superpixels %s, mask = %s",
                 start_radius_px, start_tolerance_px, start_tolerance_rel, stop_at_unknown ? "stop" : "pass", band,
-                static_veto ? "on" : "off", to_string(mask_mode).c_str());
+                static_veto ? "on" : "off", ground_veto ? "on" : "off", ground_tolerance_px, ground_tolerance_rel,
+                100 * ground_slope_tolerance, enclosed_unknown_only ? "only when enclosed" : "always",
+                to_string(mask_mode).c_str());
   return buf;
 }
 
@@ -54,20 +61,57 @@ bool stops(const SuperpixelGraph& graph, int a, int b, bool stop_at_unknown) {
 }  // namespace
 
 namespace {
-// -1: no plane; 0: plane inside the band; 1: plane outside the band (disparity evaluated at pixel p).
+// -1: no plane; 0: plane inside the band; 1: plane outside the band or ground-like (disparity evaluated at
+// pixel p).
 int band_state(const DisparityBand& band, int label, cv::Point p) {
   const DisparityPlane& plane = (*band.planes)[static_cast<std::size_t>(label)];
   if (!plane.valid) return -1;
-  const double d = plane.disparity_at(p.x + band.origin.x, p.y + band.origin.y);
+  const double x = p.x + band.origin.x, y = p.y + band.origin.y;
+  if (band.ground && is_ground_like(plane, *band.ground, x, y, band.ground_tolerance_px, band.ground_tolerance_rel,
+                                    band.ground_slope_tolerance)) {
+    return 1;
+  }
+  if (!band.enabled) return 0;
+  const double d = plane.disparity_at(x, y);
   return (d < band.lo_px || d > band.hi_px) ? 1 : 0;
 }
 }  // namespace
+
+bool is_ground_like(const DisparityPlane& plane, const DisparityPlane& ground, double x, double y, double tolerance_px,
+                    double tolerance_rel, double slope_tolerance) {
+  if (!plane.valid || !ground.valid) return false;
+  const double d_ground = ground.disparity_at(x, y);
+  if (std::abs(plane.disparity_at(x, y) - d_ground) > tolerance_px + tolerance_rel * std::max(0.0, d_ground)) return false;
+  return std::abs(plane.b - ground.b) <= slope_tolerance * std::abs(ground.b);
+}
+
+DisparityPlane fit_ground_plane(const std::vector<cv::Point2f>& points_px, const std::vector<float>& disparity_px,
+                                double horizon_y, double min_slope, int min_inliers) {
+  CV_Assert(points_px.size() == disparity_px.size());
+  std::vector<cv::Point3f> samples;
+  for (std::size_t i = 0; i < points_px.size(); ++i) {
+    if (disparity_px[i] > 0 && points_px[i].y > horizon_y) samples.emplace_back(points_px[i].x, points_px[i].y, disparity_px[i]);
+  }
+  DisparityPlane ground;
+  if (static_cast<int>(samples.size()) < min_inliers) return ground;
+  PlaneFitConfig config;
+  config.ransac_iterations = 100;
+  config.inlier_threshold_px = 1.0;
+  config.min_valid_pixels = min_inliers;
+  config.min_valid_fraction = 0;
+  config.min_inlier_fraction = 0.3;
+  config.max_samples = 1000;
+  uint32_t rng = 0x9e3779b9u;
+  ground = fit_disparity_plane(samples, config, rng);
+  if (!ground.valid || ground.b <= min_slope || ground.inliers < min_inliers) ground.valid = false;
+  return ground;
+}
 
 std::array<cv::Point, 4> search_to_occlusion(const cv::Mat& labels, const SuperpixelGraph& graph, cv::Point start,
                                              bool stop_at_unknown, const DisparityBand& band) {
   CV_Assert(labels.type() == CV_32SC1);
   CV_Assert(start.x >= 0 && start.y >= 0 && start.x < labels.cols && start.y < labels.rows);
-  const bool use_band = band.enabled && band.planes != nullptr;
+  const bool use_band = (band.enabled || band.ground != nullptr) && band.planes != nullptr;
   std::array<cv::Point, 4> out;
   const int dx[4] = {1, -1, 0, 0};
   const int dy[4] = {0, 0, 1, -1};
@@ -129,7 +173,7 @@ DynamicRegion find_dynamic_region(const cv::Mat& labels, cv::Point origin, const
                                   const std::vector<DisparityPlane>& planes, const std::vector<cv::Point2f>& points_px,
                                   const std::vector<float>& disparity_px, const RegionSearchConfig& config,
                                   const std::vector<cv::Point2f>& static_points_px,
-                                  const std::vector<float>& static_disparity_px) {
+                                  const std::vector<float>& static_disparity_px, const DisparityPlane* ground) {
   CV_Assert(points_px.size() == disparity_px.size());
   CV_Assert(static_points_px.size() == static_disparity_px.size());
   DynamicRegion region;
@@ -159,6 +203,12 @@ DynamicRegion find_dynamic_region(const cv::Mat& labels, cv::Point origin, const
   for (std::size_t i = 0; i < points_px.size(); ++i) {
     start_label[i] = choose_start_superpixel(labels, origin, planes, points_px[i], disparity_px[i], config);
     if (start_label[i] >= 0 && vetoed[static_cast<std::size_t>(start_label[i])]) start_label[i] = -1;
+    // A point on the floor (a foot's sole, a wheel's contact) has the floor's disparity: it cannot start.
+    if (start_label[i] >= 0 && config.ground_veto && ground != nullptr && ground->valid &&
+        is_ground_like(planes[static_cast<std::size_t>(start_label[i])], *ground, points_px[i].x, points_px[i].y,
+                       config.ground_tolerance_px, config.ground_tolerance_rel, config.ground_slope_tolerance)) {
+      start_label[i] = -1;
+    }
     if (start_label[i] < 0) continue;
     d_min = std::min(d_min, static_cast<double>(disparity_px[i]));
     d_max = std::max(d_max, static_cast<double>(disparity_px[i]));
@@ -168,6 +218,12 @@ DynamicRegion find_dynamic_region(const cv::Mat& labels, cv::Point origin, const
   band.planes = &planes;
   band.origin = origin;
   band.vetoed = &vetoed;
+  if (config.ground_veto && ground != nullptr && ground->valid) {
+    band.ground = ground;
+    band.ground_tolerance_px = config.ground_tolerance_px;
+    band.ground_tolerance_rel = config.ground_tolerance_rel;
+    band.ground_slope_tolerance = config.ground_slope_tolerance;
+  }
   if (band.enabled) {
     band.lo_px = d_min - (config.band_tolerance_px + config.band_tolerance_rel * d_min);
     band.hi_px = d_max + (config.band_tolerance_px + config.band_tolerance_rel * d_max);
@@ -214,11 +270,15 @@ DynamicRegion find_dynamic_region(const cv::Mat& labels, cv::Point origin, const
   if (region.started_points == 0) return region;
   region.rectangle = cv::Rect(cv::Point(x0, y0) + origin, cv::Point(x1 + 1, y1 + 1) + origin);
 
-  // Flood over non-occlusion boundaries, among superpixels whose centre lies inside the rectangle.
+  // Flood over non-occlusion boundaries, among superpixels whose centre lies inside the rectangle and whose
+  // plane is in the band and not ground. Superpixels without a plane do not extend the flood; with
+  // enclosed_unknown_only they join afterwards only when members lie left and right of them.
   std::vector<char> seen(static_cast<std::size_t>(graph.count()), 0);
   std::vector<int> queue = region.start_superpixels;
+  std::vector<int> unknown;
   for (int k : queue) seen[static_cast<std::size_t>(k)] = 1;
   const cv::Rect2d rect(region.rectangle);
+  const bool checks_planes = band.enabled || band.ground != nullptr;
   for (std::size_t head = 0; head < queue.size(); ++head) {
     const int k = queue[head];
     region.superpixels.push_back(k);
@@ -229,25 +289,54 @@ DynamicRegion find_dynamic_region(const cv::Mat& labels, cv::Point origin, const
       if (is_occlusion(t) || (config.stop_at_unknown && t == BoundaryType::kUnknown)) continue;
       const cv::Point2d c = graph.region(m).centroid();
       if (!rect.contains(c)) continue;
-      if (band.enabled) {
-        const DisparityPlane& plane = planes[static_cast<std::size_t>(m)];
-        const double d = plane.disparity_at(c.x, c.y);
-        if (plane.valid && (d < band.lo_px || d > band.hi_px)) continue;
+      const DisparityPlane& plane = planes[static_cast<std::size_t>(m)];
+      if (checks_planes) {
+        const int state = band_state(band, m, cv::Point(static_cast<int>(std::lround(c.x)) - origin.x,
+                                                        static_cast<int>(std::lround(c.y)) - origin.y));
+        if (state == 1) continue;
       }
       seen[static_cast<std::size_t>(m)] = 1;
+      if (!plane.valid && config.enclosed_unknown_only) {
+        unknown.push_back(m);
+        continue;
+      }
       queue.push_back(m);
+    }
+  }
+  if (!unknown.empty()) {
+    std::vector<char> member(static_cast<std::size_t>(graph.count()), 0);
+    for (int k : region.superpixels) member[static_cast<std::size_t>(k)] = 1;
+    const cv::Rect rect_local = cv::Rect(region.rectangle.tl() - origin, region.rectangle.size()) &
+                                cv::Rect(0, 0, labels.cols, labels.rows);
+    for (int m : unknown) {
+      const cv::Point2d c = graph.region(m).centroid();
+      const cv::Point centre(std::clamp(static_cast<int>(std::lround(c.x)) - origin.x, 0, labels.cols - 1),
+                             std::clamp(static_cast<int>(std::lround(c.y)) - origin.y, 0, labels.rows - 1));
+      // The first other superpixel met from the centre in direction (dx, dy), inside the rectangle, is a member.
+      auto member_towards = [&](int dx, int dy) {
+        for (cv::Point p = centre; rect_local.contains(p); p += cv::Point(dx, dy)) {
+          const int k = labels.at<int32_t>(p);
+          if (k == m) continue;
+          return k >= 0 && k < graph.count() && member[static_cast<std::size_t>(k)] != 0;
+        }
+        return false;
+      };
+      if (member_towards(-1, 0) && member_towards(1, 0) && member_towards(0, -1) && member_towards(0, 1)) {
+        region.superpixels.push_back(m);
+      }
     }
   }
   return region;
 }
 
-void paint_region(const DynamicRegion& region, const cv::Mat& labels, cv::Point origin, MaskMode mode, cv::Mat& mask) {
+void paint_region(const DynamicRegion& region, const cv::Mat& labels, cv::Point origin, MaskMode mode, cv::Mat& mask,
+                  uint8_t value) {
   CV_Assert(mask.type() == CV_8UC1);
   const cv::Rect image(cv::Point(0, 0), mask.size());
   const cv::Rect rect = region.rectangle & image;
   if (rect.empty()) return;
   if (mode == MaskMode::kRectangle) {
-    mask(rect).setTo(255);
+    mask(rect).setTo(value);
     return;
   }
   int max_label = -1;
@@ -261,7 +350,7 @@ void paint_region(const DynamicRegion& region, const cv::Mat& labels, cv::Point 
     uint8_t* m = mask.ptr<uint8_t>(y);
     for (int x = area.x; x < area.x + area.width; ++x) {
       const int k = l[x - origin.x];
-      if (k >= 0 && k <= max_label && member[static_cast<std::size_t>(k)]) m[x] = 255;
+      if (k >= 0 && k <= max_label && member[static_cast<std::size_t>(k)]) m[x] = value;
     }
   }
 }

@@ -24,10 +24,12 @@ void RoiGroupingConfig::validate(const std::string& source) const {
 }
 
 std::string RoiGroupingConfig::describe() const {
-  char buf[280];
+  char buf[320];
   std::snprintf(buf, sizeof(buf),
-                "grouping: T_s = %.1f + %.2f d px, T_disp = %.2f + %.3f d px, ROI when >= %d points, margin %d + %.2f d px",
-                a_s_px, b_s, t_disp_px, t_disp_rel, min_points, margin_px, margin_disparity_factor);
+                "grouping: T_s = %.1f + %.2f d px, T_disp = %.2f + %.3f d px, ROI when >= %d points, margin %d + %.2f d px, "
+                "overlapping groups %s",
+                a_s_px, b_s, t_disp_px, t_disp_rel, min_points, margin_px, margin_disparity_factor,
+                merge_overlapping ? "merged" : "kept apart");
   return buf;
 }
 
@@ -70,10 +72,7 @@ std::vector<DynamicGroup> group_dynamic_points(const std::vector<cv::Point2f>& p
   }
   std::vector<DynamicGroup> groups;
   const cv::Rect image(cv::Point(0, 0), image_size);
-  for (auto& members : by_root) {
-    if (static_cast<int>(members.size()) < config.min_points) continue;
-    DynamicGroup g;
-    g.members = std::move(members);
+  auto finish = [&](DynamicGroup& g) {
     float x0 = 1e9f, y0 = 1e9f, x1 = -1e9f, y1 = -1e9f;
     double sum_d = 0;
     for (int i : g.members) {
@@ -90,7 +89,44 @@ std::vector<DynamicGroup> group_dynamic_points(const std::vector<cv::Point2f>& p
     const int margin = config.margin_px + static_cast<int>(std::lround(config.margin_disparity_factor * g.mean_disparity_px));
     g.roi = cv::Rect(g.bounds.x - margin, g.bounds.y - margin, g.bounds.width + 2 * margin,
                      g.bounds.height + 2 * margin) & image;
-    groups.push_back(std::move(g));
+  };
+  std::vector<DynamicGroup> candidates;
+  const std::size_t min_merge = config.merge_overlapping ? 2 : static_cast<std::size_t>(config.min_points);
+  for (auto& members : by_root) {
+    if (members.size() < std::max<std::size_t>(1, std::min(min_merge, static_cast<std::size_t>(config.min_points)))) continue;
+    DynamicGroup g;
+    g.members = std::move(members);
+    finish(g);
+    candidates.push_back(std::move(g));
+  }
+  if (config.merge_overlapping) {
+    bool merged = true;
+    while (merged) {
+      merged = false;
+      for (std::size_t a = 0; a < candidates.size() && !merged; ++a) {
+        for (std::size_t b = a + 1; b < candidates.size() && !merged; ++b) {
+          const double d = 0.5 * (candidates[a].mean_disparity_px + candidates[b].mean_disparity_px);
+          if (std::abs(candidates[a].mean_disparity_px - candidates[b].mean_disparity_px) >
+              config.t_disp_px + config.t_disp_rel * d) {
+            continue;
+          }
+          // Overlapping ROIs, or parts stacked vertically (overlapping columns, gap <= T_s): an upright object.
+          const cv::Rect& ra = candidates[a].roi;
+          const cv::Rect& rb = candidates[b].roi;
+          const bool columns_overlap = std::max(ra.x, rb.x) < std::min(ra.br().x, rb.br().x);
+          const int gap_y = std::max(ra.y, rb.y) - std::min(ra.br().y, rb.br().y);
+          if ((ra & rb).empty() && !(columns_overlap && gap_y <= config.a_s_px + config.b_s * d)) continue;
+          candidates[a].members.insert(candidates[a].members.end(), candidates[b].members.begin(),
+                                       candidates[b].members.end());
+          finish(candidates[a]);
+          candidates.erase(candidates.begin() + static_cast<std::ptrdiff_t>(b));
+          merged = true;
+        }
+      }
+    }
+  }
+  for (auto& g : candidates) {
+    if (static_cast<int>(g.members.size()) >= config.min_points) groups.push_back(std::move(g));
   }
   std::stable_sort(groups.begin(), groups.end(),
                    [](const DynamicGroup& a, const DynamicGroup& b) { return a.members.size() > b.members.size(); });

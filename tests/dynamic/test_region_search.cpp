@@ -119,6 +119,61 @@ TEST(RegionSearch, DisparityBandHandlesAMissedOcclusionAndPlanelessSuperpixels) 
             cv::Rect(50 + 30, 40 + 20, 40, 40));
 }
 
+TEST(RegionSearch, GroundVetoKeepsTheFloorUnderTheObjectOut) {
+  Grid g;
+  // Floor below the object (rows 6..7, full-image y 100..119): d = 0.5 y - 32.5, which is the object's
+  // disparity (20) at its contact row y = 105, as for a person standing on it.
+  DisparityPlane ground;
+  ground.valid = true;
+  ground.b = 0.5;
+  ground.c = 20.0 - 0.5 * 105.0;
+  for (int r = 6; r <= 7; ++r) {
+    for (int c = 0; c < 10; ++c) g.planes[static_cast<std::size_t>(r * 10 + c)] = ground;
+  }
+  label_boundaries(g.graph, g.planes, BoundaryConfig{});
+  // Points on the object and one on the floor at the contact (a foot's sole), all with d ~ 20.
+  const std::vector<cv::Point2f> pts = {{50.f + 45, 40.f + 33}, {50.f + 35, 40.f + 55}, {50.f + 45, 40.f + 65}};
+  const std::vector<float> d = {20.f, 20.f, 20.f};
+  RegionSearchConfig no_veto;
+  no_veto.ground_veto = false;
+  const DynamicRegion leaky = find_dynamic_region(g.labels, g.origin, g.graph, g.planes, pts, d, no_veto, {}, {}, &ground);
+  EXPECT_GT(leaky.rectangle.br().y, 40 + 60);  // the floor row in the band joins
+  RegionSearchConfig veto;
+  const DynamicRegion tight = find_dynamic_region(g.labels, g.origin, g.graph, g.planes, pts, d, veto, {}, {}, &ground);
+  EXPECT_EQ(tight.started_points, 2);  // the point on the floor cannot start
+  EXPECT_EQ(tight.rectangle, cv::Rect(50 + 30, 40 + 20, 40, 40));
+  EXPECT_EQ(tight.superpixels.size(), 16u);
+  // A fronto-parallel plane at the floor's disparity is not floor (slope test).
+  DisparityPlane upright;
+  upright.valid = true;
+  upright.c = 20.0;
+  EXPECT_FALSE(is_ground_like(upright, ground, 80, 105, 1.0, 0.05, 0.75));
+  EXPECT_TRUE(is_ground_like(ground, ground, 80, 105, 1.0, 0.05, 0.75));
+}
+
+TEST(RegionSearch, GroundPlaneFromStaticPointsWithOutliers) {
+  std::vector<cv::Point2f> pts;
+  std::vector<float> d;
+  for (int i = 0; i < 60; ++i) {  // floor points below the horizon (y > 240): d = 0.24 (y - 240)
+    const float x = 20.f + static_cast<float>((i * 137) % 700), y = 250.f + 3.f * static_cast<float>(i);
+    pts.emplace_back(x, y);
+    d.push_back(0.24f * (y - 240.f));
+  }
+  for (int i = 0; i < 25; ++i) {  // 30 % outliers: shelves at d = 6
+    pts.emplace_back(30.f * static_cast<float>(i), 300.f + static_cast<float>(i));
+    d.push_back(6.f);
+  }
+  pts.emplace_back(100.f, 100.f);  // above the horizon: ignored
+  d.push_back(40.f);
+  const DisparityPlane ground = fit_ground_plane(pts, d, 240.0);
+  ASSERT_TRUE(ground.valid);
+  EXPECT_NEAR(ground.b, 0.24, 0.01);
+  EXPECT_NEAR(ground.disparity_at(300, 400), 0.24 * 160, 0.3);
+  // A fronto-parallel wall only: no ground.
+  std::vector<float> wall(pts.size(), 8.f);
+  EXPECT_FALSE(fit_ground_plane(pts, wall, 240.0).valid);
+}
+
 TEST(RegionSearch, StaticVetoKeepsStaticSuperpixelsOut) {
   Grid g;
   // A shelf at the object's depth right of it (cols 7..8, rows 2..5): no occlusion boundary separates them.

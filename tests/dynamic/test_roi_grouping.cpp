@@ -39,6 +39,28 @@ TEST(RoiGrouping, TwoSeparatedClustersGiveTwoRois) {
   EXPECT_NEAR(groups[1].mean_disparity_px, 10.0, 1e-9);
 }
 
+TEST(RoiGrouping, StackedPartsOfOneUprightObjectMergeSideBySideObjectsDoNot) {
+  // Torso (3 points) and feet (3 points) of one person at d = 10, 55 px apart vertically (> T_s = 40): their
+  // ROIs (margin 10) are 35 px apart, within T_s, in overlapping columns.
+  std::vector<cv::Point2f> p = {{100, 100}, {115, 110}, {105, 120}, {95, 175}, {110, 180}, {120, 178}};
+  std::vector<float> d(6, 10.f);
+  RoiGroupingConfig cfg = paper_config();
+  auto groups = group_dynamic_points(p, d, cv::Size(752, 480), cfg);
+  ASSERT_EQ(groups.size(), 1u);
+  EXPECT_EQ(groups[0].members.size(), 6u);
+  EXPECT_EQ(groups[0].bounds, cv::Rect(95, 100, 26, 81));
+  cfg.merge_overlapping = false;  // the paper: two groups of three, no ROI
+  EXPECT_TRUE(group_dynamic_points(p, d, cv::Size(752, 480), cfg).empty());
+  // The same two groups side by side (two people walking abreast): not merged.
+  cfg.merge_overlapping = true;
+  std::vector<cv::Point2f> q = {{100, 100}, {110, 115}, {120, 130}, {175, 100}, {185, 115}, {195, 130}};
+  std::vector<float> e(6, 10.f);
+  EXPECT_TRUE(group_dynamic_points(q, e, cv::Size(752, 480), cfg).empty());
+  // Different depth: not merged even when stacked.
+  d = {10, 10, 10, 16, 16, 16};
+  EXPECT_TRUE(group_dynamic_points(p, d, cv::Size(752, 480), cfg).empty());
+}
+
 TEST(RoiGrouping, FourPointsAreNotAnObject) {
   std::vector<cv::Point2f> p = {{100, 100}, {110, 100}, {100, 110}, {110, 110}};
   std::vector<float> d(4, 15.f);

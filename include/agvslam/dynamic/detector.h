@@ -116,6 +116,7 @@ struct RoiSegmentation {
 
 struct DynamicMask {
   cv::Mat image;                  // CV_8UC1, 255 = dynamic, the size of the input frame
+  cv::Mat instances;              // CV_8UC1, 0 = static, k = pixel of the region regions[k - 1]
   std::vector<cv::Rect> regions;  // the dynamic rectangles (paper's output)
   int pixel_count() const { return image.empty() ? 0 : cv::countNonZero(image); }
 };
@@ -136,6 +137,7 @@ struct DetectorResult {
   std::vector<RoiSegmentation> rois;
   EpipolarResult epipolar;
   DepthTestResult depth;
+  DisparityPlane ground_plane;   // d = a x + b y + c of the floor from the static points (ground veto); may be invalid
   cv::Mat full_disparity_px;     // only with detector.full_frame_disparity
   StageTimings timings;
 

@@ -45,6 +45,19 @@ struct RegionSearchConfig {
   // entering it and the outline never includes it. Separates a person from a shelf at the same depth,
   // where no occlusion boundary exists.
   bool static_veto = true;
+  // Ground veto (beyond the paper): a superpixel whose plane agrees with the frame's ground plane (fitted to
+  // the static points below the horizon, in disparity space: d = a x + b y + c with b > 0) is floor: the
+  // search stops on entering it and the outline never includes it. Removes the floor strip around the feet of
+  // a person or the wheels of a vehicle, where the object touches the floor and no occlusion boundary exists.
+  bool ground_veto = true;
+  double ground_tolerance_px = 1.0;     // |plane - ground| at the superpixel's centre ...
+  double ground_tolerance_rel = 0.05;   // ... + this fraction of d
+  double ground_slope_tolerance = 0.75; // |b_plane - b_ground| <= this fraction of b_ground (b = 0 never passes)
+  // Superpixels without a plane (no SGBM disparity: textureless, or the half-occluded strip to the left of a
+  // foreground object) join the outline only when enclosed: from their centre, the first other superpixel
+  // left, right, above and below is a member. The half-occluded background strip has background on one side,
+  // the floor between a person's legs has floor below it.
+  bool enclosed_unknown_only = true;
 
   void validate(const std::string& source) const;
   std::string describe() const;
@@ -57,7 +70,21 @@ struct DisparityBand {
   const std::vector<DisparityPlane>* planes = nullptr;
   cv::Point origin;  // full-image position of the label image's top-left pixel
   const std::vector<char>* vetoed = nullptr;  // per label: static superpixel (the search stops before it)
+  // Ground plane (full-image coordinates) for the ground veto; nullptr = none. A superpixel whose plane agrees
+  // with it counts as outside the band.
+  const DisparityPlane* ground = nullptr;
+  double ground_tolerance_px = 1.0, ground_tolerance_rel = 0.05, ground_slope_tolerance = 0.75;
 };
+
+// True when `plane` (valid) agrees with `ground` at pixel (x, y) of the full image, within the tolerances.
+bool is_ground_like(const DisparityPlane& plane, const DisparityPlane& ground, double x, double y, double tolerance_px,
+                    double tolerance_rel, double slope_tolerance);
+
+// The ground plane in disparity space from static points (full-image x, y, d) below the horizon row
+// `horizon_y`: RANSAC plane with b > min_slope (disparity grows downwards), at least min_inliers inliers.
+// Invalid when there is no such plane.
+DisparityPlane fit_ground_plane(const std::vector<cv::Point2f>& points_px, const std::vector<float>& disparity_px,
+                                double horizon_y, double min_slope = 0.02, int min_inliers = 20);
 
 // The four stop points (ROI-local) of the search from `start` (ROI-local): +x, -x, +y, -y. Each is the last
 // pixel before the first occlusion boundary in that direction, or the last pixel of the ROI. With a band,
@@ -81,15 +108,18 @@ struct DynamicRegion {
 
 // points_px/disparity_px: the group's dynamic points (full image). labels/planes/graph: the ROI's
 // segmentation (origin = ROI top-left in the full image). static_points_px/static_disparity_px (optional):
-// tracked points that passed the motion tests, for the static veto.
+// tracked points that passed the motion tests, for the static veto. ground (optional, valid): the ground
+// plane for the ground veto.
 DynamicRegion find_dynamic_region(const cv::Mat& labels, cv::Point origin, const SuperpixelGraph& graph,
                                   const std::vector<DisparityPlane>& planes, const std::vector<cv::Point2f>& points_px,
                                   const std::vector<float>& disparity_px, const RegionSearchConfig& config,
                                   const std::vector<cv::Point2f>& static_points_px = {},
-                                  const std::vector<float>& static_disparity_px = {});
+                                  const std::vector<float>& static_disparity_px = {},
+                                  const DisparityPlane* ground = nullptr);
 
-// Sets the region's pixels to 255 in `mask` (full image, CV_8UC1): the rectangle, or the flooded superpixels
-// inside the rectangle.
-void paint_region(const DynamicRegion& region, const cv::Mat& labels, cv::Point origin, MaskMode mode, cv::Mat& mask);
+// Sets the region's pixels to `value` in `mask` (full image, CV_8UC1): the rectangle, or the flooded
+// superpixels inside the rectangle.
+void paint_region(const DynamicRegion& region, const cv::Mat& labels, cv::Point origin, MaskMode mode, cv::Mat& mask,
+                  uint8_t value = 255);
 
 }  // namespace agvslam::dynamic

@@ -3,7 +3,8 @@
 //   |p_i - p_j| <= T_s = a_s + b_s * d   and   |d_i - d_j| <= T_disp,
 // groups are the connected components of that relation (union-find), and a group of more than four points
 // (min_points = 5) is a dynamic ROI: its bounding rectangle plus a margin that grows with the disparity
-// (nearer objects are larger, and their outline lies further from the outermost corners).
+// (nearer objects are larger, and their outline lies further from the outermost corners). Optionally, groups
+// whose ROIs overlap at agreeing disparity are merged (merge_overlapping).
 // d in T_s is the mean of the two disparities (the relation must be symmetric); T_disp may grow with the
 // disparity (t_disp_rel, 0 = the paper's constant) because the disparity spread of an object of fixed depth
 // extent grows as d^2.
@@ -23,6 +24,12 @@ struct RoiGroupingConfig {
   int min_points = 5;            // "more than four dynamic features"
   int margin_px = 16;            // ROI = bounding box + margin_px + margin_disparity_factor * d
   double margin_disparity_factor = 0.5;
+  // Beyond the paper: groups (of >= 2 points) whose ROIs overlap, or are stacked vertically (overlapping
+  // columns, vertical gap <= T_s), and whose mean disparities agree within T_disp are one object (a person's
+  // torso and feet, with no corners on the thighs, are farther apart than T_s). Side-by-side groups (people
+  // walking abreast) stay apart unless their ROIs overlap.
+  // Merging happens before the min_points test, so two small groups of one object can make a ROI together.
+  bool merge_overlapping = true;
 
   void validate(const std::string& source) const;
   std::string describe() const;

@@ -1,0 +1,106 @@
+// Runs agvslam-dynamic on a short simulated sequence (written by agvslam-sim) and on the real KITTI 06 excerpt.
+#include <gtest/gtest.h>
+
+#include <filesystem>
+#include <fstream>
+#include <nlohmann/json.hpp>
+#include <opencv2/imgcodecs.hpp>
+#include <regex>
+
+#include "common/test_data.h"
+
+namespace agvslam {
+namespace {
+namespace fs = std::filesystem;
+
+// One short scene1 sequence for all tests of this file (rendering is the slow part).
+const std::string& scene1_sequence() {
+  static const std::string dir = [] {
+    const std::string d = test::make_temp_dir("agvslam-dynamic-tool") + "/scene1";
+    std::string out;
+    const int rc = test::run_command(test::tool_path("agvslam-sim") + " --scenario scene1 --seed 7 --frames 40 --threads 2 --out " + d, &out);
+    EXPECT_EQ(rc, 0) << out;
+    return d;
+  }();
+  return dir;
+}
+
+TEST(DynamicTool, WritesMasksOverlaysScoresAndJson) {
+  const std::string data = scene1_sequence();
+  const std::string out = fs::path(data).parent_path().string() + "/run";
+  const std::string json_path = out + "/result.json";
+  std::string stdout_text;
+  const int rc = test::run_command(test::tool_path("agvslam-dynamic") + " --dataset " + data + " --out " + out +
+                                       " --overlay-every 10 --json " + json_path,
+                                   &stdout_text);
+  ASSERT_EQ(rc, 0) << stdout_text;
+  // The first line of stdout (after the log lines on stderr, which run_command merges) is the score line.
+  std::smatch m;
+  const std::regex score_line(R"(\nPRECISION ([0-9.]+) RECALL ([0-9.]+) IOU ([0-9.]+)\n)");
+  ASSERT_TRUE(std::regex_search(stdout_text, m, score_line)) << stdout_text;
+  EXPECT_NE(stdout_text.find("time per frame [ms]"), std::string::npos);
+  EXPECT_NE(stdout_text.find("total"), std::string::npos);
+
+  int masks = 0;
+  for (const auto& e : fs::directory_iterator(out + "/mask")) {
+    const cv::Mat mask = cv::imread(e.path().string(), cv::IMREAD_UNCHANGED);
+    ASSERT_EQ(mask.type(), CV_8UC1);
+    ASSERT_EQ(mask.size(), cv::Size(752, 480));
+    ++masks;
+  }
+  EXPECT_EQ(masks, 40);
+  for (const char* name : {"000010.png", "000020.png", "000030.png"}) {
+    const cv::Mat overlay = cv::imread(out + "/overlay/" + name);
+    ASSERT_FALSE(overlay.empty()) << name;
+    EXPECT_EQ(overlay.size(), cv::Size(2 * 752, 2 * 480));
+  }
+
+  std::ifstream f(json_path);
+  const nlohmann::json j = nlohmann::json::parse(f);
+  EXPECT_EQ(j["frames"]["detected"].get<int>(), 39);
+  const int tp = j["true_positives"], fp = j["false_positives"], fn = j["false_negatives"];
+  EXPECT_GT(tp + fn, 0) << "the person walks through the view";
+  EXPECT_NEAR(j["precision"].get<double>(), tp + fp > 0 ? static_cast<double>(tp) / (tp + fp) : 1.0, 1e-9);
+  EXPECT_NEAR(j["recall"].get<double>(), static_cast<double>(tp) / (tp + fn), 1e-9);
+  EXPECT_NEAR(std::stod(m[2].str()), j["recall"].get<double>(), 1e-4);
+  EXPECT_EQ(j["per_frame"].size(), 40u);
+  EXPECT_TRUE(j["timings"].contains("total"));
+  EXPECT_GT(j["timings"]["total"]["median_ms"].get<double>(), 0.0);
+}
+
+TEST(DynamicTool, BadInputNamesTheOptionOrFolder) {
+  const std::string data = scene1_sequence();
+  const std::string out = test::make_temp_dir("agvslam-dynamic-bad");
+  std::string text;
+  EXPECT_EQ(test::run_command(test::tool_path("agvslam-dynamic") + " --dataset " + data + " --out " + out + " --frames 9:3", &text), 2);
+  EXPECT_NE(text.find("--frames"), std::string::npos) << text;
+  EXPECT_EQ(test::run_command(test::tool_path("agvslam-dynamic") + " --dataset " + data + " --out " + out + " --frames 500:", &text), 2);
+  EXPECT_NE(text.find("40 frames"), std::string::npos) << text;
+  EXPECT_EQ(test::run_command(test::tool_path("agvslam-dynamic") + " --dataset " + out + "/nothing --out " + out, &text), 2);
+  EXPECT_NE(text.find("nothing"), std::string::npos) << text;
+  const std::string bad_params = out + "/bad.yaml";
+  std::ofstream(bad_params) << "epipolar:\n  a_epi_px: lots\n";
+  EXPECT_EQ(test::run_command(test::tool_path("agvslam-dynamic") + " --dataset " + data + " --out " + out +
+                                  " --params-dynamic " + bad_params, &text), 2);
+  EXPECT_NE(text.find("epipolar.a_epi_px"), std::string::npos) << text;
+  fs::remove_all(out);
+}
+
+TEST(DynamicTool, RealKittiParkedCarsGiveFewRegions) {
+  AGVSLAM_REQUIRE_SHARED(root, "data/kitti06_f000-050");
+  const std::string out = test::make_temp_dir("agvslam-dynamic-kitti");
+  std::string text;
+  ASSERT_EQ(test::run_command(test::tool_path("agvslam-dynamic") + " --dataset " + root + " --out " + out +
+                                  " --overlay-every 0 --json " + out + "/r.json", &text), 0) << text;
+  EXPECT_NE(text.find("PRECISION nan RECALL nan IOU nan"), std::string::npos) << text;
+  EXPECT_NE(text.find("not scored"), std::string::npos);
+  std::ifstream f(out + "/r.json");
+  const nlohmann::json j = nlohmann::json::parse(f);
+  const double per_frame = j["regions"]["per_frame"];
+  std::printf("KITTI 06 f000-050: %.3f dynamic regions per frame\n", per_frame);
+  EXPECT_LT(per_frame, 0.5);  // the excerpt's cars are parked: few false regions
+  fs::remove_all(out);
+}
+
+}  // namespace
+}  // namespace agvslam
