@@ -1,0 +1,62 @@
+#!/usr/bin/env bash
+# Scores the dynamic-region detector on simulator scenarios (issue 3 figures):
+#   tests/bench/dynamic_scenarios.sh [--build DIR] [--data DIR] [--seeds "101 102 103 104 105"]
+#                                    [--scenarios "static scene1 scene2 scene3 scene4 scene5"] [--threads N]
+# Generates each <scenario>_<seed> sequence under --data once (agvslam-sim, full default length), runs
+# agvslam-dynamic on it (JSON under <data>/results/) and prints one line per sequence and the totals:
+# object precision / recall / mean IoU (paper 004 eqs. 12-14), false regions per 100 frames, and the median and
+# p95 detector time per frame. Rendering dominates: ~0.2 s per frame and core.
+set -euo pipefail
+build=build/release
+data=${TMPDIR:-/tmp}/agvslam-dynamic-scenarios
+seeds="101 102 103 104 105"
+scenarios="static scene1 scene2 scene3 scene4 scene5"
+threads=$(nproc)
+while [[ $# -gt 0 ]]; do
+  case "$1" in
+    --build) build=$2; shift 2 ;;
+    --data) data=$2; shift 2 ;;
+    --seeds) seeds=$2; shift 2 ;;
+    --scenarios) scenarios=$2; shift 2 ;;
+    --threads) threads=$2; shift 2 ;;
+    *) echo "dynamic_scenarios.sh: unknown option '$1' (expected --build, --data, --seeds, --scenarios, --threads)" >&2; exit 2 ;;
+  esac
+done
+sim=$build/bin/agvslam-sim
+dyn=$build/bin/agvslam-dynamic
+for tool in "$sim" "$dyn"; do
+  [[ -x $tool ]] || { echo "dynamic_scenarios.sh: $tool not found; build first (cmake --build --preset release)" >&2; exit 2; }
+done
+mkdir -p "$data/results"
+for scenario in $scenarios; do
+  for seed in $seeds; do
+    seq=$data/${scenario}_$seed
+    if [[ ! -f $seq/objects.txt ]]; then
+      "$sim" --scenario "$scenario" --seed "$seed" --out "$seq" --threads "$threads" > "$seq.log" 2>&1
+    fi
+    "$dyn" --dataset "$seq" --out "$data/results/${scenario}_$seed" --overlay-every 50 \
+      --json "$data/results/${scenario}_$seed.json" > "$data/results/${scenario}_$seed.txt" 2> /dev/null
+  done
+done
+/usr/bin/env python3 - "$data/results" $scenarios -- $seeds <<'PY'
+import json, sys
+root = sys.argv[1]
+args = sys.argv[2:]
+sep = args.index("--")
+scenarios, seeds = args[:sep], args[sep + 1:]
+tot = {"tp": 0, "fp": 0, "fn": 0, "iou": 0.0}
+print(f"{'sequence':<14}{'frames':>7}{'P':>8}{'R':>8}{'IoU':>8}{'TP':>6}{'FP':>6}{'FN':>6}{'FP/100f':>9}{'med ms':>8}{'p95 ms':>8}")
+for sc in scenarios:
+    for seed in seeds:
+        j = json.load(open(f"{root}/{sc}_{seed}.json"))
+        tp, fp, fn = j["true_positives"], j["false_positives"], j["false_negatives"]
+        if sc != "static":
+            tot["tp"] += tp; tot["fp"] += fp; tot["fn"] += fn; tot["iou"] += j["mean_iou"] * tp
+        t = j["timings"]["total"]
+        print(f"{sc + '_' + seed:<14}{j['frames']['detected']:>7}{j['precision']:>8.3f}{j['recall']:>8.3f}{j['mean_iou']:>8.3f}"
+              f"{tp:>6}{fp:>6}{fn:>6}{j['false_regions_per_100_frames']:>9.2f}{t['median_ms']:>8.2f}{t['p95_ms']:>8.2f}")
+tp, fp, fn = tot["tp"], tot["fp"], tot["fn"]
+if tp + fp + fn:
+    print(f"scene1..5 total: precision {tp / max(1, tp + fp):.3f} recall {tp / max(1, tp + fn):.3f} "
+          f"mean IoU {tot['iou'] / max(1, tp):.3f} (TP {tp} FP {fp} FN {fn})")
+PY
