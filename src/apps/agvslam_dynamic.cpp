@@ -7,7 +7,8 @@
 // Writes <out>/mask/NNNNNN.png (8-bit, 255 = dynamic) for every frame, and every N-th frame an overlay
 // <out>/overlay/NNNNNN.png with four panels like the paper's Figs. 3, 5, 7 and 8: (a) SGBM disparity of the
 // whole frame, (b) tracked points (green static, red dynamic, orange densified dynamic) and the dynamic ROIs
-// (yellow), (c) the ROIs' superpixels with occlusion boundaries in red and hinges in blue, (d) the dynamic mask
+// (yellow), (c) the ROIs' superpixels with occlusion boundaries in red and hinges in blue (tinted green where the
+// photometric check found them moving with the background, magenta where they moved otherwise), (d) the mask
 // and regions (red rectangles) against the ground truth where the dataset has one (green: correct, red: false,
 // blue: missed pixels).
 // Where the dataset has mask_0/ (the simulator), each frame after the first is scored as the paper does
@@ -147,6 +148,21 @@ cv::Mat superpixel_panel(const cv::Mat& left, const dyn::DetectorResult& r) {
       return cv::Vec3b(160, 160, 160);
     };
     const cv::Mat& labels = roi.labels;
+    // Photometric check: green tint = moves with the background, magenta = moved differently.
+    if (!roi.motion.empty()) {
+      for (int y = 0; y < labels.rows; ++y) {
+        const int* row = labels.ptr<int>(y);
+        for (int x = 0; x < labels.cols; ++x) {
+          const int k = row[x];
+          if (k < 0 || static_cast<std::size_t>(k) >= roi.motion.size() || roi.motion[static_cast<std::size_t>(k)].apparent_motion_px < 0) continue;
+          const cv::Point p(roi.roi.x + x, roi.roi.y + y);
+          if (p.x >= panel.cols || p.y >= panel.rows) continue;
+          cv::Vec3b& px = panel.at<cv::Vec3b>(p);
+          const cv::Vec3b tint = roi.motion[static_cast<std::size_t>(k)].moves_with_background ? cv::Vec3b(0, 255, 0) : cv::Vec3b(255, 0, 255);
+          for (int c = 0; c < 3; ++c) px[c] = static_cast<uint8_t>((px[c] * 2 + tint[c]) / 3);
+        }
+      }
+    }
     for (int y = 0; y < labels.rows; ++y) {
       const int* row = labels.ptr<int>(y);
       const int* below = y + 1 < labels.rows ? labels.ptr<int>(y + 1) : nullptr;
@@ -192,7 +208,7 @@ cv::Mat compose_overlay(const cv::Mat& left, const cv::Mat& right, const dyn::De
   cv::Mat d = regions_panel(left, r, gt_mask);
   label(a, "(a) SGBM disparity (whole frame, for display)");
   label(b, "(b) tracks: green static, red dynamic; yellow: dynamic ROIs");
-  label(c, "(c) superpixels: red occlusion, blue hinge, white coplanar");
+  label(c, "(c) red occlusion, blue hinge; tint: green static, magenta moved");
   label(d, gt_mask.empty() ? "(d) dynamic mask and regions (red)"
                            : "(d) mask: green correct, red false, blue missed");
   cv::Mat top, bottom, all;

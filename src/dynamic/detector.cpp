@@ -45,10 +45,10 @@ std::string DetectorOptions::describe() const {
   char buf[420];
   std::snprintf(buf, sizeof(buf),
                 "detector: epipolar test %s, depth test %s, disparity %s, <= %d ROIs searched up to max point "
-                "disparity + %.1f px at scale %.1f, mask dilation %d px, densification %s",
+                "disparity + %.1f px at scale %.1f, ROIs extended to the floor %s, mask dilation %d px, densification %s",
                 use_epipolar_test ? "on" : "off", use_depth_test ? "on" : "off",
                 full_frame_disparity ? "whole frame (debug)" : "points + ROIs", max_rois, roi_disparity_margin_px,
-                roi_scale, mask_dilation_px, densify_text);
+                roi_scale, extend_to_floor ? "on" : "off", mask_dilation_px, densify_text);
   return buf;
 }
 
@@ -62,13 +62,14 @@ void DynamicDetectorConfig::validate(const std::string& source) const {
   planes.validate(source);
   boundaries.validate(source);
   regions.validate(source);
+  photometric.validate(source);
   detector.validate(source);
 }
 
 std::vector<std::string> DynamicDetectorConfig::describe() const {
   return {features.describe(), tracking.describe(),   epipolar.describe(), depth_test.describe(),
           grouping.describe(), slic.describe(),       planes.describe(),   boundaries.describe(),
-          regions.describe(),  detector.describe()};
+          regions.describe(),  photometric.describe(), detector.describe()};
 }
 
 std::string StageTimings::describe() const {
@@ -243,7 +244,7 @@ void DynamicDetector::detect(const StereoFrame& frame, DetectorResult& result) {
     tm.grouping_ms = ms_since(t);
 
     // The floor in disparity space, from the static points below the principal point (ground veto).
-    if (!groups.empty() && config_.regions.ground_veto) {
+    if (!groups.empty() && (config_.regions.ground_veto || opt.extend_to_floor)) {
       static_pts_.clear();
       static_disp_.clear();
       for (const TrackedPoint& p : result.points) {
@@ -260,6 +261,17 @@ void DynamicDetector::detect(const StereoFrame& frame, DetectorResult& result) {
       const DynamicGroup& group = groups[g];
       seg.roi = group.roi;
       seg.mean_disparity_px = group.mean_disparity_px;
+      // Objects stand on the floor: when the group's lowest corner is well above the floor row at the group's
+      // disparity (legs without corners), the ROI reaches down to that row so the outline can include them.
+      if (opt.extend_to_floor && result.ground_plane.valid && result.ground_plane.b > 0) {
+        const DisparityPlane& gp = result.ground_plane;
+        const double x_mid = seg.roi.x + 0.5 * seg.roi.width;
+        const double d_near = group.mean_disparity_px + config_.grouping.t_disp_px + config_.grouping.t_disp_rel * group.mean_disparity_px;
+        const double y_floor = (d_near - gp.c - gp.a * x_mid) / gp.b;
+        const int margin = config_.grouping.margin_px;
+        const int bottom = std::min(size.height, static_cast<int>(std::ceil(y_floor)) + margin);
+        if (bottom > seg.roi.br().y && y_floor > seg.roi.y) seg.roi.height = bottom - seg.roi.y;
+      }
       seg.points.clear();
       group_pts_.clear();
       group_disp_.clear();
@@ -312,9 +324,19 @@ void DynamicDetector::detect(const StereoFrame& frame, DetectorResult& result) {
         static_pts_.push_back(p.cur_px);
         static_disp_.push_back(p.cur_disparity_px);
       }
+      const std::vector<char>* moves_with_background = nullptr;
+      if (config_.photometric.enabled && result.depth.valid && !prev_left_.empty()) {
+        check_superpixel_motion(frame.left, prev_left_, calibration_.left, calibration_.bf(), result.depth.T_cur_prev,
+                                seg.labels, seg.roi.tl(), seg.planes, config_.photometric, seg.motion);
+        background_flags_.assign(seg.motion.size(), 0);
+        for (std::size_t k = 0; k < seg.motion.size(); ++k) background_flags_[k] = seg.motion[k].moves_with_background ? 1 : 0;
+        moves_with_background = &background_flags_;
+      } else {
+        seg.motion.clear();
+      }
       seg.region = find_dynamic_region(seg.labels, seg.roi.tl(), graph_, seg.planes, group_pts_, group_disp_,
                                        config_.regions, static_pts_, static_disp_,
-                                       result.ground_plane.valid ? &result.ground_plane : nullptr);
+                                       result.ground_plane.valid ? &result.ground_plane : nullptr, moves_with_background);
       if (!seg.region.rectangle.empty()) {
         result.mask.regions.push_back(seg.region.rectangle & cv::Rect(cv::Point(0, 0), size));
         paint_region(seg.region, seg.labels, seg.roi.tl(), config_.regions.mask_mode, result.mask.instances,
@@ -345,7 +367,7 @@ void DynamicDetector::detect(const StereoFrame& frame, DetectorResult& result) {
   tm.point_disparity_ms += ms_since(t);
 
   std::swap(prev_pyramid_, cur_pyramid_);
-  if (opt.densify) {
+  if (opt.densify || config_.photometric.enabled) {
     frame.left.copyTo(prev_left_);
     frame.right.copyTo(prev_right_);
   }

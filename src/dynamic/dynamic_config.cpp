@@ -8,7 +8,7 @@ namespace agvslam::dynamic {
 DynamicDetectorConfig load_dynamic_config(const std::string& path) {
   const stereo::ParamsReader in(path);
   in.check_sections({"features", "tracking", "epipolar", "depth_test", "grouping", "slic", "planes", "boundaries",
-                     "regions", "detector"});
+                     "regions", "photometric", "detector"});
   DynamicDetectorConfig c;
   const char* px = "a number (px)";
   const char* num = "a number";
@@ -120,8 +120,16 @@ DynamicDetectorConfig load_dynamic_config(const std::string& path) {
   in.read("regions", "mask_mode", mode, "rectangle or superpixels");
   if (!parse_mask_mode(mode, c.regions.mask_mode)) throw InputError(path, "regions.mask_mode", "expected rectangle or superpixels");
 
+  in.check_keys("photometric", {"enabled", "max_motion_px", "min_gradient", "sample_step_px", "min_samples"});
+  in.read("photometric", "enabled", c.photometric.enabled, flag);
+  in.read("photometric", "max_motion_px", c.photometric.max_motion_px, px);
+  in.read("photometric", "min_gradient", c.photometric.min_gradient, "a number (grey levels per px)");
+  in.read("photometric", "sample_step_px", c.photometric.sample_step_px, "an integer (px)");
+  in.read("photometric", "min_samples", c.photometric.min_samples, "an integer");
+
   in.check_keys("detector", {"use_epipolar_test", "use_depth_test", "full_frame_disparity", "max_rois",
-                             "roi_disparity_margin_px", "roi_scale", "mask_dilation_px", "densify", "densify_radius_px",
+                             "roi_disparity_margin_px", "roi_scale", "extend_to_floor", "mask_dilation_px", "densify",
+                             "densify_radius_px",
                              "densify_radius_disparity_factor", "densify_max_points", "densify_min_distance_px"});
   in.read("detector", "use_epipolar_test", c.detector.use_epipolar_test, flag);
   in.read("detector", "use_depth_test", c.detector.use_depth_test, flag);
@@ -129,6 +137,7 @@ DynamicDetectorConfig load_dynamic_config(const std::string& path) {
   in.read("detector", "max_rois", c.detector.max_rois, integer);
   in.read("detector", "roi_disparity_margin_px", c.detector.roi_disparity_margin_px, px);
   in.read("detector", "roi_scale", c.detector.roi_scale, "1 or 0.5");
+  in.read("detector", "extend_to_floor", c.detector.extend_to_floor, flag);
   in.read("detector", "mask_dilation_px", c.detector.mask_dilation_px, "an integer (px)");
   in.read("detector", "densify", c.detector.densify, flag);
   in.read("detector", "densify_radius_px", c.detector.densify_radius_px, px);

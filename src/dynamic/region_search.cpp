@@ -173,7 +173,8 @@ DynamicRegion find_dynamic_region(const cv::Mat& labels, cv::Point origin, const
                                   const std::vector<DisparityPlane>& planes, const std::vector<cv::Point2f>& points_px,
                                   const std::vector<float>& disparity_px, const RegionSearchConfig& config,
                                   const std::vector<cv::Point2f>& static_points_px,
-                                  const std::vector<float>& static_disparity_px, const DisparityPlane* ground) {
+                                  const std::vector<float>& static_disparity_px, const DisparityPlane* ground,
+                                  const std::vector<char>* moves_with_background) {
   CV_Assert(points_px.size() == disparity_px.size());
   CV_Assert(static_points_px.size() == static_disparity_px.size());
   DynamicRegion region;
@@ -212,6 +213,20 @@ DynamicRegion find_dynamic_region(const cv::Mat& labels, cv::Point origin, const
     if (start_label[i] < 0) continue;
     d_min = std::min(d_min, static_cast<double>(disparity_px[i]));
     d_max = std::max(d_max, static_cast<double>(disparity_px[i]));
+  }
+  // Superpixels whose appearance moved with the background (and that no point starts from) are static too.
+  if (moves_with_background != nullptr && static_cast<int>(moves_with_background->size()) == graph.count()) {
+    std::vector<char> starts(static_cast<std::size_t>(graph.count()), 0);
+    for (int k : start_label) {
+      if (k >= 0) starts[static_cast<std::size_t>(k)] = 1;
+    }
+    for (int k = 0; k < graph.count(); ++k) {
+      const auto u = static_cast<std::size_t>(k);
+      if ((*moves_with_background)[u] && !starts[u] && !vetoed[u]) {
+        vetoed[u] = 1;
+        region.vetoed_superpixels.push_back(k);
+      }
+    }
   }
   DisparityBand band;
   band.enabled = config.disparity_band && d_max >= d_min;

@@ -28,6 +28,7 @@
 #include "agvslam/dynamic/depth_test.h"
 #include "agvslam/dynamic/disparity_plane.h"
 #include "agvslam/dynamic/epipolar.h"
+#include "agvslam/dynamic/photometric_check.h"
 #include "agvslam/dynamic/quadtree_fast.h"
 #include "agvslam/dynamic/region_search.h"
 #include "agvslam/dynamic/roi_grouping.h"
@@ -48,6 +49,9 @@ struct DetectorOptions {
   double roi_scale = 0.5;             // 1 or 0.5: SGBM and SLIC of the ROIs at this resolution (planes, boundaries
                                       // and regions stay at full resolution)
   int mask_dilation_px = 0;           // grow the final mask by this many pixels
+  // Beyond the paper: objects stand on the floor. A ROI whose lowest point lies above the floor row at the
+  // group's disparity (from the frame's ground plane; legs often have no corners) is extended down to it.
+  bool extend_to_floor = true;
   // Densification (beyond the paper): a small object gets only a few of the N quadtree points, fewer than a
   // ROI needs. Around each small group (2 .. grouping.min_points - 1) of seed points, up to
   // densify_max_points extra FAST corners (features.min_threshold) of the previous frame within
@@ -75,6 +79,7 @@ struct DynamicDetectorConfig {
   PlaneFitConfig planes;
   BoundaryConfig boundaries;
   RegionSearchConfig regions;
+  PhotometricCheckConfig photometric;
   DetectorOptions detector;
 
   void validate(const std::string& source) const;
@@ -111,6 +116,7 @@ struct RoiSegmentation {
   SlicStats slic;
   std::vector<DisparityPlane> planes;      // per superpixel
   std::vector<SuperpixelBoundary> boundaries;
+  std::vector<SuperpixelMotion> motion;    // photometric check per superpixel (when enabled)
   DynamicRegion region;
 };
 
@@ -204,6 +210,7 @@ class DynamicDetector {
   std::vector<cv::Point2f> seed_pts_;
   std::vector<float> seed_disp_;
   std::vector<int> seed_index_;
+  std::vector<char> background_flags_;
 };
 
 }  // namespace agvslam::dynamic

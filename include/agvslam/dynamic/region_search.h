@@ -109,13 +109,16 @@ struct DynamicRegion {
 // points_px/disparity_px: the group's dynamic points (full image). labels/planes/graph: the ROI's
 // segmentation (origin = ROI top-left in the full image). static_points_px/static_disparity_px (optional):
 // tracked points that passed the motion tests, for the static veto. ground (optional, valid): the ground
-// plane for the ground veto.
+// plane for the ground veto. moves_with_background (optional, one flag per superpixel): superpixels whose
+// image content moved as the ego-motion predicts for a static surface (the detector's photometric check);
+// they are vetoed like static superpixels unless a dynamic point starts from them.
 DynamicRegion find_dynamic_region(const cv::Mat& labels, cv::Point origin, const SuperpixelGraph& graph,
                                   const std::vector<DisparityPlane>& planes, const std::vector<cv::Point2f>& points_px,
                                   const std::vector<float>& disparity_px, const RegionSearchConfig& config,
                                   const std::vector<cv::Point2f>& static_points_px = {},
                                   const std::vector<float>& static_disparity_px = {},
-                                  const DisparityPlane* ground = nullptr);
+                                  const DisparityPlane* ground = nullptr,
+                                  const std::vector<char>* moves_with_background = nullptr);
 
 // Sets the region's pixels to `value` in `mask` (full image, CV_8UC1): the rectangle, or the flooded
 // superpixels inside the rectangle.

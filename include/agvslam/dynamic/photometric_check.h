@@ -1,0 +1,47 @@
+#pragma once
+// Dense motion check of superpixels (beyond paper 004; the idea of paper 001's reprojection offsets, applied to
+// every pixel instead of feature points). Under the hypothesis that a superpixel is a static surface, its pixels
+// (back-projected with the superpixel's disparity plane) must reappear in the previous left image where the
+// ego-motion T_cur_prev puts them. The intensity differences of that warp, with their mean removed (exposure
+// changes), divided by the mean image gradient, estimate how far (px) the content is from where a static surface
+// would be: ~0.2-0.4 px for a static textured surface (noise, disparity error), more for an object that moved.
+// A textured superpixel whose apparent motion is small "moves with the background"; the region search then keeps
+// it out of the dynamic outline (a shelf beside a person at the same depth, which no occlusion boundary separates).
+
+#include <opencv2/core.hpp>
+#include <string>
+#include <vector>
+
+#include "agvslam/core/camera.h"
+#include "agvslam/core/se3.h"
+#include "agvslam/dynamic/disparity_plane.h"
+
+namespace agvslam::dynamic {
+
+// params/dynamic.yaml, section `photometric`.
+struct PhotometricCheckConfig {
+  bool enabled = true;
+  double max_motion_px = 1.0;   // apparent motion below this: the superpixel moves with the background
+  double min_gradient = 6.0;    // grey levels per px: weaker texture cannot tell (undecided, not vetoed)
+  int sample_step_px = 2;       // every 2nd pixel in x and y
+  int min_samples = 12;         // fewer usable samples: undecided
+
+  void validate(const std::string& source) const;
+  std::string describe() const;
+};
+
+struct SuperpixelMotion {
+  int samples = 0;
+  double mean_gradient = 0;       // grey levels per px
+  double apparent_motion_px = -1; // -1: not measured
+  bool moves_with_background = false;
+};
+
+// labels: CV_32SC1 superpixels (0 .. planes.size()-1) of a ROI whose top-left pixel is `origin` in the full
+// image; planes in full-image coordinates; cur_left/prev_left: CV_8UC1 full images; bf_px_m: baseline * fx.
+void check_superpixel_motion(const cv::Mat& cur_left, const cv::Mat& prev_left, const PinholeCamera& camera,
+                             double bf_px_m, const SE3d& T_cur_prev, const cv::Mat& labels, cv::Point origin,
+                             const std::vector<DisparityPlane>& planes, const PhotometricCheckConfig& config,
+                             std::vector<SuperpixelMotion>& motion);
+
+}  // namespace agvslam::dynamic

@@ -1,0 +1,97 @@
+#include "agvslam/dynamic/photometric_check.h"
+
+#include <cmath>
+#include <cstdio>
+
+#include "agvslam/core/error.h"
+
+namespace agvslam::dynamic {
+
+void PhotometricCheckConfig::validate(const std::string& source) const {
+  auto require = [&](bool ok, const char* field, const char* expected) {
+    if (!ok) throw InputError(source, std::string("photometric.") + field, expected);
+  };
+  require(max_motion_px > 0 && max_motion_px <= 20, "max_motion_px", "expected a number in (0, 20] px");
+  require(min_gradient >= 0 && min_gradient <= 255, "min_gradient", "expected a number in [0, 255] grey levels/px");
+  require(sample_step_px >= 1 && sample_step_px <= 16, "sample_step_px", "expected an integer in [1, 16]");
+  require(min_samples >= 3 && min_samples <= 100000, "min_samples", "expected an integer in [3, 100000]");
+}
+
+std::string PhotometricCheckConfig::describe() const {
+  char buf[240];
+  std::snprintf(buf, sizeof(buf),
+                "photometric: %s, static when apparent motion <= %.2f px with gradient >= %.1f /px, every %d px, "
+                ">= %d samples",
+                enabled ? "on" : "off", max_motion_px, min_gradient, sample_step_px, min_samples);
+  return buf;
+}
+
+namespace {
+double bilinear(const cv::Mat& image, double x, double y) {
+  const int x0 = static_cast<int>(x), y0 = static_cast<int>(y);
+  const double fx = x - x0, fy = y - y0;
+  const uint8_t* r0 = image.ptr<uint8_t>(y0);
+  const uint8_t* r1 = image.ptr<uint8_t>(y0 + 1);
+  return (1 - fy) * ((1 - fx) * r0[x0] + fx * r0[x0 + 1]) + fy * ((1 - fx) * r1[x0] + fx * r1[x0 + 1]);
+}
+}  // namespace
+
+void check_superpixel_motion(const cv::Mat& cur_left, const cv::Mat& prev_left, const PinholeCamera& camera,
+                             double bf_px_m, const SE3d& T_cur_prev, const cv::Mat& labels, cv::Point origin,
+                             const std::vector<DisparityPlane>& planes, const PhotometricCheckConfig& config,
+                             std::vector<SuperpixelMotion>& motion) {
+  CV_Assert(cur_left.type() == CV_8UC1 && prev_left.type() == CV_8UC1 && cur_left.size() == prev_left.size());
+  CV_Assert(labels.type() == CV_32SC1);
+  const std::size_t n = planes.size();
+  motion.assign(n, SuperpixelMotion{});
+  std::vector<double> sum(n, 0), sum_sq(n, 0), sum_grad(n, 0);
+  const SE3d T_prev_cur = T_cur_prev.inverse();
+  const Eigen::Matrix3d R = T_prev_cur.linear();
+  const Eigen::Vector3d t = T_prev_cur.translation();
+  const int w = cur_left.cols, h = cur_left.rows;
+  const int step = config.sample_step_px;
+  for (int ly = 0; ly < labels.rows; ly += step) {
+    const int y = ly + origin.y;
+    if (y < 1 || y >= h - 1) continue;
+    const int32_t* lrow = labels.ptr<int32_t>(ly);
+    const uint8_t* c0 = cur_left.ptr<uint8_t>(y);
+    const uint8_t* cm = cur_left.ptr<uint8_t>(y - 1);
+    const uint8_t* cp = cur_left.ptr<uint8_t>(y + 1);
+    for (int lx = 0; lx < labels.cols; lx += step) {
+      const int k = lrow[lx];
+      if (k < 0 || static_cast<std::size_t>(k) >= n) continue;
+      const DisparityPlane& plane = planes[static_cast<std::size_t>(k)];
+      if (!plane.valid) continue;
+      const int x = lx + origin.x;
+      if (x < 1 || x >= w - 1) continue;
+      const double d = plane.disparity_at(x, y);
+      if (d < 0.5) continue;
+      const double z = bf_px_m / d;
+      const Eigen::Vector3d X_cur((x - camera.cx) / camera.fx * z, (y - camera.cy) / camera.fy * z, z);
+      const Eigen::Vector3d X_prev = R * X_cur + t;
+      if (X_prev.z() < 0.1) continue;
+      const double u = camera.fx * X_prev.x() / X_prev.z() + camera.cx;
+      const double v = camera.fy * X_prev.y() / X_prev.z() + camera.cy;
+      if (!(u >= 0 && v >= 0 && u < w - 1 && v < h - 1)) continue;
+      const double diff = c0[x] - bilinear(prev_left, u, v);
+      const double gx = 0.5 * (c0[x + 1] - c0[x - 1]), gy = 0.5 * (cp[x] - cm[x]);
+      const auto u_k = static_cast<std::size_t>(k);
+      sum[u_k] += diff;
+      sum_sq[u_k] += diff * diff;
+      sum_grad[u_k] += std::sqrt(gx * gx + gy * gy);
+      ++motion[u_k].samples;
+    }
+  }
+  for (std::size_t k = 0; k < n; ++k) {
+    SuperpixelMotion& m = motion[k];
+    if (m.samples < config.min_samples) continue;
+    const double mean = sum[k] / m.samples;
+    const double spread = std::sqrt(std::max(0.0, sum_sq[k] / m.samples - mean * mean));
+    m.mean_gradient = sum_grad[k] / m.samples;
+    if (m.mean_gradient < config.min_gradient) continue;
+    m.apparent_motion_px = spread / m.mean_gradient;
+    m.moves_with_background = m.apparent_motion_px <= config.max_motion_px;
+  }
+}
+
+}  // namespace agvslam::dynamic
