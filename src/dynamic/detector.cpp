@@ -45,10 +45,11 @@ std::string DetectorOptions::describe() const {
   char buf[420];
   std::snprintf(buf, sizeof(buf),
                 "detector: epipolar test %s, depth test %s, disparity %s, <= %d ROIs searched up to max point "
-                "disparity + %.1f px at scale %.1f, ROIs extended to the floor %s, mask dilation %d px, densification %s",
+                "disparity + %.1f px at scale %.1f, ROIs extended to the floor %s, side-by-side pieces split %s, mask "
+                "dilation %d px, densification %s",
                 use_epipolar_test ? "on" : "off", use_depth_test ? "on" : "off",
                 full_frame_disparity ? "whole frame (debug)" : "points + ROIs", max_rois, roi_disparity_margin_px,
-                roi_scale, extend_to_floor ? "on" : "off", mask_dilation_px, densify_text);
+                roi_scale, extend_to_floor ? "on" : "off", split_side_by_side ? "on" : "off", mask_dilation_px, densify_text);
   return buf;
 }
 
@@ -256,6 +257,7 @@ void DynamicDetector::detect(const StereoFrame& frame, DetectorResult& result) {
     }
 
     result.rois.resize(groups.size());
+    int next_instance = 1;
     for (std::size_t g = 0; g < groups.size(); ++g) {
       RoiSegmentation& seg = result.rois[g];
       const DynamicGroup& group = groups[g];
@@ -338,9 +340,13 @@ void DynamicDetector::detect(const StereoFrame& frame, DetectorResult& result) {
                                        config_.regions, static_pts_, static_disp_,
                                        result.ground_plane.valid ? &result.ground_plane : nullptr, moves_with_background);
       if (!seg.region.rectangle.empty()) {
-        result.mask.regions.push_back(seg.region.rectangle & cv::Rect(cv::Point(0, 0), size));
-        paint_region(seg.region, seg.labels, seg.roi.tl(), config_.regions.mask_mode, result.mask.instances,
-                     static_cast<uint8_t>(std::min<std::size_t>(result.mask.regions.size(), 255)));
+        const cv::Rect rect = seg.region.rectangle & cv::Rect(cv::Point(0, 0), size);
+        result.mask.regions.push_back(rect);
+        region_mask_.create(size, CV_8UC1);
+        region_mask_(rect).setTo(0);
+        paint_region(seg.region, seg.labels, seg.roi.tl(), config_.regions.mask_mode, region_mask_);
+        next_instance = label_region_objects(region_mask_(rect), opt.split_side_by_side, next_instance,
+                                      result.mask.instances(rect));
       }
       tm.regions_ms += ms_since(t);
     }

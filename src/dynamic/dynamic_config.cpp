@@ -101,7 +101,7 @@ DynamicDetectorConfig load_dynamic_config(const std::string& path) {
   in.read("boundaries", "lambda_pen", c.boundaries.lambda_pen, "a number (px^2)");
 
   in.check_keys("regions", {"start_radius_px", "start_tolerance_px", "start_tolerance_rel", "stop_at_unknown",
-                            "disparity_band", "band_tolerance_px", "band_tolerance_rel", "static_veto", "ground_veto", "ground_tolerance_px", "ground_tolerance_rel",
+                            "disparity_band", "band_tolerance_px", "band_tolerance_rel", "local_band", "static_veto", "ground_veto", "ground_tolerance_px", "ground_tolerance_rel",
                             "ground_slope_tolerance", "enclosed_unknown_only", "mask_mode"});
   in.read("regions", "start_radius_px", c.regions.start_radius_px, "an integer (px)");
   in.read("regions", "start_tolerance_px", c.regions.start_tolerance_px, px);
@@ -110,6 +110,7 @@ DynamicDetectorConfig load_dynamic_config(const std::string& path) {
   in.read("regions", "disparity_band", c.regions.disparity_band, flag);
   in.read("regions", "band_tolerance_px", c.regions.band_tolerance_px, px);
   in.read("regions", "band_tolerance_rel", c.regions.band_tolerance_rel, num);
+  in.read("regions", "local_band", c.regions.local_band, flag);
   in.read("regions", "static_veto", c.regions.static_veto, flag);
   in.read("regions", "ground_veto", c.regions.ground_veto, flag);
   in.read("regions", "ground_tolerance_px", c.regions.ground_tolerance_px, px);
@@ -128,7 +129,7 @@ DynamicDetectorConfig load_dynamic_config(const std::string& path) {
   in.read("photometric", "min_samples", c.photometric.min_samples, "an integer");
 
   in.check_keys("detector", {"use_epipolar_test", "use_depth_test", "full_frame_disparity", "max_rois",
-                             "roi_disparity_margin_px", "roi_scale", "extend_to_floor", "mask_dilation_px", "densify",
+                             "roi_disparity_margin_px", "roi_scale", "extend_to_floor", "split_side_by_side", "mask_dilation_px", "densify",
                              "densify_radius_px",
                              "densify_radius_disparity_factor", "densify_max_points", "densify_min_distance_px"});
   in.read("detector", "use_epipolar_test", c.detector.use_epipolar_test, flag);
@@ -138,6 +139,7 @@ DynamicDetectorConfig load_dynamic_config(const std::string& path) {
   in.read("detector", "roi_disparity_margin_px", c.detector.roi_disparity_margin_px, px);
   in.read("detector", "roi_scale", c.detector.roi_scale, "1 or 0.5");
   in.read("detector", "extend_to_floor", c.detector.extend_to_floor, flag);
+  in.read("detector", "split_side_by_side", c.detector.split_side_by_side, flag);
   in.read("detector", "mask_dilation_px", c.detector.mask_dilation_px, "an integer (px)");
   in.read("detector", "densify", c.detector.densify, flag);
   in.read("detector", "densify_radius_px", c.detector.densify_radius_px, px);

@@ -3,6 +3,7 @@
 #include <algorithm>
 #include <cmath>
 #include <cstdio>
+#include <opencv2/imgproc.hpp>
 
 #include "agvslam/core/error.h"
 
@@ -43,10 +44,10 @@ std::string RegionSearchConfig::describe() const {
   if (disparity_band) std::snprintf(band, sizeof(band), "+-(%.2f + %.3f d) px", band_tolerance_px, band_tolerance_rel);
   std::snprintf(buf, sizeof(buf),
                 "regions: start superpixel within %d px agreeing to %.2f + %.2f d px, unknown boundaries %s, "
-                "disparity band %s, static veto %s, ground veto %s (%.2f + %.3f d px, slope +-%.0f %%), planeless "
+                "disparity band %s (local %s), static veto %s, ground veto %s (%.2f + %.3f d px, slope +-%.0f %%), planeless "
                 "superpixels %s, mask = %s",
                 start_radius_px, start_tolerance_px, start_tolerance_rel, stop_at_unknown ? "stop" : "pass", band,
-                static_veto ? "on" : "off", ground_veto ? "on" : "off", ground_tolerance_px, ground_tolerance_rel,
+                local_band ? "on" : "off", static_veto ? "on" : "off", ground_veto ? "on" : "off", ground_tolerance_px, ground_tolerance_rel,
                 100 * ground_slope_tolerance, enclosed_unknown_only ? "only when enclosed" : "always",
                 to_string(mask_mode).c_str());
   return buf;
@@ -310,6 +311,21 @@ DynamicRegion find_dynamic_region(const cv::Mat& labels, cv::Point origin, const
                                                         static_cast<int>(std::lround(c.y)) - origin.y));
         if (state == 1) continue;
       }
+      // Local band: the plane must also agree with the nearest started point of the group (a group that spans
+      // two people at different depths has a wide band, which the background between them would pass).
+      if (config.local_band && band.enabled && plane.valid) {
+        double best_d2 = 1e30, d_near = 0;
+        for (std::size_t i = 0; i < points_px.size(); ++i) {
+          if (start_label[i] < 0) continue;
+          const double dx = points_px[i].x - c.x, dy = points_px[i].y - c.y;
+          if (dx * dx + dy * dy < best_d2) {
+            best_d2 = dx * dx + dy * dy;
+            d_near = disparity_px[i];
+          }
+        }
+        const double tol = config.band_tolerance_px + config.band_tolerance_rel * d_near;
+        if (std::abs(plane.disparity_at(c.x, c.y) - d_near) > tol) continue;
+      }
       seen[static_cast<std::size_t>(m)] = 1;
       if (!plane.valid && config.enclosed_unknown_only) {
         unknown.push_back(m);
@@ -369,5 +385,60 @@ void paint_region(const DynamicRegion& region, const cv::Mat& labels, cv::Point 
     }
   }
 }
+
+int label_region_objects(const cv::Mat& region_mask, bool split_side_by_side, int first_id, cv::Mat instances) {
+  const auto clamp_id = [](int id) { return static_cast<uint8_t>(std::min(id, 255)); };
+  if (!split_side_by_side) {
+    instances.setTo(clamp_id(first_id), region_mask);
+    return first_id + 1;
+  }
+  cv::Mat labels, stats, centroids;
+  const int n = cv::connectedComponentsWithStats(region_mask, labels, stats, centroids, 8, CV_32S);
+  if (n <= 1) return first_id;
+  int total = 0, largest = 1;
+  for (int k = 1; k < n; ++k) {
+    total += stats.at<int>(k, cv::CC_STAT_AREA);
+    if (stats.at<int>(k, cv::CC_STAT_AREA) > stats.at<int>(largest, cv::CC_STAT_AREA)) largest = k;
+  }
+  std::vector<int> parent(static_cast<std::size_t>(n));
+  for (int k = 0; k < n; ++k) parent[static_cast<std::size_t>(k)] = k;
+  const auto root = [&](int k) {
+    while (parent[static_cast<std::size_t>(k)] != k) k = parent[static_cast<std::size_t>(k)];
+    return k;
+  };
+  const auto join = [&](int a, int b) {
+    a = root(a);
+    b = root(b);
+    if (a != b) parent[static_cast<std::size_t>(std::max(a, b))] = std::min(a, b);
+  };
+  for (int a = 1; a < n; ++a) {
+    if (stats.at<int>(a, cv::CC_STAT_AREA) * 50 < total) {
+      join(a, largest);
+      continue;
+    }
+    const int ax0 = stats.at<int>(a, cv::CC_STAT_LEFT), ax1 = ax0 + stats.at<int>(a, cv::CC_STAT_WIDTH);
+    for (int b = a + 1; b < n; ++b) {
+      if (stats.at<int>(b, cv::CC_STAT_AREA) * 50 < total) continue;
+      const int bx0 = stats.at<int>(b, cv::CC_STAT_LEFT), bx1 = bx0 + stats.at<int>(b, cv::CC_STAT_WIDTH);
+      const int overlap = std::min(ax1, bx1) - std::max(ax0, bx0);
+      if (overlap * 2 >= std::min(ax1 - ax0, bx1 - bx0)) join(a, b);  // columns overlap by half the narrower
+    }
+  }
+  std::vector<int> id_of(static_cast<std::size_t>(n), 0);
+  int next = first_id;
+  for (int k = 1; k < n; ++k) {
+    const int r = root(k);
+    if (id_of[static_cast<std::size_t>(r)] == 0) id_of[static_cast<std::size_t>(r)] = next++;
+  }
+  for (int y = 0; y < labels.rows; ++y) {
+    const int* l = labels.ptr<int>(y);
+    uint8_t* out = instances.ptr<uint8_t>(y);
+    for (int x = 0; x < labels.cols; ++x) {
+      if (l[x] > 0) out[x] = clamp_id(id_of[static_cast<std::size_t>(root(l[x]))]);
+    }
+  }
+  return next;
+}
+
 
 }  // namespace agvslam::dynamic

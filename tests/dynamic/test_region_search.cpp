@@ -174,6 +174,25 @@ TEST(RegionSearch, GroundPlaneFromStaticPointsWithOutliers) {
   EXPECT_FALSE(fit_ground_plane(pts, wall, 240.0).valid);
 }
 
+TEST(RegionSearch, RegionObjectsSplitSideBySideAndKeepStackedPieces) {
+  cv::Mat region(100, 120, CV_8UC1, cv::Scalar(0));
+  region(cv::Rect(10, 5, 20, 40)).setTo(255);   // person A torso
+  region(cv::Rect(12, 55, 18, 40)).setTo(255);  // person A legs (gap below the torso)
+  region(cv::Rect(70, 10, 25, 80)).setTo(255);  // person B, side by side
+  region(cv::Rect(50, 90, 2, 2)).setTo(255);    // a crumb: joins the largest
+  cv::Mat instances(100, 120, CV_8UC1, cv::Scalar(0));
+  EXPECT_EQ(label_region_objects(region, true, 3, instances), 5);
+  EXPECT_EQ(instances.at<uint8_t>(20, 20), instances.at<uint8_t>(70, 20));  // torso and legs: one object
+  EXPECT_NE(instances.at<uint8_t>(20, 20), instances.at<uint8_t>(50, 80));  // A and B: two
+  EXPECT_EQ(instances.at<uint8_t>(90, 50), instances.at<uint8_t>(50, 80));  // crumb joins B (the largest)
+  EXPECT_EQ(instances.at<uint8_t>(0, 0), 0);
+  EXPECT_EQ(cv::countNonZero(instances), cv::countNonZero(region));
+  instances.setTo(0);
+  EXPECT_EQ(label_region_objects(region, false, 3, instances), 4);
+  EXPECT_EQ(instances.at<uint8_t>(20, 20), 3);
+  EXPECT_EQ(instances.at<uint8_t>(50, 80), 3);
+}
+
 TEST(RegionSearch, StaticVetoKeepsStaticSuperpixelsOut) {
   Grid g;
   // A shelf at the object's depth right of it (cols 7..8, rows 2..5): no occlusion boundary separates them.

@@ -52,6 +52,9 @@ struct DetectorOptions {
   // Beyond the paper: objects stand on the floor. A ROI whose lowest point lies above the floor row at the
   // group's disparity (from the frame's ground plane; legs often have no corners) is extended down to it.
   bool extend_to_floor = true;
+  // Beyond the paper: a region whose outline falls into pieces side by side (columns not overlapping, e.g. two
+  // people walking apart inside one ROI) gives one object per piece in DynamicMask::instances.
+  bool split_side_by_side = true;
   // Densification (beyond the paper): a small object gets only a few of the N quadtree points, fewer than a
   // ROI needs. Around each small group (2 .. grouping.min_points - 1) of seed points, up to
   // densify_max_points extra FAST corners (features.min_threshold) of the previous frame within
@@ -122,7 +125,8 @@ struct RoiSegmentation {
 
 struct DynamicMask {
   cv::Mat image;                  // CV_8UC1, 255 = dynamic, the size of the input frame
-  cv::Mat instances;              // CV_8UC1, 0 = static, k = pixel of the region regions[k - 1]
+  cv::Mat instances;              // CV_8UC1, 0 = static, k > 0 = pixel of detected object k (a region, or with
+                                  // detector.split_side_by_side one of the side-by-side objects of a region)
   std::vector<cv::Rect> regions;  // the dynamic rectangles (paper's output)
   int pixel_count() const { return image.empty() ? 0 : cv::countNonZero(image); }
 };
@@ -211,6 +215,7 @@ class DynamicDetector {
   std::vector<float> seed_disp_;
   std::vector<int> seed_index_;
   std::vector<char> background_flags_;
+  cv::Mat region_mask_;
 };
 
 }  // namespace agvslam::dynamic

@@ -39,6 +39,9 @@ struct RegionSearchConfig {
   bool disparity_band = true;         // also stop at superpixels outside the group's disparity band
   double band_tolerance_px = 1.5;     // band = [min d - tol(min d), max d + tol(max d)], tol(d) = px + rel * d
   double band_tolerance_rel = 0.05;
+  // With the band, a superpixel also joins the outline only when its plane agrees (band tolerance) with the
+  // disparity of the group's nearest started point: one group may hold objects at different depths.
+  bool local_band = true;
   MaskMode mask_mode = MaskMode::kSuperpixels;
   // Static veto (beyond the paper): a superpixel that holds a tracked point which passed the motion tests,
   // with a disparity agreeing with the superpixel's plane (start tolerance), is static: the search stops on
@@ -124,5 +127,12 @@ DynamicRegion find_dynamic_region(const cv::Mat& labels, cv::Point origin, const
 // superpixels inside the rectangle.
 void paint_region(const DynamicRegion& region, const cv::Mat& labels, cv::Point origin, MaskMode mode, cv::Mat& mask,
                   uint8_t value = 255);
+
+// Writes the pixels of one region (region_mask, non-zero) into `instances` (CV_8UC1 of the same size) as
+// objects numbered from first_id (capped at 255): with split_side_by_side, the region's 8-connected pieces are
+// grouped by overlapping columns (by half the narrower piece: stacked pieces of one upright object stay
+// together; pieces side by side are separate objects, e.g. two people in one ROI); pieces under 1/50 of the
+// region join the largest. Without splitting the whole region is first_id. Returns the next free id.
+int label_region_objects(const cv::Mat& region_mask, bool split_side_by_side, int first_id, cv::Mat instances);
 
 }  // namespace agvslam::dynamic
