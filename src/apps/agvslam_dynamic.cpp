@@ -19,6 +19,7 @@
 // names the option, file or folder), 1 on any other failure.
 
 #include <CLI/CLI.hpp>
+#include <spdlog/sinks/stdout_color_sinks.h>
 #include <spdlog/spdlog.h>
 
 #include <algorithm>
@@ -390,6 +391,8 @@ int run(const Options& o) {
 }  // namespace
 
 int main(int argc, char** argv) {
+  // Logs go to stderr: stdout carries the results, starting with the PRECISION line.
+  spdlog::set_default_logger(spdlog::stderr_color_mt("agvslam-dynamic"));
   CLI::App app{"agvslam-dynamic: dynamic-region detection (paper 004) over a stereo sequence, scored where the "
                "dataset has ground-truth masks"};
   Options o;
