@@ -48,10 +48,81 @@ int32_t surface_key(const RayHit& hit) {
   return 0;
 }
 
+// Texture cache: level-0 texels of 1/512 m (about 2 mm: the footprint of a pixel on the floor nearest to the
+// camera), tiles kept while any of the last 16 images (8 stereo frames) used them.
+constexpr float kBaseTexelM = 1.0f / 512.0f;
+constexpr uint32_t kKeepPasses = 16;
+
+// Footprint of a pixel (the width it covers) on a surface hit at ray parameter t, for a ray direction of length
+// dir_len whose dot product with the surface normal is n_dot_dir: the larger of the width across the ray,
+// t / (focal * dir_len), and 0.6 times the (stretched) width along the slope, t / (focal * |cos|), so that
+// grazing surfaces are blurred rather than aliased.
+// (Plain comparisons rather than std::min/max, so that the row loop calling it vectorises.)
+inline float pixel_footprint(float t, float dir_len, float n_dot_dir, float focal_px) {
+  constexpr float kMinSlopeScale = 1e-4f / 0.6f;  // |cos| >= 1e-4
+  const float slope_scale = std::fabs(n_dot_dir) * (1.0f / 0.6f);
+  const float limited = slope_scale > kMinSlopeScale ? slope_scale : kMinSlopeScale;
+  return t / (focal_px * (limited < dir_len ? limited : dir_len));
+}
+
+// Lighting of a surface with unit normal n: ambient + sky from above + sun.
+inline float lighting(const RenderSettings& s, const V3& n) {
+  return s.ambient + s.sky * std::max(0.0f, n.z) + s.sun * std::max(0.0f, dot(n, s.sun_dir));
+}
+
+// Haze fraction at a distance: ~ 1 - exp(-dist / haze_distance) for short distances (0 without haze: the
+// distance scale is then infinite).
+inline float haze_scale_m(const RenderSettings& s) { return s.haze_distance_m > 0 ? s.haze_distance_m : kInfinity; }
+inline float haze_fraction(float dist, float haze_scale) { return dist / (dist + haze_scale); }
+inline float hazed(const RenderSettings& s, float radiance, float dist) {
+  return radiance + (s.haze_level - radiance) * haze_fraction(dist, haze_scale_m(s));
+}
+
+// Per-row arrays of the shading passes (one set per thread, reused).
+struct RowScratch {
+  std::vector<RayHit> hits;
+  std::vector<float> t, nx, ny, nz, footprint, light, haze, albedo;
+};
+RowScratch& row_scratch(int width) {
+  thread_local RowScratch row;
+  const std::size_t n = static_cast<std::size_t>(width);
+  if (row.hits.size() < n) {
+    row.hits.resize(n);
+    for (auto* a : {&row.t, &row.nx, &row.ny, &row.nz, &row.footprint, &row.light, &row.haze, &row.albedo})
+      a->assign(n, 0.0f);
+  }
+  return row;
+}
+
+// Per pixel of a row (ray directions col_x * column_x[u] + row_dir, hit at ray_t[u] on a surface with normal
+// (nx, ny, nz)[u]): the pixel's footprint on the surface, the lighting and the haze fraction. (Plain arrays, so
+// that the loop vectorises.)
+void row_footprint_light_haze(int width, const V3 col_x, const V3 row_dir, const float* __restrict column_x,
+                              float focal_px, const RenderSettings& settings, const float* __restrict ray_t,
+                              const float* __restrict nx, const float* __restrict ny, const float* __restrict nz,
+                              float* __restrict footprint, float* __restrict light, float* __restrict haze) {
+  const RenderSettings s = settings;  // a local copy: the stores cannot alias it
+  const float haze_scale = haze_scale_m(s);
+  for (int u = 0; u < width; ++u) {
+    const V3 dir = col_x * column_x[u] + row_dir;
+    const V3 n{nx[u], ny[u], nz[u]};
+    const float dir_len = length(dir);
+    footprint[u] = pixel_footprint(ray_t[u], dir_len, dot(n, dir), focal_px);
+    light[u] = lighting(s, n);
+    haze[u] = haze_fraction(ray_t[u] * dir_len, haze_scale);
+  }
+}
+
+// Surface ids in the texture cache.
+constexpr std::size_t kFloorSurface = 0, kCeilingSurface = 1, kFirstWallSurface = 2, kFirstBoxSurface = 6;
+std::size_t box_surface(std::size_t box, int face) { return kFirstBoxSurface + box * 6 + static_cast<std::size_t>(face); }
+
 }  // namespace
 
 Renderer::Renderer(const Warehouse& warehouse, const RenderSettings& settings)
-    : warehouse_(warehouse), settings_(settings) {
+    : warehouse_(warehouse),
+      settings_(settings),
+      textures_(kFirstBoxSurface + 6 * warehouse.boxes.size(), kBaseTexelM, kKeepPasses) {
   mark_nx_ = std::max(1, static_cast<int>(std::ceil(warehouse.width_m / mark_cell_m_)));
   mark_ny_ = std::max(1, static_cast<int>(std::ceil(warehouse.depth_m / mark_cell_m_)));
   mark_bins_.assign(static_cast<std::size_t>(mark_nx_ * mark_ny_), {});
@@ -96,68 +167,53 @@ Renderer::Renderer(const Warehouse& warehouse, const RenderSettings& settings)
   }
 }
 
-void Renderer::cast_hall(const Ray& ray, RayHit& hit) const {
+void Renderer::cast_hall(const V3& o, const V3& d, RayHit& hit) const {
   const Warehouse& w = warehouse_;
-  const V3& o = ray.origin;
-  const V3& d = ray.dir;
-  const V3& inv = ray.inv_dir;
-  // Hall: walls, floor and ceiling (the origin is inside).
-  float t_best = kInfinity;
-  uint8_t wall = 0;
-  RayHit::Kind kind = RayHit::Kind::kNone;
-  V3 normal;
-  if (d.x > 0) {
-    t_best = (w.width_m - o.x) * inv.x;
-    wall = 1;
-    normal = {-1, 0, 0};
-    kind = RayHit::Kind::kWall;
-  } else if (d.x < 0) {
-    t_best = -o.x * inv.x;
-    wall = 3;
-    normal = {1, 0, 0};
-    kind = RayHit::Kind::kWall;
+  // Per axis, the wall (or floor / ceiling) the ray heads for: its distance from the origin along the axis and
+  // the direction's component towards it, both >= 0 (the origin is inside the hall); t = distance / component.
+  // The nearest is found by cross-multiplying, so only it needs a division. Ties keep x, then y.
+  struct Candidate {
+    float distance, speed;
+  };
+  auto towards = [](float o_i, float d_i, float extent) {
+    return d_i > 0 ? Candidate{extent - o_i, d_i} : (d_i < 0 ? Candidate{o_i, -d_i} : Candidate{1.0f, 0.0f});
+  };
+  const Candidate cx = towards(o.x, d.x, w.width_m), cy = towards(o.y, d.y, w.depth_m),
+                  cz = towards(o.z, d.z, w.height_m);
+  int axis = 0;
+  Candidate best = cx;
+  if (cy.distance * best.speed < best.distance * cy.speed) {
+    best = cy;
+    axis = 1;
   }
-  if (d.y > 0) {
-    const float t = (w.depth_m - o.y) * inv.y;
-    if (t < t_best) {
-      t_best = t;
-      wall = 2;
-      normal = {0, -1, 0};
-      kind = RayHit::Kind::kWall;
-    }
-  } else if (d.y < 0) {
-    const float t = -o.y * inv.y;
-    if (t < t_best) {
-      t_best = t;
-      wall = 0;
-      normal = {0, 1, 0};
-      kind = RayHit::Kind::kWall;
-    }
+  if (cz.distance * best.speed < best.distance * cz.speed) {
+    best = cz;
+    axis = 2;
   }
-  if (d.z < 0) {
-    const float t = -o.z * inv.z;
-    if (t < t_best) {
-      t_best = t;
-      normal = {0, 0, 1};
-      kind = RayHit::Kind::kFloor;
-    }
-  } else if (d.z > 0) {
-    const float t = (w.height_m - o.z) * inv.z;
-    if (t < t_best) {
-      t_best = t;
-      normal = {0, 0, -1};
-      kind = RayHit::Kind::kCeiling;
-    }
-  }
-  hit.t = t_best;
-  hit.kind = kind;
-  hit.face = wall;
-  hit.normal = normal;
   hit.index = -1;
+  hit.face = 0;
+  if (best.speed == 0) {  // a zero direction (never for camera rays)
+    hit.t = kInfinity;
+    hit.kind = RayHit::Kind::kNone;
+    hit.normal = {};
+    return;
+  }
+  hit.t = best.distance / best.speed;
+  const bool positive = (axis == 0 ? d.x : (axis == 1 ? d.y : d.z)) > 0;
+  V3 n{0, 0, 0};
+  n[axis] = positive ? -1.0f : 1.0f;
+  hit.normal = n;
+  if (axis == 2) {
+    hit.kind = positive ? RayHit::Kind::kCeiling : RayHit::Kind::kFloor;
+  } else {
+    // Walls: 0 south (y = 0), 1 east (x = width), 2 north (y = depth), 3 west (x = 0).
+    hit.kind = RayHit::Kind::kWall;
+    hit.face = static_cast<uint8_t>(axis == 0 ? (positive ? 1 : 3) : (positive ? 2 : 0));
+  }
 }
 
 void Renderer::cast_static(const Ray& ray, RayHit& hit) const {
-  cast_hall(ray, hit);
+  cast_hall(ray.origin, ray.dir, hit);
   const Warehouse& w = warehouse_;
   const V3& o = ray.origin;
   const V3& d = ray.dir;
@@ -439,23 +495,73 @@ RayHit Renderer::cast(const Ray& ray, const std::vector<DynamicObject>& objects)
 
 float Renderer::shade(const RayHit& hit, const Ray& ray, const std::vector<DynamicObject>& objects,
                       float focal_px) const {
+  std::shared_lock<std::shared_mutex> pass_lock(pass_mutex_);
+  return shade_hit(hit, ray.origin, ray.dir, objects, focal_px);
+}
+
+void Renderer::face_size(const StaticBox& box, int face, float& su, float& sv) {
+  const V3 size = box.hi - box.lo;
+  switch (face / 2) {
+    case 0: su = size.y; sv = size.z; break;
+    case 1: su = size.x; sv = size.z; break;
+    default: su = size.x; sv = size.y; break;
+  }
+}
+
+float Renderer::box_face_albedo(std::size_t box_index, int face, float u, float v, float footprint_m) const {
+  const StaticBox& box = warehouse_.boxes[box_index];
+  FaceSample f;
+  f.box_size = box.hi - box.lo;
+  face_size(box, face, f.su, f.sv);
+  f.u = u;
+  f.v = v;
+  f.face = face;
+  f.footprint_m = footprint_m;
+  f.seed = (hash32(box.seed) & ~7U) | static_cast<uint32_t>(face);
+  return box_albedo(box.material, box.variant, f);
+}
+
+float Renderer::cached_floor_albedo(float x, float y, float footprint_m) const {
+  return textures_.sample(kFloorSurface, warehouse_.width_m, warehouse_.depth_m, x, y, footprint_m,
+                          [this](float u, float v, float w) { return floor_albedo(u, v, w); });
+}
+
+float Renderer::cached_ceiling_albedo(float x, float y, float footprint_m) const {
+  return textures_.sample(kCeilingSurface, warehouse_.width_m, warehouse_.depth_m, x, y, footprint_m,
+                          [this](float u, float v, float w) { return ceiling_albedo(u, v, w); });
+}
+
+float Renderer::cached_wall_albedo(int wall, float u, float z, float footprint_m) const {
+  const float length = (wall & 1) ? warehouse_.depth_m : warehouse_.width_m;
+  return textures_.sample(kFirstWallSurface + static_cast<std::size_t>(wall), length, warehouse_.height_m, u, z,
+                          footprint_m, [this, wall](float a, float b, float w) { return wall_albedo(wall, a, b, w); });
+}
+
+float Renderer::cached_box_face_albedo(std::size_t box, int face, float u, float v, float footprint_m) const {
+  float su, sv;
+  face_size(warehouse_.boxes[box], face, su, sv);
+  return textures_.sample(box_surface(box, face), su, sv, u, v, footprint_m,
+                          [this, box, face](float a, float b, float w) { return box_face_albedo(box, face, a, b, w); });
+}
+
+float Renderer::shade_hit(const RayHit& hit, const V3& origin, const V3& dir, const std::vector<DynamicObject>& objects,
+                          float focal_px) const {
   const RenderSettings& s = settings_;
   if (hit.kind == RayHit::Kind::kNone) return s.haze_level;
-  const V3 p = ray.at(hit.t);
-  const float dir_len = length(ray.dir);
-  const float cos_term = std::max(std::fabs(dot(hit.normal, ray.dir)), 1e-4f);
-  // Footprint of the pixel on the surface: across the ray and (stretched) along the slope, clamped so that
-  // grazing surfaces are blurred rather than aliased.
-  const float w_across = hit.t / (focal_px * dir_len);
-  const float w_along = hit.t / (focal_px * cos_term);
-  const float footprint = std::max(w_across, 0.6f * w_along);
+  const float dir_len = length(dir);
+  const float footprint = pixel_footprint(hit.t, dir_len, dot(hit.normal, dir), focal_px);
+  const float albedo = surface_albedo(hit, origin + dir * hit.t, footprint, objects);
+  return hazed(s, albedo * lighting(s, hit.normal), hit.t * dir_len);
+}
 
+float Renderer::surface_albedo(const RayHit& hit, const V3& p, float footprint,
+                               const std::vector<DynamicObject>& objects) const {
   float albedo = 0.5f;
   switch (hit.kind) {
     case RayHit::Kind::kFloor: {
-      albedo = floor_albedo(p.x, p.y, footprint);
+      albedo = cached_floor_albedo(p.x, p.y, footprint);
       // Soft occlusion by static goods (bilinear in the AO raster) and blob shadows of the actors.
-      const float gx = p.x / ao_cell_m_ - 0.5f, gy = p.y / ao_cell_m_ - 0.5f;
+      const float gx = p.x * inv_ao_cell_ - 0.5f, gy = p.y * inv_ao_cell_ - 0.5f;
       const int ix = std::clamp(floor_to_int(gx), 0, floor_ao_.cols - 2);
       const int iy = std::clamp(floor_to_int(gy), 0, floor_ao_.rows - 2);
       const float fx = clamp01(gx - static_cast<float>(ix)), fy = clamp01(gy - static_cast<float>(iy));
@@ -463,15 +569,18 @@ float Renderer::shade(const RayHit& hit, const Ray& ray, const std::vector<Dynam
       const float* r1 = floor_ao_.ptr<float>(iy + 1);
       albedo *= lerp(lerp(r0[ix], r0[ix + 1], fx), lerp(r1[ix], r1[ix + 1], fx), fy);
       for (const DynamicObject& obj : objects) {
-        const float radius = obj.cls == ActorClass::kPerson ? 0.45f : (obj.cls == ActorClass::kForklift ? 1.3f : 0.75f);
+        // Shadow radius 0.45 m (people), 1.3 m (forklifts), 0.75 m (AGVs).
+        const float inv_radius2 = obj.cls == ActorClass::kPerson
+                                      ? 1.0f / (0.45f * 0.45f)
+                                      : (obj.cls == ActorClass::kForklift ? 1.0f / (1.3f * 1.3f) : 1.0f / (0.75f * 0.75f));
         const float fwd = obj.cls == ActorClass::kForklift ? 0.3f : 0.0f;
         const float dx = p.x - (obj.origin.x + fwd * obj.cos_yaw), dy = p.y - (obj.origin.y + fwd * obj.sin_yaw);
-        const float q = 1.0f - (dx * dx + dy * dy) / (radius * radius);
+        const float q = 1.0f - (dx * dx + dy * dy) * inv_radius2;
         if (q > 0) albedo *= 1.0f - 0.6f * q * q;
       }
       break;
     }
-    case RayHit::Kind::kCeiling: albedo = ceiling_albedo(p.x, p.y, footprint); break;
+    case RayHit::Kind::kCeiling: albedo = cached_ceiling_albedo(p.x, p.y, footprint); break;
     case RayHit::Kind::kWall: {
       const Warehouse& w = warehouse_;
       float u = 0;
@@ -481,34 +590,17 @@ float Renderer::shade(const RayHit& hit, const Ray& ray, const std::vector<Dynam
         case 2: u = w.width_m - p.x; break;
         default: u = w.depth_m - p.y; break;
       }
-      albedo = wall_albedo(hit.face, u, p.z, footprint);
+      albedo = cached_wall_albedo(hit.face, u, p.z, footprint);
       break;
     }
     case RayHit::Kind::kBox: {
-      const StaticBox& box = warehouse_.boxes[static_cast<std::size_t>(hit.index)];
-      FaceSample f;
+      const std::size_t index = static_cast<std::size_t>(hit.index);
+      const StaticBox& box = warehouse_.boxes[index];
+      const V3 q = p - box.lo;
       const int axis = hit.face / 2;
-      f.box_size = box.hi - box.lo;
-      if (axis == 2) {
-        f.u = p.x - box.lo.x;
-        f.v = p.y - box.lo.y;
-        f.su = f.box_size.x;
-        f.sv = f.box_size.y;
-      } else if (axis == 0) {
-        f.u = p.y - box.lo.y;
-        f.v = p.z - box.lo.z;
-        f.su = f.box_size.y;
-        f.sv = f.box_size.z;
-      } else {
-        f.u = p.x - box.lo.x;
-        f.v = p.z - box.lo.z;
-        f.su = f.box_size.x;
-        f.sv = f.box_size.z;
-      }
-      f.face = hit.face;
-      f.footprint_m = footprint;
-      f.seed = (hash32(box.seed) & ~7U) | static_cast<uint32_t>(hit.face);
-      albedo = box_albedo(box.material, box.variant, f);
+      const float u = axis == 0 ? q.y : q.x;
+      const float v = axis == 2 ? q.y : q.z;
+      albedo = cached_box_face_albedo(index, hit.face, u, v, footprint);
       break;
     }
     case RayHit::Kind::kDynamic: {
@@ -522,19 +614,17 @@ float Renderer::shade(const RayHit& hit, const Ray& ray, const std::vector<Dynam
     }
     case RayHit::Kind::kNone: break;
   }
-  const V3& n = hit.normal;
-  const float light = s.ambient + s.sky * std::max(0.0f, n.z) + s.sun * std::max(0.0f, dot(n, s.sun_dir));
-  float radiance = albedo * light;
-  if (s.haze_distance_m > 0) {
-    const float dist = hit.t * dir_len;
-    const float h = dist / (dist + s.haze_distance_m);  // ~ 1 - exp(-dist / haze_distance) for short distances
-    radiance += (s.haze_level - radiance) * h;
-  }
-  return radiance;
+  return albedo;
 }
 
 void Renderer::render(const CameraIntrinsics& cam, const Eigen::Isometry3d& T_m_c,
                       const std::vector<DynamicObject>& objects, CameraRender& out, int threads) const {
+  {
+    // A new texture cache pass (freeing tiles unused for a while) unless another render is under way.
+    std::unique_lock<std::shared_mutex> exclusive(pass_mutex_, std::try_to_lock);
+    if (exclusive.owns_lock()) textures_.begin_pass();
+  }
+  std::shared_lock<std::shared_mutex> pass_lock(pass_mutex_);
   const int width = cam.width, height = cam.height;
   out.radiance.create(height, width, CV_32FC1);
   out.depth_m.create(height, width, CV_32FC1);
@@ -614,15 +704,30 @@ void Renderer::render(const CameraIntrinsics& cam, const Eigen::Isometry3d& T_m_
   // Static boxes by rasterisation into depth_m / surface_key, then per pixel: the hall, the nearer of the two,
   // the actors (ray cast inside their screen rectangles), shading.
   rasterize_boxes(cam, T_m_c, out.depth_m, out.surface_key, threads);
+  std::vector<float> column_x(static_cast<std::size_t>(width));  // normalised image x of each pixel column
+  for (int u = 0; u < width; ++u) column_x[static_cast<std::size_t>(u)] = (static_cast<float>(u) - cx) / fx;
+  const RenderSettings& s = settings_;
   for_each_row(height, threads, [&](int v) {
     float* radiance = out.radiance.ptr<float>(v);
     float* depth = out.depth_m.ptr<float>(v);
     uint16_t* ids = out.object_id.ptr<uint16_t>(v);
     int32_t* keys = out.surface_key.ptr<int32_t>(v);
+    const V3 row_dir = col_y * ((static_cast<float>(v) - cy) / fy) + col_z;
+    // Columns of this row inside some object's screen rectangle: only there are rays cast against the actors.
+    int actor_u0 = width, actor_u1 = -1;
+    for (const PixelRect& r : rects.object)
+      if (v >= r.v0 && v <= r.v1 && r.u0 <= r.u1) {
+        actor_u0 = std::min(actor_u0, r.u0);
+        actor_u1 = std::max(actor_u1, r.u1);
+      }
+    // The row is shaded in passes over arrays, so that the arithmetic shared by all pixels vectorises: the hits,
+    // then footprints, lighting and haze, then the albedos (texture lookups), then the radiance.
+    RowScratch& row = row_scratch(width);
     for (int u = 0; u < width; ++u) {
-      const Ray ray = make_ray(static_cast<float>(u), static_cast<float>(v));
-      RayHit hit;
-      cast_hall(ray, hit);
+      const V3 dir = col_x * column_x[static_cast<std::size_t>(u)] + row_dir;
+      RayHit& hit = row.hits[static_cast<std::size_t>(u)];
+      hit = RayHit{};
+      cast_hall(origin, dir, hit);
       if (keys[u] >= 16 && depth[u] < hit.t) {
         const int32_t k = keys[u] - 16;
         hit.t = depth[u];
@@ -633,13 +738,39 @@ void Renderer::render(const CameraIntrinsics& cam, const Eigen::Isometry3d& T_m_
         n[hit.face / 2] = (hit.face & 1) ? 1.0f : -1.0f;
         hit.normal = n;
       }
-      cast_dynamic(ray, objects, rect_ptr, u, v, hit);
-      radiance[u] = shade(hit, ray, objects, focal);
-      depth[u] = hit.kind == RayHit::Kind::kNone ? 0.0f : hit.t;
+      if (u >= actor_u0 && u <= actor_u1) cast_dynamic(Ray(origin, dir), objects, rect_ptr, u, v, hit);
+      const bool none = hit.kind == RayHit::Kind::kNone;
+      row.t[u] = none ? 0.0f : hit.t;
+      row.nx[u] = hit.normal.x;
+      row.ny[u] = hit.normal.y;
+      row.nz[u] = hit.normal.z;
+      depth[u] = none ? 0.0f : hit.t;
       ids[u] = hit.kind == RayHit::Kind::kDynamic
                    ? static_cast<uint16_t>(objects[static_cast<std::size_t>(hit.object)].id)
                    : static_cast<uint16_t>(0);
       keys[u] = surface_key(hit);
+    }
+    row_footprint_light_haze(width, col_x, row_dir, column_x.data(), focal, s, row.t.data(), row.nx.data(),
+                             row.ny.data(), row.nz.data(), row.footprint.data(), row.light.data(), row.haze.data());
+    for (int u = 0; u < width; ++u) {
+      const RayHit& hit = row.hits[static_cast<std::size_t>(u)];
+      if (hit.kind == RayHit::Kind::kNone) {  // nothing hit (not in a closed hall): all haze
+        row.albedo[u] = 0;
+        row.haze[u] = 1;
+        continue;
+      }
+      const V3 dir = col_x * column_x[static_cast<std::size_t>(u)] + row_dir;
+      row.albedo[u] = surface_albedo(hit, origin + dir * hit.t, row.footprint[u], objects);
+    }
+    {
+      const float haze_level = s.haze_level;
+      const float* __restrict albedo = row.albedo.data();
+      const float* __restrict light = row.light.data();
+      const float* __restrict haze = row.haze.data();
+      for (int u = 0; u < width; ++u) {
+        const float lit = albedo[u] * light[u];
+        radiance[u] = lit + (haze_level - lit) * haze[u];
+      }
     }
   });
 
@@ -684,7 +815,7 @@ void Renderer::render(const CameraIntrinsics& cam, const Eigen::Isometry3d& T_m_
         RayHit hit;
         cast_static(ray, hit);
         cast_dynamic(ray, objects, rect_ptr, u, v, hit);
-        sum += shade(hit, ray, objects, focal);
+        sum += shade_hit(hit, ray.origin, ray.dir, objects, focal);
       }
       radiance[u] = sum * (1.0f / 3.0f);
     }

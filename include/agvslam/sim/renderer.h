@@ -5,6 +5,10 @@
 // few moving primitives (ray cast inside each object's screen rectangle). Pixels on silhouettes get two more
 // samples, ray cast through the 2-D grid DDA (cast_static), when antialiasing is on.
 //
+// The procedural textures of the static surfaces (floor, ceiling, walls, box faces) are looked up in
+// mip-mapped tiles baked on first use (TextureCache) rather than evaluated per pixel; the actors' textures are
+// evaluated per pixel. Baked texels depend only on the layout, so the cache never changes a result.
+//
 // Outputs per camera: linear radiance (before exposure and noise), depth along the optical axis (the ray
 // parameter: rays are built as R_m_c * ((u - cx) / fx, (v - cy) / fy, 1)), the id of the dynamic object seen
 // at the pixel centre (0 = static scene) and a surface key (for edge detection). Rows may be split across
@@ -13,10 +17,12 @@
 #include <Eigen/Geometry>
 #include <cstdint>
 #include <opencv2/core.hpp>
+#include <shared_mutex>
 #include <vector>
 
 #include "agvslam/sim/actors.h"
 #include "agvslam/sim/geometry.h"
+#include "agvslam/sim/texture_cache.h"
 #include "agvslam/sim/warehouse.h"
 
 namespace agvslam::sim {
@@ -69,6 +75,20 @@ class Renderer {
   // Linear radiance of a hit seen along `ray` with a pixel footprint scale of 1 / focal_px.
   float shade(const RayHit& hit, const Ray& ray, const std::vector<DynamicObject>& objects, float focal_px) const;
 
+  // Albedo of the static surfaces as evaluated procedurally (what the texture cache bakes): the floor at (x, y),
+  // wall `wall` at u metres along it and height z, the ceiling at (x, y), face `face` of box `box` at face
+  // coordinates (u, v) (see FaceSample), each seen with a pixel footprint of footprint_m.
+  float floor_albedo(float x, float y, float footprint_m) const;
+  float wall_albedo(int wall, float u, float z, float footprint_m) const;
+  float ceiling_albedo(float x, float y, float footprint_m) const;
+  float box_face_albedo(std::size_t box, int face, float u, float v, float footprint_m) const;
+  // The same from the texture cache (what shade() uses).
+  float cached_floor_albedo(float x, float y, float footprint_m) const;
+  float cached_wall_albedo(int wall, float u, float z, float footprint_m) const;
+  float cached_ceiling_albedo(float x, float y, float footprint_m) const;
+  float cached_box_face_albedo(std::size_t box, int face, float u, float v, float footprint_m) const;
+  TextureCache::Stats texture_cache_stats() const { return textures_.stats(); }
+
   const Warehouse& warehouse() const { return warehouse_; }
   const RenderSettings& settings() const { return settings_; }
 
@@ -82,8 +102,8 @@ class Renderer {
     std::vector<std::vector<PixelRect>> primitive;
   };
   void cast_static(const Ray& ray, RayHit& hit) const;
-  // Walls, floor and ceiling only (the ray starts inside the hall).
-  void cast_hall(const Ray& ray, RayHit& hit) const;
+  // Walls, floor and ceiling only, for the ray origin + t * dir (the origin is inside the hall).
+  void cast_hall(const V3& origin, const V3& dir, RayHit& hit) const;
   // Primary visibility of the static boxes by rasterising their camera-facing faces, with the exact depth of
   // each face's plane at the pixel centre (what a pixel-centre ray cast returns). Fills `depth` (+inf where no
   // box) and `key` (surface key of the nearest face, -1 where none).
@@ -91,9 +111,13 @@ class Renderer {
                        int threads) const;
   void cast_dynamic(const Ray& ray, const std::vector<DynamicObject>& objects, const ObjectRects* rects, int u, int v,
                     RayHit& hit) const;
-  float floor_albedo(float x, float y, float footprint_m) const;
-  float wall_albedo(int wall, float u, float z, float footprint_m) const;
-  float ceiling_albedo(float x, float y, float footprint_m) const;
+  // shade() without the texture cache's pass lock (render() holds it).
+  float shade_hit(const RayHit& hit, const V3& origin, const V3& dir, const std::vector<DynamicObject>& objects,
+                  float focal_px) const;
+  // Albedo of the surface hit at point p, seen with a pixel footprint of footprint_m.
+  float surface_albedo(const RayHit& hit, const V3& p, float footprint_m, const std::vector<DynamicObject>& objects) const;
+  // Size (metres) of box face `face` (axis * 2 + positive): extents along its u and v coordinates.
+  static void face_size(const StaticBox& box, int face, float& su, float& sv);
 
   const Warehouse& warehouse_;
   RenderSettings settings_;
@@ -104,8 +128,12 @@ class Renderer {
   std::vector<std::vector<uint16_t>> wall_feature_bins_;  // per wall and metre along it: [wall * wall_bins_ + m]
   int wall_bins_ = 0;
   // Ambient occlusion of the floor by the goods and racks standing on it (multiplier, 0.1 m raster).
-  float ao_cell_m_ = 0.1f;
+  float ao_cell_m_ = 0.1f, inv_ao_cell_ = 10.0f;
   cv::Mat floor_ao_;  // CV_32FC1
+  // Baked textures of the static surfaces (surface ids: floor, ceiling, 4 walls, then 6 faces per box). render()
+  // starts a cache pass (which may free tiles) only while no other render or shade() holds pass_mutex_.
+  mutable TextureCache textures_;
+  mutable std::shared_mutex pass_mutex_;
 };
 
 // Albedo of a box face. `u`, `v` are face coordinates (metres from the face's corner; v is height on the
