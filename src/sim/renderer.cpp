@@ -78,16 +78,67 @@ inline float hazed(const RenderSettings& s, float radiance, float dist) {
   return radiance + (s.haze_level - radiance) * haze_fraction(dist, haze_scale_m(s));
 }
 
+// The hall's walls, floor and ceiling, seen from inside: a ray from o along d reaches, on each axis, the plane
+// ahead of it at t = (distance to it) / d_i (never, when d_i = 0). The nearest of the three is the hit; `plane`
+// numbers it axis * 2 + (d_i < 0), i.e. 0: east wall, 1: west wall, 2: north wall, 3: south wall, 4: ceiling,
+// 5: floor. Ties keep x, then y. (Selections only, so that a loop over pixels vectorises.)
+inline float hall_plane_t(float o_i, float d_i, float extent) {
+  const float t = (d_i > 0 ? extent - o_i : -o_i) / d_i;
+  return d_i != 0 ? t : kInfinity;
+}
+inline int nearest_hall_plane(const V3& o, const V3& d, const V3& extent, float& t) {
+  const float tx = hall_plane_t(o.x, d.x, extent.x), ty = hall_plane_t(o.y, d.y, extent.y),
+              tz = hall_plane_t(o.z, d.z, extent.z);
+  int plane = d.x > 0 ? 0 : 1;
+  t = tx;
+  plane = ty < t ? (d.y > 0 ? 2 : 3) : plane;
+  t = ty < t ? ty : t;
+  plane = tz < t ? (d.z > 0 ? 4 : 5) : plane;
+  t = tz < t ? tz : t;
+  return plane;
+}
+// The hit on hall plane `plane` (see nearest_hall_plane) at t (+inf: nothing, for a zero direction).
+void set_hall_hit(int plane, float t, RayHit& hit) {
+  struct Plane {
+    RayHit::Kind kind;
+    uint8_t wall;  // 0 south (y = 0), 1 east (x = width), 2 north (y = depth), 3 west (x = 0)
+    V3 normal;
+  };
+  static constexpr Plane kPlanes[6] = {
+      {RayHit::Kind::kWall, 1, {-1, 0, 0}},    {RayHit::Kind::kWall, 3, {1, 0, 0}},
+      {RayHit::Kind::kWall, 2, {0, -1, 0}},    {RayHit::Kind::kWall, 0, {0, 1, 0}},
+      {RayHit::Kind::kCeiling, 0, {0, 0, -1}}, {RayHit::Kind::kFloor, 0, {0, 0, 1}}};
+  const Plane& p = kPlanes[plane];
+  hit.t = t;
+  hit.kind = t < kInfinity ? p.kind : RayHit::Kind::kNone;
+  hit.face = p.wall;
+  hit.normal = p.normal;
+  hit.index = -1;
+}
+
+// Nearest hall plane of every pixel of a row (ray directions col_x * column_x[u] + row_dir).
+void row_hall_hits(int width, const V3 origin, const V3 col_x, const V3 row_dir, const V3 extent,
+                   const float* __restrict column_x, float* __restrict t, int32_t* __restrict plane) {
+  for (int u = 0; u < width; ++u) {
+    const V3 dir = col_x * column_x[u] + row_dir;
+    float tu;
+    plane[u] = nearest_hall_plane(origin, dir, extent, tu);
+    t[u] = tu;
+  }
+}
+
 // Per-row arrays of the shading passes (one set per thread, reused).
 struct RowScratch {
   std::vector<RayHit> hits;
   std::vector<float> t, nx, ny, nz, footprint, light, haze, albedo;
+  std::vector<int32_t> plane;
 };
 RowScratch& row_scratch(int width) {
   thread_local RowScratch row;
   const std::size_t n = static_cast<std::size_t>(width);
   if (row.hits.size() < n) {
     row.hits.resize(n);
+    row.plane.resize(n);
     for (auto* a : {&row.t, &row.nx, &row.ny, &row.nz, &row.footprint, &row.light, &row.haze, &row.albedo})
       a->assign(n, 0.0f);
   }
@@ -168,48 +219,9 @@ Renderer::Renderer(const Warehouse& warehouse, const RenderSettings& settings)
 }
 
 void Renderer::cast_hall(const V3& o, const V3& d, RayHit& hit) const {
-  const Warehouse& w = warehouse_;
-  // Per axis, the wall (or floor / ceiling) the ray heads for: its distance from the origin along the axis and
-  // the direction's component towards it, both >= 0 (the origin is inside the hall); t = distance / component.
-  // The nearest is found by cross-multiplying, so only it needs a division. Ties keep x, then y.
-  struct Candidate {
-    float distance, speed;
-  };
-  auto towards = [](float o_i, float d_i, float extent) {
-    return d_i > 0 ? Candidate{extent - o_i, d_i} : (d_i < 0 ? Candidate{o_i, -d_i} : Candidate{1.0f, 0.0f});
-  };
-  const Candidate cx = towards(o.x, d.x, w.width_m), cy = towards(o.y, d.y, w.depth_m),
-                  cz = towards(o.z, d.z, w.height_m);
-  int axis = 0;
-  Candidate best = cx;
-  if (cy.distance * best.speed < best.distance * cy.speed) {
-    best = cy;
-    axis = 1;
-  }
-  if (cz.distance * best.speed < best.distance * cz.speed) {
-    best = cz;
-    axis = 2;
-  }
-  hit.index = -1;
-  hit.face = 0;
-  if (best.speed == 0) {  // a zero direction (never for camera rays)
-    hit.t = kInfinity;
-    hit.kind = RayHit::Kind::kNone;
-    hit.normal = {};
-    return;
-  }
-  hit.t = best.distance / best.speed;
-  const bool positive = (axis == 0 ? d.x : (axis == 1 ? d.y : d.z)) > 0;
-  V3 n{0, 0, 0};
-  n[axis] = positive ? -1.0f : 1.0f;
-  hit.normal = n;
-  if (axis == 2) {
-    hit.kind = positive ? RayHit::Kind::kCeiling : RayHit::Kind::kFloor;
-  } else {
-    // Walls: 0 south (y = 0), 1 east (x = width), 2 north (y = depth), 3 west (x = 0).
-    hit.kind = RayHit::Kind::kWall;
-    hit.face = static_cast<uint8_t>(axis == 0 ? (positive ? 1 : 3) : (positive ? 2 : 0));
-  }
+  float t;
+  const int plane = nearest_hall_plane(o, d, hall_extent(), t);
+  set_hall_hit(plane, t, hit);
 }
 
 void Renderer::cast_static(const Ray& ray, RayHit& hit) const {
@@ -496,7 +508,7 @@ RayHit Renderer::cast(const Ray& ray, const std::vector<DynamicObject>& objects)
 float Renderer::shade(const RayHit& hit, const Ray& ray, const std::vector<DynamicObject>& objects,
                       float focal_px) const {
   std::shared_lock<std::shared_mutex> pass_lock(pass_mutex_);
-  return shade_hit(hit, ray.origin, ray.dir, objects, focal_px);
+  return shade_hit(hit, ray.origin, ray.dir, objects, blob_shadows(objects), focal_px);
 }
 
 void Renderer::face_size(const StaticBox& box, int face, float& su, float& sv) {
@@ -544,18 +556,32 @@ float Renderer::cached_box_face_albedo(std::size_t box, int face, float u, float
                           [this, box, face](float a, float b, float w) { return box_face_albedo(box, face, a, b, w); });
 }
 
+std::vector<Renderer::BlobShadow> Renderer::blob_shadows(const std::vector<DynamicObject>& objects) {
+  std::vector<BlobShadow> shadows;
+  shadows.reserve(objects.size());
+  for (const DynamicObject& obj : objects) {
+    // Radius 0.45 m (people), 1.3 m (forklifts, centred 0.3 m ahead of their origin), 0.75 m (AGVs).
+    const float inv_radius2 = obj.cls == ActorClass::kPerson
+                                  ? 1.0f / (0.45f * 0.45f)
+                                  : (obj.cls == ActorClass::kForklift ? 1.0f / (1.3f * 1.3f) : 1.0f / (0.75f * 0.75f));
+    const float fwd = obj.cls == ActorClass::kForklift ? 0.3f : 0.0f;
+    shadows.push_back({obj.origin.x + fwd * obj.cos_yaw, obj.origin.y + fwd * obj.sin_yaw, inv_radius2});
+  }
+  return shadows;
+}
+
 float Renderer::shade_hit(const RayHit& hit, const V3& origin, const V3& dir, const std::vector<DynamicObject>& objects,
-                          float focal_px) const {
+                          const std::vector<BlobShadow>& shadows, float focal_px) const {
   const RenderSettings& s = settings_;
   if (hit.kind == RayHit::Kind::kNone) return s.haze_level;
   const float dir_len = length(dir);
   const float footprint = pixel_footprint(hit.t, dir_len, dot(hit.normal, dir), focal_px);
-  const float albedo = surface_albedo(hit, origin + dir * hit.t, footprint, objects);
+  const float albedo = surface_albedo(hit, origin + dir * hit.t, footprint, objects, shadows);
   return hazed(s, albedo * lighting(s, hit.normal), hit.t * dir_len);
 }
 
-float Renderer::surface_albedo(const RayHit& hit, const V3& p, float footprint,
-                               const std::vector<DynamicObject>& objects) const {
+float Renderer::surface_albedo(const RayHit& hit, const V3& p, float footprint, const std::vector<DynamicObject>& objects,
+                               const std::vector<BlobShadow>& shadows) const {
   float albedo = 0.5f;
   switch (hit.kind) {
     case RayHit::Kind::kFloor: {
@@ -568,14 +594,9 @@ float Renderer::surface_albedo(const RayHit& hit, const V3& p, float footprint,
       const float* r0 = floor_ao_.ptr<float>(iy);
       const float* r1 = floor_ao_.ptr<float>(iy + 1);
       albedo *= lerp(lerp(r0[ix], r0[ix + 1], fx), lerp(r1[ix], r1[ix + 1], fx), fy);
-      for (const DynamicObject& obj : objects) {
-        // Shadow radius 0.45 m (people), 1.3 m (forklifts), 0.75 m (AGVs).
-        const float inv_radius2 = obj.cls == ActorClass::kPerson
-                                      ? 1.0f / (0.45f * 0.45f)
-                                      : (obj.cls == ActorClass::kForklift ? 1.0f / (1.3f * 1.3f) : 1.0f / (0.75f * 0.75f));
-        const float fwd = obj.cls == ActorClass::kForklift ? 0.3f : 0.0f;
-        const float dx = p.x - (obj.origin.x + fwd * obj.cos_yaw), dy = p.y - (obj.origin.y + fwd * obj.sin_yaw);
-        const float q = 1.0f - (dx * dx + dy * dy) * inv_radius2;
+      for (const BlobShadow& b : shadows) {
+        const float dx = p.x - b.x, dy = p.y - b.y;
+        const float q = 1.0f - (dx * dx + dy * dy) * b.inv_radius2;
         if (q > 0) albedo *= 1.0f - 0.6f * q * q;
       }
       break;
@@ -700,6 +721,8 @@ void Renderer::render(const CameraIntrinsics& cam, const Eigen::Isometry3d& T_m_
     }
   }
   const ObjectRects* rect_ptr = &rects;
+  const std::vector<BlobShadow> shadows = blob_shadows(objects);
+  const V3 hall = hall_extent();
 
   // Static boxes by rasterisation into depth_m / surface_key, then per pixel: the hall, the nearer of the two,
   // the actors (ray cast inside their screen rectangles), shading.
@@ -723,11 +746,11 @@ void Renderer::render(const CameraIntrinsics& cam, const Eigen::Isometry3d& T_m_
     // The row is shaded in passes over arrays, so that the arithmetic shared by all pixels vectorises: the hits,
     // then footprints, lighting and haze, then the albedos (texture lookups), then the radiance.
     RowScratch& row = row_scratch(width);
+    row_hall_hits(width, origin, col_x, row_dir, hall, column_x.data(), row.t.data(), row.plane.data());
     for (int u = 0; u < width; ++u) {
-      const V3 dir = col_x * column_x[static_cast<std::size_t>(u)] + row_dir;
       RayHit& hit = row.hits[static_cast<std::size_t>(u)];
       hit = RayHit{};
-      cast_hall(origin, dir, hit);
+      set_hall_hit(row.plane[static_cast<std::size_t>(u)], row.t[static_cast<std::size_t>(u)], hit);
       if (keys[u] >= 16 && depth[u] < hit.t) {
         const int32_t k = keys[u] - 16;
         hit.t = depth[u];
@@ -738,7 +761,8 @@ void Renderer::render(const CameraIntrinsics& cam, const Eigen::Isometry3d& T_m_
         n[hit.face / 2] = (hit.face & 1) ? 1.0f : -1.0f;
         hit.normal = n;
       }
-      if (u >= actor_u0 && u <= actor_u1) cast_dynamic(Ray(origin, dir), objects, rect_ptr, u, v, hit);
+      if (u >= actor_u0 && u <= actor_u1)
+        cast_dynamic(Ray(origin, col_x * column_x[static_cast<std::size_t>(u)] + row_dir), objects, rect_ptr, u, v, hit);
       const bool none = hit.kind == RayHit::Kind::kNone;
       row.t[u] = none ? 0.0f : hit.t;
       row.nx[u] = hit.normal.x;
@@ -760,7 +784,7 @@ void Renderer::render(const CameraIntrinsics& cam, const Eigen::Isometry3d& T_m_
         continue;
       }
       const V3 dir = col_x * column_x[static_cast<std::size_t>(u)] + row_dir;
-      row.albedo[u] = surface_albedo(hit, origin + dir * hit.t, row.footprint[u], objects);
+      row.albedo[u] = surface_albedo(hit, origin + dir * hit.t, row.footprint[u], objects, shadows);
     }
     {
       const float haze_level = s.haze_level;
@@ -815,7 +839,7 @@ void Renderer::render(const CameraIntrinsics& cam, const Eigen::Isometry3d& T_m_
         RayHit hit;
         cast_static(ray, hit);
         cast_dynamic(ray, objects, rect_ptr, u, v, hit);
-        sum += shade_hit(hit, ray.origin, ray.dir, objects, focal);
+        sum += shade_hit(hit, ray.origin, ray.dir, objects, shadows, focal);
       }
       radiance[u] = sum * (1.0f / 3.0f);
     }

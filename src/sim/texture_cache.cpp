@@ -14,7 +14,7 @@ TextureCache::TextureCache(std::size_t surface_count, float base_texel_m, uint32
 }
 
 TextureCache::~TextureCache() {
-  for (std::atomic<Tile*>* slot : held_) delete slot->load(std::memory_order_relaxed);
+  for (Slot* slot : held_) delete slot->tile.load(std::memory_order_relaxed);
   for (std::size_t i = 0; i < surface_count_; ++i) delete surfaces_[i].load(std::memory_order_relaxed);
 }
 
@@ -37,8 +37,7 @@ const TextureCache::Surface& TextureCache::create_surface(std::size_t id, float 
     if ((lv.texels_u == 1 && lv.texels_v == 1) || level + 1 == kMaxLevels) break;
   }
   s->top_level = level;
-  s->slots = std::make_unique<std::atomic<Tile*>[]>(slots);
-  for (std::size_t i = 0; i < slots; ++i) s->slots[i].store(nullptr, std::memory_order_relaxed);
+  s->slots = std::make_unique<Slot[]>(slots);
   std::size_t first = 0;
   for (int l = 0; l <= level; ++l) {
     Level& lv = s->levels[static_cast<std::size_t>(l)];
@@ -51,11 +50,9 @@ const TextureCache::Surface& TextureCache::create_surface(std::size_t id, float 
   return *expected;  // another thread created it first (identically)
 }
 
-const TextureCache::Tile* TextureCache::publish(std::unique_ptr<Tile> tile, uint64_t texels,
-                                                std::atomic<Tile*>& slot) const {
-  tile->last_pass.store(pass_, std::memory_order_relaxed);
+const TextureCache::Tile* TextureCache::publish(std::unique_ptr<Tile> tile, uint64_t texels, Slot& slot) const {
   Tile* expected = nullptr;
-  if (!slot.compare_exchange_strong(expected, tile.get(), std::memory_order_acq_rel, std::memory_order_acquire))
+  if (!slot.tile.compare_exchange_strong(expected, tile.get(), std::memory_order_acq_rel, std::memory_order_acquire))
     return expected;  // another thread baked the same texels first
   std::lock_guard<std::mutex> lock(mutex_);
   held_.push_back(&slot);
@@ -67,10 +64,9 @@ void TextureCache::begin_pass() {
   std::lock_guard<std::mutex> lock(mutex_);
   ++pass_;
   for (std::size_t i = 0; i < held_.size();) {
-    Tile* tile = held_[i]->load(std::memory_order_relaxed);
-    if (pass_ - tile->last_pass.load(std::memory_order_relaxed) > keep_passes_) {
-      held_[i]->store(nullptr, std::memory_order_relaxed);
-      delete tile;
+    Slot& slot = *held_[i];
+    if (pass_ - slot.last_pass.load(std::memory_order_relaxed) > keep_passes_) {
+      delete slot.tile.exchange(nullptr, std::memory_order_relaxed);
       ++tiles_freed_;
       held_[i] = held_.back();
       held_.pop_back();

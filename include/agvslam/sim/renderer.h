@@ -104,6 +104,7 @@ class Renderer {
   void cast_static(const Ray& ray, RayHit& hit) const;
   // Walls, floor and ceiling only, for the ray origin + t * dir (the origin is inside the hall).
   void cast_hall(const V3& origin, const V3& dir, RayHit& hit) const;
+  V3 hall_extent() const { return {warehouse_.width_m, warehouse_.depth_m, warehouse_.height_m}; }
   // Primary visibility of the static boxes by rasterising their camera-facing faces, with the exact depth of
   // each face's plane at the pixel centre (what a pixel-centre ray cast returns). Fills `depth` (+inf where no
   // box) and `key` (surface key of the nearest face, -1 where none).
@@ -111,11 +112,17 @@ class Renderer {
                        int threads) const;
   void cast_dynamic(const Ray& ray, const std::vector<DynamicObject>& objects, const ObjectRects* rects, int u, int v,
                     RayHit& hit) const;
+  // Soft shadow of an actor on the floor: albedo *= 1 - 0.6 q^2 where q = 1 - squared distance / radius^2 > 0.
+  struct BlobShadow {
+    float x, y, inv_radius2;
+  };
+  static std::vector<BlobShadow> blob_shadows(const std::vector<DynamicObject>& objects);
   // shade() without the texture cache's pass lock (render() holds it).
   float shade_hit(const RayHit& hit, const V3& origin, const V3& dir, const std::vector<DynamicObject>& objects,
-                  float focal_px) const;
+                  const std::vector<BlobShadow>& shadows, float focal_px) const;
   // Albedo of the surface hit at point p, seen with a pixel footprint of footprint_m.
-  float surface_albedo(const RayHit& hit, const V3& p, float footprint_m, const std::vector<DynamicObject>& objects) const;
+  float surface_albedo(const RayHit& hit, const V3& p, float footprint_m, const std::vector<DynamicObject>& objects,
+                       const std::vector<BlobShadow>& shadows) const;
   // Size (metres) of box face `face` (axis * 2 + positive): extents along its u and v coordinates.
   static void face_size(const StaticBox& box, int face, float& su, float& sv);
 

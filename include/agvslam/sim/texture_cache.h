@@ -83,21 +83,26 @@ class TextureCache {
   static constexpr float kCodeScale = 8192.0f;
   static constexpr int kTileStride = kTileTexels + 1;  // texels per tile row, apron included
   struct Tile {
-    std::atomic<uint32_t> last_pass{0};
     // Row-major, kTileStride per row; a tile at the surface's edge uses the top-left part.
     uint16_t texels[kTileStride * kTileStride];
+  };
+  // Where a tile is published, with the last pass that used it (next to the pointer, so that marking the use
+  // touches no other memory).
+  struct Slot {
+    std::atomic<Tile*> tile{nullptr};
+    std::atomic<uint32_t> last_pass{0};
   };
   struct Level {
     float texel_m = 0, inv_texel_m = 0;
     float x_max = 0, y_max = 0;      // largest texel coordinate a lookup may use (texels - 1)
     int texels_u = 0, texels_v = 0;  // texels covering the surface (the apron adds one more)
     int tiles_u = 0, tiles_v = 0;
-    std::atomic<Tile*>* slots = nullptr;  // tiles_u * tiles_v, row-major
+    Slot* slots = nullptr;  // tiles_u * tiles_v, row-major
   };
   struct Surface {
     int top_level = 0;
     std::array<Level, kMaxLevels> levels;
-    std::unique_ptr<std::atomic<Tile*>[]> slots;  // the tiles of all levels
+    std::unique_ptr<Slot[]> slots;  // the tiles of all levels
   };
 
   const Surface& surface(std::size_t id, float size_u, float size_v) const {
@@ -115,11 +120,10 @@ class TextureCache {
     const int ix = static_cast<int>(x), iy = static_cast<int>(y);
     const float fx = x - static_cast<float>(ix), fy = y - static_cast<float>(iy);
     const int tx = ix >> kTileShift, ty = iy >> kTileShift;
-    std::atomic<Tile*>& slot = lv.slots[ty * lv.tiles_u + tx];
-    const Tile* tile = slot.load(std::memory_order_acquire);
+    Slot& slot = lv.slots[ty * lv.tiles_u + tx];
+    const Tile* tile = slot.tile.load(std::memory_order_acquire);
     if (!tile) tile = bake(lv, tx, ty, slot, source);
-    if (tile->last_pass.load(std::memory_order_relaxed) != pass_)
-      const_cast<Tile*>(tile)->last_pass.store(pass_, std::memory_order_relaxed);
+    if (slot.last_pass.load(std::memory_order_relaxed) != pass_) slot.last_pass.store(pass_, std::memory_order_relaxed);
     const uint16_t* p = tile->texels + (iy & (kTileTexels - 1)) * kTileStride + (ix & (kTileTexels - 1));
     const float p00 = p[0], p01 = p[1], p10 = p[kTileStride], p11 = p[kTileStride + 1];
     const float top = p00 + (p01 - p00) * fx;
@@ -137,7 +141,7 @@ class TextureCache {
 #if defined(__GNUC__)
   __attribute__((noinline))
 #endif
-  const Tile* bake(const Level& lv, int tx, int ty, std::atomic<Tile*>& slot, const Source& source) const {
+  const Tile* bake(const Level& lv, int tx, int ty, Slot& slot, const Source& source) const {
     const int i0 = tx << kTileShift, j0 = ty << kTileShift;
     const int nu = std::min(kTileTexels, lv.texels_u - i0) + 1, nv = std::min(kTileTexels, lv.texels_v - j0) + 1;
     auto tile = std::make_unique<Tile>();
@@ -149,7 +153,7 @@ class TextureCache {
     }
     return publish(std::move(tile), static_cast<uint64_t>(nu) * static_cast<uint64_t>(nv), slot);
   }
-  const Tile* publish(std::unique_ptr<Tile> tile, uint64_t texels, std::atomic<Tile*>& slot) const;
+  const Tile* publish(std::unique_ptr<Tile> tile, uint64_t texels, Slot& slot) const;
 
   float base_texel_m_, inv_base_texel_m_;
   uint32_t keep_passes_;
@@ -158,7 +162,7 @@ class TextureCache {
   std::size_t surface_count_;
   // Tiles held (for eviction), guarded by mutex_ together with the statistics.
   mutable std::mutex mutex_;
-  mutable std::vector<std::atomic<Tile*>*> held_;
+  mutable std::vector<Slot*> held_;
   mutable uint64_t texels_baked_ = 0, tiles_freed_ = 0;
 };
 
