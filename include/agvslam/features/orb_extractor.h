@@ -18,7 +18,7 @@
 
 namespace agvslam::features {
 
-// params/slam.yaml, section `orb`.
+// params/features.yaml, section `orb` (features::load_features_config).
 struct OrbExtractorConfig {
   int n_features = 1200;         // per image (paper 004 uses ORB-SLAM2's 1200 for 752x480)
   double scale_factor = 1.2;     // between pyramid levels

@@ -16,7 +16,7 @@
 
 namespace agvslam::features {
 
-// params/slam.yaml, section `stereo_matching`.
+// params/features.yaml, section `stereo_matching` (features::load_features_config).
 struct StereoMatcherConfig {
   double min_depth_m = 0.3;        // nearer matches are rejected (disparity above bf / min_depth)
   double max_depth_m = 60.0;       // farther matches get no depth (they still track as monocular points)
