@@ -8,6 +8,7 @@ packages=(
   libopencv-dev libeigen3-dev libceres-dev
   libyaml-cpp-dev libspdlog-dev libfmt-dev libcli11-dev nlohmann-json3-dev
   libgtest-dev libgmock-dev libbenchmark-dev
+  cyclonedds-dev cyclonedds-tools can-utils iproute2 util-linux  # pose outputs: DDS (idlc), CAN tools, netns tests
 )
 
 missing=()
