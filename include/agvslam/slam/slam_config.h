@@ -1,0 +1,87 @@
+#pragma once
+// Settings of the stereo SLAM back end (tracking, local mapping, optimiser), one struct per stage, loaded from
+// params/slam.yaml. Defaults are ORB-SLAM2's stereo values (paper 004 III.C uses ORB-SLAM2's framework); every
+// value is explained in params/slam.yaml.
+
+#include <string>
+#include <vector>
+
+namespace agvslam::slam {
+
+// Section `tracking`.
+struct TrackingConfig {
+  // A stereo point is "close" (trusted for depth, created as a map point at once) when its depth is below
+  // close_depth_baselines * baseline_m (ORB-SLAM2's ThDepth: 35-40 baselines).
+  double close_depth_baselines = 40.0;
+  int min_init_features = 500;           // stereo initialisation needs this many keypoints with depth
+  int motion_model_radius_px = 7;        // search window (x scale of the level) when projecting the last frame
+  int min_motion_model_matches = 20;     // below this the window is doubled, then the model is given up
+  int min_frame_inliers = 10;            // motion-model / reference-keyframe tracking succeeds above this
+  int min_reference_matches = 15;        // reference-keyframe tracking needs this many descriptor matches
+  double reference_ratio = 0.7;          // Lowe ratio for the brute-force reference-keyframe matching
+  double local_map_radius = 1.0;         // search window factor for local map points (ORB-SLAM2's th = 1)
+  int min_local_map_inliers = 30;        // local-map tracking succeeds with at least this many inliers
+  int max_local_keyframes = 80;          // size cap of the local map (keyframes)
+  // Keyframe decision (ORB-SLAM2's NeedNewKeyFrame).
+  int keyframe_max_frames = 0;           // insert at least every this many frames (0 = the frame rate)
+  int keyframe_min_frames = 0;
+  double keyframe_ref_ratio = 0.75;      // fewer inliers than this x the reference keyframe's tracked points
+  int keyframe_close_tracked = 100;      // close points: fewer tracked than this and ...
+  int keyframe_close_untracked = 70;     // ... more untracked than this -> insert
+  int keyframe_max_new_points = 100;     // a new keyframe creates at least this many of its closest stereo points
+  // Loss: after this many consecutive failed frames with a map of fewer than reset_max_keyframes keyframes, the
+  // map is reset and initialised again (ORB-SLAM2 does the same with <= 5 keyframes).
+  int reset_max_keyframes = 5;
+  int reset_after_lost_frames = 5;
+
+  void validate(const std::string& source) const;
+  std::string describe() const;
+};
+
+// Section `mapping`.
+struct LocalMappingConfig {
+  int queue_capacity = 3;                // keyframes waiting for the local mapper (tracking skips a keyframe when full)
+  int triangulation_neighbours = 10;     // covisible keyframes searched for new map points
+  int fusion_neighbours = 10;            // first-order neighbours for duplicate fusion (+ 5 second-order each)
+  int fusion_second_order = 5;
+  double fusion_radius = 3.0;            // search window factor (x scale) for duplicate fusion
+  int local_ba_iterations_first = 5;     // robust pass
+  int local_ba_iterations_second = 10;   // after outlier removal
+  int max_local_ba_keyframes = 20;       // optimised keyframes (covisible with the new one, best first)
+  double map_point_min_found_ratio = 0.25;  // culled below found/visible
+  int map_point_min_observations = 3;    // culled when seen by fewer keyframes 2 keyframes after its creation
+  double keyframe_redundancy = 0.9;      // culled when this fraction of its points is seen by >= 3 others
+  int keyframe_redundancy_observers = 3;
+  int max_keyframes = 0;                 // hard cap on the map (oldest redundant removed first); 0 = no cap
+
+  void validate(const std::string& source) const;
+  std::string describe() const;
+};
+
+// Section `optimizer`.
+struct OptimizerConfig {
+  double chi2_mono = 5.991;              // 95 % of chi-square with 2 DOF
+  double chi2_stereo = 7.815;            // 95 % of chi-square with 3 DOF
+  int motion_rounds = 4;                 // motion-only BA: rounds of optimise + outlier classification
+  int motion_iterations = 10;            // per round
+  int motion_robust_rounds = 2;          // the Huber loss is used in the first rounds only (ORB-SLAM2: 2)
+  bool local_ba_dense_schur = true;      // DENSE_SCHUR for the reduced camera system (SPARSE_SCHUR otherwise)
+
+  void validate(const std::string& source) const;
+  std::string describe() const;
+};
+
+struct SlamConfig {
+  TrackingConfig tracking;
+  LocalMappingConfig mapping;
+  OptimizerConfig optimizer;
+
+  void validate(const std::string& source) const;
+  std::vector<std::string> describe() const;
+};
+
+// Loads params/slam.yaml over the defaults (absent keys keep their default). Throws InputError naming the file and
+// the field for a missing file, bad YAML, an unknown key, or a value of the wrong type or out of range.
+SlamConfig load_slam_config(const std::string& path);
+
+}  // namespace agvslam::slam

@@ -1,0 +1,81 @@
+#include "agvslam/slam/map.h"
+
+#include <algorithm>
+
+namespace agvslam::slam {
+
+Map::~Map() { clear(); }
+
+void Map::add_keyframe(const KeyFramePtr& kf) {
+  if (keyframes_.empty() && origin_id_ == UINT64_MAX) {
+    origin_id_ = kf->id;
+    kf->mark_origin();
+  }
+  keyframes_[kf->id] = kf;
+}
+
+void Map::add_map_point(const MapPointPtr& point) { map_points_[point->id] = point; }
+
+void Map::erase_keyframe(const KeyFrame* kf) { keyframes_.erase(kf->id); }
+
+void Map::erase_map_point(const MapPoint* point) { map_points_.erase(point->id); }
+
+KeyFramePtr Map::keyframe(uint64_t id) const {
+  const auto it = keyframes_.find(id);
+  return it == keyframes_.end() ? nullptr : it->second;
+}
+
+MapPointPtr Map::map_point(uint64_t id) const {
+  const auto it = map_points_.find(id);
+  return it == map_points_.end() ? nullptr : it->second;
+}
+
+std::vector<KeyFramePtr> Map::keyframes() const {
+  std::vector<KeyFramePtr> out;
+  out.reserve(keyframes_.size());
+  for (const auto& [id, kf] : keyframes_) out.push_back(kf);
+  std::sort(out.begin(), out.end(), [](const KeyFramePtr& a, const KeyFramePtr& b) { return a->id < b->id; });
+  return out;
+}
+
+std::vector<MapPointPtr> Map::map_points() const {
+  std::vector<MapPointPtr> out;
+  out.reserve(map_points_.size());
+  for (const auto& [id, p] : map_points_) out.push_back(p);
+  std::sort(out.begin(), out.end(), [](const MapPointPtr& a, const MapPointPtr& b) { return a->id < b->id; });
+  return out;
+}
+
+MapCounts Map::counts() const {
+  MapCounts c;
+  c.keyframes = keyframes_.size();
+  c.map_points = map_points_.size();
+  std::size_t bytes = 0;
+  for (const auto& [id, kf] : keyframes_) {
+    bytes += sizeof(KeyFrame) + kf->size() * (sizeof(cv::KeyPoint) + 32 + 2 * sizeof(float) + sizeof(MapPointPtr) + sizeof(int));
+  }
+  for (const auto& [id, p] : map_points_) {
+    c.observations += p->observations().size();
+    bytes += sizeof(MapPoint) + p->observations().size() * sizeof(Observation);
+  }
+  c.memory_bytes = bytes;
+  return c;
+}
+
+void Map::clear() {
+  // Break the keyframe -> point shared_ptr links and the raw back-links (a point that a frame still holds must not
+  // point at a freed keyframe), so everything is freed.
+  std::vector<MapPointPtr> points;
+  points.reserve(map_points_.size());
+  for (const auto& [id, p] : map_points_) points.push_back(p);
+  for (const MapPointPtr& p : points) p->set_bad(*this);
+  for (auto& [id, kf] : keyframes_) {
+    for (std::size_t i = 0; i < kf->size(); ++i) kf->erase_map_point_match(i);
+  }
+  keyframes_.clear();
+  map_points_.clear();
+  origin_id_ = UINT64_MAX;
+  ++big_change_;
+}
+
+}  // namespace agvslam::slam

@@ -1,0 +1,185 @@
+#include "agvslam/slam/slam_config.h"
+
+#include <cstdio>
+
+#include "agvslam/core/error.h"
+#include "agvslam/stereo/params_reader.h"
+
+namespace agvslam::slam {
+
+namespace {
+
+struct Checker {
+  const std::string& source;
+  const char* section;
+  void operator()(bool ok, const char* field, const char* expected) const {
+    if (!ok) throw InputError(source, std::string(section) + "." + field, expected);
+  }
+};
+
+}  // namespace
+
+void TrackingConfig::validate(const std::string& source) const {
+  const Checker require{source, "tracking"};
+  require(close_depth_baselines > 1 && close_depth_baselines <= 1000, "close_depth_baselines",
+          "expected a number in (1, 1000] (baselines)");
+  require(min_init_features >= 10, "min_init_features", "expected an integer >= 10");
+  require(motion_model_radius_px >= 1 && motion_model_radius_px <= 100, "motion_model_radius_px",
+          "expected an integer in [1, 100] px");
+  require(min_motion_model_matches >= 5, "min_motion_model_matches", "expected an integer >= 5");
+  require(min_frame_inliers >= 3, "min_frame_inliers", "expected an integer >= 3");
+  require(min_reference_matches >= min_frame_inliers, "min_reference_matches", "expected an integer >= min_frame_inliers");
+  require(reference_ratio > 0 && reference_ratio <= 1, "reference_ratio", "expected a ratio in (0, 1]");
+  require(local_map_radius > 0 && local_map_radius <= 20, "local_map_radius", "expected a factor in (0, 20]");
+  require(min_local_map_inliers >= min_frame_inliers, "min_local_map_inliers", "expected an integer >= min_frame_inliers");
+  require(max_local_keyframes >= 2, "max_local_keyframes", "expected an integer >= 2");
+  require(keyframe_max_frames >= 0, "keyframe_max_frames", "expected an integer >= 0 (0: the frame rate)");
+  require(keyframe_min_frames >= 0, "keyframe_min_frames", "expected an integer >= 0");
+  require(keyframe_ref_ratio > 0 && keyframe_ref_ratio <= 1, "keyframe_ref_ratio", "expected a ratio in (0, 1]");
+  require(keyframe_close_tracked >= 0, "keyframe_close_tracked", "expected an integer >= 0");
+  require(keyframe_close_untracked >= 0, "keyframe_close_untracked", "expected an integer >= 0");
+  require(keyframe_max_new_points >= 0, "keyframe_max_new_points", "expected an integer >= 0");
+  require(reset_max_keyframes >= 0, "reset_max_keyframes", "expected an integer >= 0");
+  require(reset_after_lost_frames >= 1, "reset_after_lost_frames", "expected an integer >= 1");
+}
+
+std::string TrackingConfig::describe() const {
+  char buf[512];
+  std::snprintf(buf, sizeof(buf),
+                "tracking: close points < %.0f baselines, init >= %d stereo features, motion model window %d px "
+                "(>= %d matches), >= %d frame inliers, reference matching ratio %.2f (>= %d), local map window x%.1f "
+                "(>= %d inliers, <= %d keyframes), keyframe every <= %d frames (0 = rate), ref ratio %.2f, close "
+                "%d/%d, >= %d new points; reset after %d lost frames with <= %d keyframes",
+                close_depth_baselines, min_init_features, motion_model_radius_px, min_motion_model_matches,
+                min_frame_inliers, reference_ratio, min_reference_matches, local_map_radius, min_local_map_inliers,
+                max_local_keyframes, keyframe_max_frames, keyframe_ref_ratio, keyframe_close_tracked,
+                keyframe_close_untracked, keyframe_max_new_points, reset_after_lost_frames, reset_max_keyframes);
+  return buf;
+}
+
+void LocalMappingConfig::validate(const std::string& source) const {
+  const Checker require{source, "mapping"};
+  require(queue_capacity >= 1 && queue_capacity <= 100, "queue_capacity", "expected an integer in [1, 100]");
+  require(triangulation_neighbours >= 1, "triangulation_neighbours", "expected an integer >= 1");
+  require(fusion_neighbours >= 0, "fusion_neighbours", "expected an integer >= 0");
+  require(fusion_second_order >= 0, "fusion_second_order", "expected an integer >= 0");
+  require(fusion_radius > 0 && fusion_radius <= 20, "fusion_radius", "expected a factor in (0, 20]");
+  require(local_ba_iterations_first >= 0, "local_ba_iterations_first", "expected an integer >= 0");
+  require(local_ba_iterations_second >= 0, "local_ba_iterations_second", "expected an integer >= 0");
+  require(max_local_ba_keyframes >= 1, "max_local_ba_keyframes", "expected an integer >= 1");
+  require(map_point_min_found_ratio >= 0 && map_point_min_found_ratio <= 1, "map_point_min_found_ratio",
+          "expected a ratio in [0, 1]");
+  require(map_point_min_observations >= 1, "map_point_min_observations", "expected an integer >= 1");
+  require(keyframe_redundancy > 0 && keyframe_redundancy <= 1, "keyframe_redundancy", "expected a ratio in (0, 1]");
+  require(keyframe_redundancy_observers >= 1, "keyframe_redundancy_observers", "expected an integer >= 1");
+  require(max_keyframes == 0 || max_keyframes >= 10, "max_keyframes", "expected 0 (no cap) or an integer >= 10");
+}
+
+std::string LocalMappingConfig::describe() const {
+  char buf[512];
+  std::snprintf(buf, sizeof(buf),
+                "mapping: queue %d keyframes, triangulation with %d neighbours, fusion %d+%d neighbours window x%.1f, "
+                "local BA %d+%d iterations over <= %d keyframes, point culling found/visible < %.2f or < %d "
+                "observers, keyframe culling %.0f %% seen by >= %d others, keyframe cap %d (0 = none)",
+                queue_capacity, triangulation_neighbours, fusion_neighbours, fusion_second_order, fusion_radius,
+                local_ba_iterations_first, local_ba_iterations_second, max_local_ba_keyframes,
+                map_point_min_found_ratio, map_point_min_observations, keyframe_redundancy * 100.0,
+                keyframe_redundancy_observers, max_keyframes);
+  return buf;
+}
+
+void OptimizerConfig::validate(const std::string& source) const {
+  const Checker require{source, "optimizer"};
+  require(chi2_mono > 0, "chi2_mono", "expected a positive chi-square threshold (2 DOF)");
+  require(chi2_stereo > 0, "chi2_stereo", "expected a positive chi-square threshold (3 DOF)");
+  require(motion_rounds >= 1 && motion_rounds <= 20, "motion_rounds", "expected an integer in [1, 20]");
+  require(motion_iterations >= 1 && motion_iterations <= 100, "motion_iterations", "expected an integer in [1, 100]");
+  require(motion_robust_rounds >= 0 && motion_robust_rounds <= motion_rounds, "motion_robust_rounds",
+          "expected an integer in [0, motion_rounds]");
+}
+
+std::string OptimizerConfig::describe() const {
+  char buf[256];
+  std::snprintf(buf, sizeof(buf),
+                "optimizer: chi2 mono %.3f stereo %.3f, motion-only BA %d rounds x %d iterations (Huber in the first "
+                "%d), local BA %s",
+                chi2_mono, chi2_stereo, motion_rounds, motion_iterations, motion_robust_rounds,
+                local_ba_dense_schur ? "DENSE_SCHUR" : "SPARSE_SCHUR");
+  return buf;
+}
+
+void SlamConfig::validate(const std::string& source) const {
+  tracking.validate(source);
+  mapping.validate(source);
+  optimizer.validate(source);
+}
+
+std::vector<std::string> SlamConfig::describe() const {
+  return {tracking.describe(), mapping.describe(), optimizer.describe()};
+}
+
+SlamConfig load_slam_config(const std::string& path) {
+  const stereo::ParamsReader in(path);
+  in.check_sections({"tracking", "mapping", "optimizer"});
+  SlamConfig c;
+
+  TrackingConfig& t = c.tracking;
+  in.check_keys("tracking",
+                {"close_depth_baselines", "min_init_features", "motion_model_radius_px", "min_motion_model_matches",
+                 "min_frame_inliers", "min_reference_matches", "reference_ratio", "local_map_radius",
+                 "min_local_map_inliers", "max_local_keyframes", "keyframe_max_frames", "keyframe_min_frames",
+                 "keyframe_ref_ratio", "keyframe_close_tracked", "keyframe_close_untracked",
+                 "keyframe_max_new_points", "reset_max_keyframes", "reset_after_lost_frames"});
+  in.read("tracking", "close_depth_baselines", t.close_depth_baselines, "a number (baselines)");
+  in.read("tracking", "min_init_features", t.min_init_features, "an integer");
+  in.read("tracking", "motion_model_radius_px", t.motion_model_radius_px, "an integer (px)");
+  in.read("tracking", "min_motion_model_matches", t.min_motion_model_matches, "an integer");
+  in.read("tracking", "min_frame_inliers", t.min_frame_inliers, "an integer");
+  in.read("tracking", "min_reference_matches", t.min_reference_matches, "an integer");
+  in.read("tracking", "reference_ratio", t.reference_ratio, "a number (ratio)");
+  in.read("tracking", "local_map_radius", t.local_map_radius, "a number (factor)");
+  in.read("tracking", "min_local_map_inliers", t.min_local_map_inliers, "an integer");
+  in.read("tracking", "max_local_keyframes", t.max_local_keyframes, "an integer");
+  in.read("tracking", "keyframe_max_frames", t.keyframe_max_frames, "an integer (frames)");
+  in.read("tracking", "keyframe_min_frames", t.keyframe_min_frames, "an integer (frames)");
+  in.read("tracking", "keyframe_ref_ratio", t.keyframe_ref_ratio, "a number (ratio)");
+  in.read("tracking", "keyframe_close_tracked", t.keyframe_close_tracked, "an integer");
+  in.read("tracking", "keyframe_close_untracked", t.keyframe_close_untracked, "an integer");
+  in.read("tracking", "keyframe_max_new_points", t.keyframe_max_new_points, "an integer");
+  in.read("tracking", "reset_max_keyframes", t.reset_max_keyframes, "an integer");
+  in.read("tracking", "reset_after_lost_frames", t.reset_after_lost_frames, "an integer (frames)");
+
+  LocalMappingConfig& m = c.mapping;
+  in.check_keys("mapping", {"queue_capacity", "triangulation_neighbours", "fusion_neighbours", "fusion_second_order",
+                            "fusion_radius", "local_ba_iterations_first", "local_ba_iterations_second",
+                            "max_local_ba_keyframes", "map_point_min_found_ratio", "map_point_min_observations",
+                            "keyframe_redundancy", "keyframe_redundancy_observers", "max_keyframes"});
+  in.read("mapping", "queue_capacity", m.queue_capacity, "an integer (keyframes)");
+  in.read("mapping", "triangulation_neighbours", m.triangulation_neighbours, "an integer");
+  in.read("mapping", "fusion_neighbours", m.fusion_neighbours, "an integer");
+  in.read("mapping", "fusion_second_order", m.fusion_second_order, "an integer");
+  in.read("mapping", "fusion_radius", m.fusion_radius, "a number (factor)");
+  in.read("mapping", "local_ba_iterations_first", m.local_ba_iterations_first, "an integer");
+  in.read("mapping", "local_ba_iterations_second", m.local_ba_iterations_second, "an integer");
+  in.read("mapping", "max_local_ba_keyframes", m.max_local_ba_keyframes, "an integer");
+  in.read("mapping", "map_point_min_found_ratio", m.map_point_min_found_ratio, "a number (ratio)");
+  in.read("mapping", "map_point_min_observations", m.map_point_min_observations, "an integer");
+  in.read("mapping", "keyframe_redundancy", m.keyframe_redundancy, "a number (ratio)");
+  in.read("mapping", "keyframe_redundancy_observers", m.keyframe_redundancy_observers, "an integer");
+  in.read("mapping", "max_keyframes", m.max_keyframes, "an integer");
+
+  OptimizerConfig& o = c.optimizer;
+  in.check_keys("optimizer", {"chi2_mono", "chi2_stereo", "motion_rounds", "motion_iterations", "motion_robust_rounds",
+                              "local_ba_dense_schur"});
+  in.read("optimizer", "chi2_mono", o.chi2_mono, "a number");
+  in.read("optimizer", "chi2_stereo", o.chi2_stereo, "a number");
+  in.read("optimizer", "motion_rounds", o.motion_rounds, "an integer");
+  in.read("optimizer", "motion_iterations", o.motion_iterations, "an integer");
+  in.read("optimizer", "motion_robust_rounds", o.motion_robust_rounds, "an integer");
+  in.read("optimizer", "local_ba_dense_schur", o.local_ba_dense_schur, "true or false");
+
+  c.validate(path);
+  return c;
+}
+
+}  // namespace agvslam::slam
