@@ -55,7 +55,7 @@ V4l2Device::V4l2Device(const std::string& path, const CaptureRequest& request) :
     if (fd_ < 0) {
       const int e = errno;
       ::close(raw);
-      throw V4l2Error(path_, "libv4l2 cannot take the device: " + errno_text(e), e == ENOTTY, e);
+      throw V4l2Error(path_, (e == ENOTTY ? "is not a V4L2 device (libv4l2: " + errno_text(e) + "); expected a V4L2 capture device node" : "libv4l2 cannot take the device: " + errno_text(e)), e == ENOTTY, e);
     }
     v4l2_capability cap{};
     if (xioctl(fd_, VIDIOC_QUERYCAP, &cap) < 0) {

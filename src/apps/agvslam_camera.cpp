@@ -1,0 +1,279 @@
+// agvslam-camera: opens the V4L2 stereo camera the way the daemon does, grabs pairs and reports what arrived:
+// rate, capture-to-dequeue latency, left/right stamp difference, dropped / unpaired / corrupt frames, losses and
+// reopens. Used on a vehicle to check a camera and its configuration, and by the VM tests to check the driver.
+//
+//   agvslam-camera [--config params/camera.yaml [--section camera]] [--left DEV] [--right DEV] [--side-by-side]
+//                  [--width W] [--height H] [--format grey|yuyv|mjpeg] [--fps F] [--tolerance-ms T]
+//                  [--stall-ms S] [--backoff-ms A:B] [--frames N] [--duration-s S] [--timeout-s S] [--wait]
+//                  [--ready-file FILE] [--expect-manifest FILE ...] [--min-losses N] [--save DIR]
+//                  [--save-every K] [--json OUT]
+//
+// Stops after --frames pairs (default: the manifests' length, else 100), --duration-s, or --timeout-s without
+// reaching them. --wait keeps retrying a device that is absent or not ready at start (else a failure to open
+// is an error). --ready-file is written each time the camera starts streaming (its content: how many times).
+// --expect-manifest (agvslam-v4l2-feed's, repeatable, concatenated) checks every frame arrived pixel-exact, in
+// order, left with its own right, none missing or extra. --min-losses N requires N device losses each followed
+// by a reopen. Exit status: 0 ok, 1 a check failed or the device failed, 2 bad option or camera configuration
+// (device not a capture device, format not offered, size refused).
+
+#include <CLI/CLI.hpp>
+#include <algorithm>
+#include <cstdio>
+#include <filesystem>
+#include <fstream>
+#include <nlohmann/json.hpp>
+#include <opencv2/imgcodecs.hpp>
+#include <spdlog/sinks/stdout_color_sinks.h>
+#include <spdlog/spdlog.h>
+#include <sstream>
+
+#include "agvslam/core/error.h"
+#include "agvslam/drivers/v4l2/camera_config.h"
+#include "agvslam/drivers/v4l2/device.h"
+#include "agvslam/drivers/v4l2/pixel_convert.h"
+#include "agvslam/drivers/v4l2/stereo_camera.h"
+
+namespace {
+
+namespace v4l2 = agvslam::drivers::v4l2;
+using agvslam::InputError;
+
+struct Options {
+  std::string config, section = "camera", left, right, format, backoff, ready_file, save, json;
+  std::vector<std::string> manifests;
+  bool side_by_side = false, wait = false;
+  int width = 0, height = 0, stall_ms = 0, frames = 0, min_losses = 0, save_every = 1;
+  double fps = -1, tolerance_ms = -1, duration_s = 0, timeout_s = 60;
+};
+
+struct Expected {
+  std::size_t index;
+  uint64_t left, right;
+};
+
+std::vector<Expected> read_manifest(const std::string& path) {
+  std::ifstream in(path);
+  if (!in) throw InputError(path, "", "expected an agvslam-v4l2-feed manifest (file not readable)");
+  std::vector<Expected> out;
+  std::string line;
+  int n = 0;
+  while (std::getline(in, line)) {
+    ++n;
+    if (line.empty() || line[0] == '#') continue;
+    std::istringstream s(line);
+    Expected e{};
+    std::string l, r;
+    if (!(s >> e.index >> l >> r)) throw InputError(path, "line " + std::to_string(n), "expected 'index left_hash right_hash'");
+    e.left = std::stoull(l, nullptr, 16);
+    e.right = std::stoull(r, nullptr, 16);
+    out.push_back(e);
+  }
+  return out;
+}
+
+double percentile(std::vector<double> v, double p) {
+  if (v.empty()) return 0;
+  std::sort(v.begin(), v.end());
+  return v[std::min(v.size() - 1, static_cast<std::size_t>(p * static_cast<double>(v.size() - 1) + 0.5))];
+}
+
+nlohmann::json summary(const std::vector<double>& v) {
+  return {{"median", percentile(v, 0.5)}, {"p95", percentile(v, 0.95)}, {"max", percentile(v, 1.0)}};
+}
+
+void write_ready(const std::string& path, int count) {
+  const std::string tmp = path + ".tmp";
+  std::ofstream(tmp) << count << "\n";
+  std::filesystem::rename(tmp, path);
+}
+
+int run(const Options& o) {
+  v4l2::V4l2CameraConfig c = o.config.empty() ? v4l2::V4l2CameraConfig{} : v4l2::load_v4l2_camera_config(o.config, o.section);
+  if (!o.left.empty()) c.left_device = o.left;
+  if (!o.right.empty()) c.right_device = o.right;
+  if (o.side_by_side) c.side_by_side = true;
+  if (o.width > 0) c.width = o.width;
+  if (o.height > 0) c.height = o.height;
+  if (!o.format.empty() && !v4l2::parse_pixel_format(o.format, c.pixel_format))
+    throw InputError("--format", o.format, "expected one of grey, yuyv, mjpeg");
+  if (o.fps >= 0) c.fps = o.fps;
+  if (o.tolerance_ms >= 0) c.pair_tolerance_ms = o.tolerance_ms;
+  if (o.stall_ms > 0) c.stall_timeout_ms = o.stall_ms;
+  if (!o.backoff.empty()) {
+    const auto colon = o.backoff.find(':');
+    try {
+      c.reopen_backoff_initial_ms = std::stoi(o.backoff.substr(0, colon));
+      c.reopen_backoff_max_ms = colon == std::string::npos ? c.reopen_backoff_initial_ms : std::stoi(o.backoff.substr(colon + 1));
+    } catch (const std::exception&) {
+      throw InputError("--backoff-ms", o.backoff, "expected INITIAL:MAX in ms");
+    }
+  }
+  c.validate(o.config.empty() ? "command line" : o.config + " + command line");
+
+  std::vector<Expected> expected;
+  for (const auto& m : o.manifests) {
+    auto part = read_manifest(m);
+    expected.insert(expected.end(), part.begin(), part.end());
+  }
+  const std::size_t want = o.frames > 0 ? static_cast<std::size_t>(o.frames) : (expected.empty() ? 100 : expected.size());
+  spdlog::info("agvslam-camera: {}", c.describe());
+  spdlog::info("stop after {} pairs{}, timeout {} s, {} at start, ready-file {}, manifests {} ({} frames), min losses {}, "
+               "save {}",
+               want, o.duration_s > 0 ? " or " + std::to_string(o.duration_s) + " s" : "", o.timeout_s,
+               o.wait ? "wait for the device" : "fail if the device is not ready", o.ready_file.empty() ? "-" : o.ready_file,
+               o.manifests.size(), expected.size(), o.min_losses, o.save.empty() ? "-" : o.save);
+  if (!o.save.empty()) std::filesystem::create_directories(o.save);
+
+  v4l2::StereoCamera cam(c);
+  cam.open(!o.wait);
+  int streaming_starts = 0;
+  auto note_state = [&, last = v4l2::CaptureStats::State::kClosed]() mutable {
+    const auto s = cam.stats().state;
+    if (s == v4l2::CaptureStats::State::kStreaming && last != s) {
+      ++streaming_starts;
+      if (!o.ready_file.empty()) write_ready(o.ready_file, streaming_starts);
+    }
+    last = s;
+  };
+  note_state();
+
+  struct Got {
+    uint64_t left, right;
+    int64_t t_ns;
+  };
+  std::vector<Got> got;
+  std::vector<double> latency_ms, pair_dt_ms, interval_ms;
+  const int64_t t_start = v4l2::monotonic_now_ns();
+  const int64_t t_end = t_start + static_cast<int64_t>(o.timeout_s * 1e9);
+  const int64_t t_stop = o.duration_s > 0 ? t_start + static_cast<int64_t>(o.duration_s * 1e9) : INT64_MAX;
+  agvslam::StereoFrame f;
+  v4l2::CaptureInfo info;
+  int64_t last_status = t_start;
+  while (got.size() < want) {
+    const int64_t now = v4l2::monotonic_now_ns();
+    if (now >= t_end || now >= t_stop) break;
+    const auto r = cam.grab(f, 200, &info);
+    note_state();
+    if (r == v4l2::StereoCamera::Grab::kFrame) {
+      if (!got.empty()) interval_ms.push_back(static_cast<double>(f.t_ns - got.back().t_ns) / 1e6);
+      got.push_back({v4l2::image_hash(f.left), v4l2::image_hash(f.right), f.t_ns});
+      latency_ms.push_back(static_cast<double>(info.dequeued_ns - f.t_ns) / 1e6);
+      pair_dt_ms.push_back(std::abs(static_cast<double>(info.t_left_ns - info.t_right_ns)) / 1e6);
+      if (!o.save.empty() && (got.size() - 1) % static_cast<std::size_t>(std::max(1, o.save_every)) == 0) {
+        char name[32];
+        std::snprintf(name, sizeof name, "%06zu.png", got.size() - 1);
+        cv::imwrite((std::filesystem::path(o.save) / (std::string("left_") + name)).string(), f.left);
+        cv::imwrite((std::filesystem::path(o.save) / (std::string("right_") + name)).string(), f.right);
+      }
+    }
+    if (v4l2::monotonic_now_ns() - last_status > 2000000000LL) {
+      last_status = v4l2::monotonic_now_ns();
+      spdlog::info("{}", cam.stats_line());
+    }
+  }
+  const double elapsed_s = static_cast<double>(v4l2::monotonic_now_ns() - t_start) / 1e9;
+  const auto& st = cam.stats();
+  spdlog::info("{}", cam.stats_line());
+  std::printf("FRAMES %zu DROPPED %llu/%llu UNPAIRED %llu/%llu CORRUPT %llu LOSSES %llu REOPENS %llu\n", got.size(),
+              static_cast<unsigned long long>(st.dropped_left), static_cast<unsigned long long>(st.dropped_right),
+              static_cast<unsigned long long>(st.unpaired_left), static_cast<unsigned long long>(st.unpaired_right),
+              static_cast<unsigned long long>(st.corrupt), static_cast<unsigned long long>(st.device_losses),
+              static_cast<unsigned long long>(st.reopens));
+  std::printf("latency capture->dequeue ms: median %.2f p95 %.2f max %.2f; |t_left - t_right| ms max %.2f\n",
+              percentile(latency_ms, 0.5), percentile(latency_ms, 0.95), percentile(latency_ms, 1.0),
+              percentile(pair_dt_ms, 1.0));
+
+  std::vector<std::string> failures;
+  if (got.size() < want) failures.push_back("received " + std::to_string(got.size()) + " of " + std::to_string(want) + " pairs");
+  if (!expected.empty()) {
+    std::size_t mismatches = 0;
+    for (std::size_t k = 0; k < std::min(got.size(), expected.size()); ++k) {
+      if (got[k].left != expected[k].left || got[k].right != expected[k].right) {
+        if (mismatches++ < 5) {
+          std::string what = "pair " + std::to_string(k) + " is not manifest frame " + std::to_string(expected[k].index);
+          for (const auto& e : expected)
+            if (e.left == got[k].left) what += " (left is frame " + std::to_string(e.index) + ")";
+          for (const auto& e : expected)
+            if (e.right == got[k].right) what += " (right is frame " + std::to_string(e.index) + ")";
+          failures.push_back(what);
+        }
+      }
+    }
+    if (mismatches > 0) failures.push_back(std::to_string(mismatches) + " pairs differ from the manifest");
+    if (got.size() > expected.size()) failures.push_back(std::to_string(got.size() - expected.size()) + " pairs more than the manifest");
+  }
+  if (st.device_losses < static_cast<uint64_t>(o.min_losses))
+    failures.push_back("expected at least " + std::to_string(o.min_losses) + " device losses, saw " + std::to_string(st.device_losses));
+  if (st.reopens < static_cast<uint64_t>(o.min_losses))
+    failures.push_back("expected at least " + std::to_string(o.min_losses) + " reopens, saw " + std::to_string(st.reopens));
+
+  if (!o.json.empty()) {
+    nlohmann::json j = {{"config", c.describe()},
+                        {"frames", got.size()},
+                        {"elapsed_s", elapsed_s},
+                        {"rate_hz", elapsed_s > 0 ? static_cast<double>(got.size()) / elapsed_s : 0.0},
+                        {"dropped_left", st.dropped_left},
+                        {"dropped_right", st.dropped_right},
+                        {"unpaired_left", st.unpaired_left},
+                        {"unpaired_right", st.unpaired_right},
+                        {"corrupt", st.corrupt},
+                        {"device_losses", st.device_losses},
+                        {"reopen_attempts", st.reopen_attempts},
+                        {"reopens", st.reopens},
+                        {"last_error", st.last_error},
+                        {"latency_ms", summary(latency_ms)},
+                        {"pair_dt_ms", summary(pair_dt_ms)},
+                        {"interval_ms", summary(interval_ms)},
+                        {"failures", failures}};
+    std::ofstream(o.json) << j.dump(2) << "\n";
+  }
+  for (const auto& fmsg : failures) spdlog::error("check failed: {}", fmsg);
+  if (!failures.empty()) return 1;
+  if (!expected.empty()) std::printf("MANIFEST OK: %zu pairs pixel-exact and in order\n", got.size());
+  return 0;
+}
+
+}  // namespace
+
+int main(int argc, char** argv) {
+  spdlog::set_default_logger(spdlog::stderr_color_mt("camera"));
+  CLI::App app{"agvslam-camera: grab stereo pairs from the V4L2 camera and report what arrived"};
+  Options o;
+  app.add_option("--config", o.config, "params YAML with a camera section");
+  app.add_option("--section", o.section, "section of --config (default camera)");
+  app.add_option("--left", o.left, "left device (side by side: the device)");
+  app.add_option("--right", o.right, "right device");
+  app.add_flag("--side-by-side", o.side_by_side, "one device, left|right side by side");
+  app.add_option("--width", o.width, "width of one eye (px)");
+  app.add_option("--height", o.height, "height (px)");
+  app.add_option("--format", o.format, "grey, yuyv or mjpeg");
+  app.add_option("--fps", o.fps, "frame rate to request (0: the device's)");
+  app.add_option("--tolerance-ms", o.tolerance_ms, "pairing tolerance (ms)");
+  app.add_option("--stall-ms", o.stall_ms, "a device silent this long is reopened (ms)");
+  app.add_option("--backoff-ms", o.backoff, "reopen back-off INITIAL:MAX (ms)");
+  app.add_option("--frames", o.frames, "stop after this many pairs");
+  app.add_option("--duration-s", o.duration_s, "stop after this long");
+  app.add_option("--timeout-s", o.timeout_s, "give up after this long");
+  app.add_flag("--wait", o.wait, "keep retrying a device that is not there or not ready at start");
+  app.add_option("--ready-file", o.ready_file, "written each time streaming starts");
+  app.add_option("--expect-manifest", o.manifests, "agvslam-v4l2-feed manifest(s) the frames must match");
+  app.add_option("--min-losses", o.min_losses, "require at least this many device losses, each reopened");
+  app.add_option("--save", o.save, "write left_/right_NNNNNN.png here");
+  app.add_option("--save-every", o.save_every, "save every K-th pair");
+  app.add_option("--json", o.json, "write statistics as JSON");
+  try {
+    app.parse(argc, argv);
+    return run(o);
+  } catch (const CLI::ParseError& e) {
+    return app.exit(e) == 0 ? 0 : 2;
+  } catch (const InputError& e) {
+    spdlog::error("{}", e.what());
+    return 2;
+  } catch (const v4l2::V4l2Error& e) {
+    spdlog::error("{}", e.what());
+    return e.configuration() ? 2 : 1;
+  } catch (const std::exception& e) {
+    spdlog::error("{}", e.what());
+    return 1;
+  }
+}
