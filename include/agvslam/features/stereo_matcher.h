@@ -7,14 +7,30 @@
 // Contract used by the slam module: the signatures below are what it calls. Members may be added; change a
 // signature only together with its callers.
 
+#include <cstdint>
+#include <optional>
 #include <opencv2/core.hpp>
 #include <string>
+#include <utility>
 #include <vector>
 
 #include "agvslam/core/camera.h"
 #include "agvslam/features/orb_extractor.h"
 
 namespace agvslam::features {
+
+// How the right-image match of a left keypoint is found.
+//   kBlockMatching: SAD of the keypoint's window at its pyramid level along the same row of the right image's
+//     pyramid over the whole disparity range [bf / max_depth, bf / min_depth], best and second-best minimum
+//     (uniqueness test), parabola through the costs around the best. No right-image features are extracted.
+//     The window is 2 h + 1 rows by 2 h + 1 columns rounded up to a multiple of 4 (12 for h = 5), starting h
+//     columns left of the keypoint, so that the SAD runs four columns at a time.
+//   kDescriptor: ORB-SLAM2's ComputeStereoMatches: ORB features of the right image, best descriptor within the
+//     row band and the disparity range, then SAD refinement (+-sad_search_px, window 2 h + 1) and a parabola.
+// Both reject matches whose SAD is above outlier_factor * median over the image (ORB-SLAM2: 1.5 * 1.4).
+enum class StereoMethod : uint8_t { kBlockMatching, kDescriptor };
+const char* to_string(StereoMethod method);
+bool parse_stereo_method(const std::string& text, StereoMethod& out);
 
 // params/features.yaml, section `stereo_matching` (features::load_features_config).
 struct StereoMatcherConfig {
@@ -23,6 +39,9 @@ struct StereoMatcherConfig {
   int sad_half_window = 5;         // 11x11 window for the sub-pixel refinement (ORB-SLAM2's w = 5)
   int sad_search_px = 5;           // +-5 px around the descriptor match (ORB-SLAM2's L = 5)
   int max_descriptor_distance = 75;  // ORB-SLAM2's (TH_HIGH + TH_LOW) / 2
+  StereoMethod method = StereoMethod::kBlockMatching;
+  double uniqueness_ratio = 0.9;   // block matching: best SAD <= ratio * best SAD >= 2 px (level px) away
+  double outlier_factor = 2.1;     // reject SAD > factor * median SAD of the image's matches (ORB-SLAM2 1.5 * 1.4)
 
   void validate(const std::string& source) const;
   std::string describe() const;
@@ -43,10 +62,27 @@ class StereoMatcher {
   // right: the rectified right image (CV_8UC1, same size). Fills `out` with one entry per keypoint.
   void match(const OrbExtractor& left, const KeypointSet& keypoints, const cv::Mat& right, StereoDepth& out);
 
+  // The right image's pyramid of the last call (block matching) or the right extractor's (descriptor).
+  const std::vector<cv::Mat>& right_pyramid() const;
+  // Wall time of the last call (ms): right pyramid (or right ORB extraction), matching.
+  double t_right_ms() const { return t_right_ms_; }
+  double t_match_ms() const { return t_match_ms_; }
+
  private:
+  void match_blocks(const OrbExtractor& left, const KeypointSet& keypoints, StereoDepth& out);
+  void match_descriptors(const OrbExtractor& left, const KeypointSet& keypoints, StereoDepth& out);
+  void reject_outliers(StereoDepth& out);
+
   StereoMatcherConfig config_;
   StereoCalibration calibration_;
-  // Implementation state (a right-image extractor, buffers) is added by the implementation.
+  double min_disparity_px_ = 0, max_disparity_px_ = 0;  // level 0, from max_depth_m / min_depth_m
+  std::vector<cv::Mat> right_pyramid_;
+  std::optional<OrbExtractor> right_extractor_;          // kDescriptor only
+  KeypointSet right_keypoints_;
+  std::vector<std::vector<int>> row_index_;              // kDescriptor: right keypoints per level-0 row
+  std::vector<int32_t> costs_;                           // per candidate disparity of one keypoint
+  std::vector<std::pair<int32_t, int>> match_costs_;     // (SAD, keypoint) of the accepted matches
+  double t_right_ms_ = 0, t_match_ms_ = 0;
 };
 
 }  // namespace agvslam::features
