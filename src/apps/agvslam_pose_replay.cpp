@@ -180,7 +180,10 @@ int run(const Options& o) {
         line["can"] = {{"due", r.due}, {"sent", r.sent}, {"counter", r.counter}, {"frames_sent", r.frames_sent}};
       }
     }
-    if (o.json) std::printf("%s\n", line.dump().c_str());
+    if (o.json) {
+      std::printf("%s\n", line.dump().c_str());
+      std::fflush(stdout);  // a test watching the file sees each sample as it goes
+    }
   }
   std::fflush(stdout);
 

@@ -25,6 +25,7 @@ struct CanCheckResult {
   int values_checked = 0;
   int unsent_samples = 0;         // due samples the driver could not send (interface down)
   int sent_after_unsent = 0;      // whole cycles sent after the first unsent one (resumed)
+  int lost_at_outage = 0;         // cycles sent just before an outage that did not reach the bus (allowed)
 };
 
 // `sent`: the JSON lines of agvslam-pose-replay --json (lines without "i" are ignored). `log`: candump -L lines.

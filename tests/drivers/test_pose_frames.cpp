@@ -164,4 +164,49 @@ TEST(PoseFrames, CheckerCatchesACorruptedFrame) {
   EXPECT_NE(res.failures[0].find("Crc"), std::string::npos) << res.failures[0];
 }
 
+// Cycles 0..9; cycle 5 could not be sent (interface down). Cycle 4 (sent just before) may be missing from the log,
+// no other may be, and the log may hold nothing the driver did not send.
+TEST(PoseFrames, CheckerAllowsOnlyTheCycleBeforeAnOutageToBeMissing) {
+  const Dbc dbc = Dbc::load(kDbcPath);
+  std::vector<nlohmann::json> sent;
+  std::vector<std::vector<CandumpRecord>> cycles;
+  for (std::size_t i = 0; i < 10; ++i) {
+    const PoseSample s = synthetic_pose_sample(i, static_cast<int64_t>(i) * 50000000);
+    const auto counter = static_cast<uint8_t>(i & 0xF);
+    nlohmann::json line = sample_line(i, s, counter);
+    std::array<CanFrameBytes, kMaxClassicFrames> f;
+    const std::size_t n = encode_classic_frames(s, counter, FrameLayout{}, true, true, true, f);
+    cycles.emplace_back();
+    if (i == 5) {
+      line["can"]["sent"] = false;
+      line["can"]["frames_sent"] = 0;
+    } else {
+      for (std::size_t k = 0; k < n; ++k) {
+        CandumpRecord r;
+        r.frame = f[k];
+        cycles.back().push_back(r);
+      }
+    }
+    sent.push_back(line);
+  }
+  auto log_without = [&](std::size_t missing) {
+    std::vector<CandumpRecord> log;
+    for (std::size_t i = 0; i < cycles.size(); ++i) {
+      if (i != missing) log.insert(log.end(), cycles[i].begin(), cycles[i].end());
+    }
+    return log;
+  };
+  auto all = agvslam::test::check_can_log(dbc, sent, log_without(99));
+  EXPECT_TRUE(all.ok);
+  EXPECT_EQ(all.unsent_samples, 1);
+  EXPECT_EQ(all.sent_after_unsent, 4);
+  auto before_outage = agvslam::test::check_can_log(dbc, sent, log_without(4));
+  EXPECT_TRUE(before_outage.ok);
+  EXPECT_EQ(before_outage.lost_at_outage, 1);
+  EXPECT_FALSE(agvslam::test::check_can_log(dbc, sent, log_without(3)).ok);
+  EXPECT_FALSE(agvslam::test::check_can_log(dbc, sent, log_without(6)).ok);
+  std::vector<nlohmann::json> fewer(sent.begin(), sent.end() - 1);  // the log has a cycle nobody sent
+  EXPECT_FALSE(agvslam::test::check_can_log(dbc, fewer, log_without(99)).ok);
+}
+
 }  // namespace
