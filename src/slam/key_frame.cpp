@@ -177,6 +177,10 @@ void KeyFrame::add_loop_edge(KeyFrame* kf) {
 void KeyFrame::set_bad(Map& map) {
   if (bad_ || origin_ || id == map.origin_keyframe_id() || not_erase_) return;
   const KeyFramePtr self = shared_from_this();
+  if (parent_) {
+    T_c_parent_ = T_c_w_ * parent_->T_w_c();
+    map.record_removed_keyframe(id, parent_->id, T_c_parent_);
+  }
   for (const auto& [kf, w] : connections_) kf->erase_connection(this);
   for (std::size_t i = 0; i < map_points_.size(); ++i) {
     if (map_points_[i]) {

@@ -62,6 +62,27 @@ MapCounts Map::counts() const {
   return c;
 }
 
+void Map::record_removed_keyframe(uint64_t id, uint64_t parent_id, const SE3d& T_c_parent) {
+  removed_[id] = {parent_id, T_c_parent};
+}
+
+bool Map::resolve_pose(uint64_t kf_id, const SE3d& T_c_r, SE3d& T_c_w) const {
+  SE3d T = T_c_r;
+  uint64_t id = kf_id;
+  for (std::size_t guard = 0; guard <= removed_.size() + 1; ++guard) {
+    const auto it = keyframes_.find(id);
+    if (it != keyframes_.end()) {
+      T_c_w = T * it->second->T_c_w();
+      return true;
+    }
+    const auto r = removed_.find(id);
+    if (r == removed_.end()) return false;
+    T = T * r->second.T_c_parent;
+    id = r->second.parent_id;
+  }
+  return false;
+}
+
 void Map::clear() {
   // Break the keyframe -> point shared_ptr links and the raw back-links (a point that a frame still holds must not
   // point at a freed keyframe), so everything is freed.
@@ -74,6 +95,7 @@ void Map::clear() {
   }
   keyframes_.clear();
   map_points_.clear();
+  removed_.clear();
   origin_id_ = UINT64_MAX;
   ++big_change_;
 }

@@ -65,8 +65,9 @@ inline void make_frame(const World& world, const SE3d& T_c_w, const FrameGeometr
     cv::KeyPoint kp(static_cast<float>(u), static_cast<float>(v), 31.f, 0.f, 1.f, 0);
     kps.push_back(kp);
     const double ur = uv.x() - g->bf / p_c.z() + noise(rng);
-    u_right.push_back(static_cast<float>(ur));
-    depth.push_back(static_cast<float>(g->bf / (u - ur)));
+    const bool stereo = ur >= 0 && u - ur > 0.5;
+    u_right.push_back(stereo ? static_cast<float>(ur) : -1.f);
+    depth.push_back(stereo ? static_cast<float>(g->bf / (u - ur)) : -1.f);
     descs.push_back(world.descriptors[i]);
     point_of_keypoint.push_back(static_cast<int>(i));
   }

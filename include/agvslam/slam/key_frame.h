@@ -82,6 +82,9 @@ class KeyFrame : public std::enable_shared_from_this<KeyFrame> {
 
   // Spanning tree and loop edges.
   KeyFrame* parent() const { return parent_; }
+  // Pose relative to the parent at the moment the keyframe was removed (trajectory output for frames whose
+  // reference keyframe was culled follows these up to a keyframe in the map, as ORB-SLAM2 does).
+  const SE3d& T_c_parent() const { return T_c_parent_; }
   const std::vector<KeyFrame*>& children() const { return children_; }
   void change_parent(KeyFrame* kf);
   void add_child(KeyFrame* kf);
@@ -123,6 +126,7 @@ class KeyFrame : public std::enable_shared_from_this<KeyFrame> {
   std::vector<KeyFrame*> ordered_neighbours_;
   std::vector<int> ordered_weights_;
   KeyFrame* parent_ = nullptr;
+  SE3d T_c_parent_ = SE3d::Identity();
   std::vector<KeyFrame*> children_;
   std::vector<KeyFrame*> loop_edges_;
   bool first_connection_ = true;

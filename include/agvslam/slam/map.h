@@ -53,6 +53,13 @@ class Map {
   uint64_t big_change_index() const { return big_change_; }
   void notify_big_change() { ++big_change_; }
 
+  // Where a removed keyframe was relative to its parent, so that poses stored relative to it can still be
+  // resolved (a few dozen bytes per removed keyframe).
+  void record_removed_keyframe(uint64_t id, uint64_t parent_id, const SE3d& T_c_parent);
+  // T_c_w of a pose given relative to keyframe kf_id (T_c_r), following removed keyframes to their parents.
+  // False when the chain ends nowhere (after a reset).
+  bool resolve_pose(uint64_t kf_id, const SE3d& T_c_r, SE3d& T_c_w) const;
+
   // Removes everything, breaking the references between keyframes and points so that all of it is freed.
   void clear();
 
@@ -60,6 +67,11 @@ class Map {
   std::mutex mutex_;
   std::unordered_map<uint64_t, KeyFramePtr> keyframes_;
   std::unordered_map<uint64_t, MapPointPtr> map_points_;
+  struct RemovedKeyFrame {
+    uint64_t parent_id;
+    SE3d T_c_parent;
+  };
+  std::unordered_map<uint64_t, RemovedKeyFrame> removed_;
   uint64_t next_keyframe_id_ = 0;
   uint64_t next_map_point_id_ = 0;
   uint64_t origin_id_ = UINT64_MAX;

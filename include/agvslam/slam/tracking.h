@@ -1,0 +1,116 @@
+#pragma once
+// The tracking stage (ORB-SLAM2's Tracking, stereo): stereo initialisation, constant-velocity motion model,
+// reference-keyframe fallback, local-map tracking with motion-only BA, the keyframe decision and keyframe
+// creation. Runs in the caller's thread; holds the Map's mutex while it works on a frame.
+//
+// Lost: when a frame cannot be tracked the state is kLost, no pose is given, and every following frame first
+// tries to recover against the last reference keyframe and its neighbours (brute-force matching from the last
+// pose) before giving up again; a map of few keyframes is reset and initialised anew after
+// tracking.reset_after_lost_frames. Relocalisation with the bag-of-words database is issue 5's (the hook is
+// Tracking::recover()).
+
+#include <cstdint>
+#include <vector>
+
+#include "agvslam/slam/frame.h"
+#include "agvslam/slam/key_frame.h"
+#include "agvslam/slam/matcher.h"
+#include "agvslam/slam/optimizer.h"
+#include "agvslam/slam/slam_config.h"
+
+namespace agvslam::slam {
+
+class Map;
+class LocalMapping;
+
+enum class TrackingState { kInitialising, kOk, kLost };
+const char* to_string(TrackingState state);
+
+// Per-stage wall-clock times of one frame in the tracking thread (ms).
+struct TrackTimings {
+  double extract_ms = 0;       // ORB on the left image (features module)
+  double stereo_ms = 0;        // stereo matching at the keypoints (features module)
+  double map_wait_ms = 0;      // waiting for the map mutex (held by the local mapper)
+  double frame_ms = 0;         // motion model / reference keyframe / recovery, with its motion-only BA
+  double local_map_ms = 0;     // local map update, projection search and motion-only BA
+  double keyframe_ms = 0;      // keyframe decision and creation
+  double total_ms = 0;         // all of track_stereo
+};
+
+struct TrackingCounts {
+  int features = 0;            // keypoints in the frame
+  int stereo_features = 0;     // of which with stereo depth
+  int frame_matches = 0;       // matches of the motion model / reference keyframe step
+  int inliers = 0;             // map point inliers after local-map tracking
+  bool new_keyframe = false;
+  bool recovered = false;      // tracked again after being lost
+  bool reset = false;          // the map was reset on this frame
+};
+
+class Tracking {
+ public:
+  Tracking(const SlamConfig& config, FrameGeometryPtr geometry, Map& map, LocalMapping& mapper, double frame_rate_hz);
+
+  // Tracks `frame` (its features are set; its pose is overwritten). On success the frame has a pose. The
+  // previous frame is kept internally (the frame object is swapped in, not copied).
+  TrackingState track(Frame& frame, TrackTimings& timings, TrackingCounts& counts);
+
+  TrackingState state() const { return state_; }
+  // Pose of the last frame (valid when state() == kOk).
+  const Frame& last_frame() const { return last_frame_; }
+  const KeyFramePtr& reference_keyframe() const { return reference_kf_; }
+  // The last tracked frame's pose relative to its reference keyframe (last_frame().reference_keyframe).
+  const SE3d& last_relative_pose() const { return last_T_c_r_; }
+
+  // Forgets everything (the map must be cleared by the caller, with the mapper reset first).
+  void reset();
+
+  // Local map (for tests and statistics).
+  std::size_t local_keyframe_count() const { return local_keyframes_.size(); }
+  std::size_t local_point_count() const { return local_points_.size(); }
+
+ private:
+  bool stereo_initialisation();
+  bool track_with_motion_model(int& matches);
+  bool track_reference_keyframe(const KeyFrame& kf, const SE3d& T_c_w_guess, int& matches);
+  bool recover(int& matches);
+  bool track_local_map(int& inliers);
+  void update_local_map();
+  void search_local_points();
+  int optimize_current_pose();
+  int discard_outliers();
+  bool need_new_keyframe();
+  void create_new_keyframe();
+  void check_replaced_in_last_frame();
+
+  SlamConfig config_;
+  FrameGeometryPtr geometry_;
+  StereoIntrinsics intrinsics_;
+  Map& map_;
+  LocalMapping& mapper_;
+  int max_frames_;
+  int min_frames_;
+
+  TrackingState state_ = TrackingState::kInitialising;
+  Frame current_;
+  Frame last_frame_;
+  KeyFramePtr reference_kf_;
+  uint64_t last_keyframe_frame_id_ = 0;
+  uint64_t last_recovery_frame_id_ = 0;
+  SE3d last_T_c_r_ = SE3d::Identity();
+  SE3d velocity_ = SE3d::Identity();  // T_c_l: last camera -> current camera
+  bool has_velocity_ = false;
+  int lost_frames_ = 0;
+  int inliers_ = 0;
+
+  // Rebuilt for every frame with the map mutex held and used only under it (raw pointers never outlive the lock).
+  std::vector<KeyFrame*> local_keyframes_;
+  std::vector<MapPoint*> local_points_;
+  Matcher matcher_;
+  std::vector<PoseObservation> observations_;
+  std::vector<int> observation_keypoint_;
+  std::vector<uint8_t> observation_outlier_;
+  std::vector<MapPointPtr> matches_;
+};
+
+}  // namespace agvslam::slam

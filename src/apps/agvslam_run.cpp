@@ -1,0 +1,493 @@
+// agvslam-run: the stereo SLAM (paper 004: dynamic regions removed, then ORB-SLAM2-style tracking and mapping)
+// over a dataset folder.
+//
+//   agvslam-run --dataset DIR --out TRAJ [--calib FILE] [--format tum|kitti] [--dynamic detector|gt|off]
+//               [--json STATS] [--frames A:B] [--params-slam params/slam.yaml] [--params-features ...]
+//               [--params-dynamic ...] [--params-stereo ...] [--mapping thread|inline] [--speed X]
+//
+// Reads KITTI-layout folders (also what agvslam-sim writes) and EuRoC ASL folders through agvslam::io. The frames
+// are read, and with --dynamic detector their dynamic masks computed, in a second thread one frame ahead of
+// tracking (bounded queue of two), so detection of frame k+1 overlaps tracking of frame k. --dynamic gt takes the
+// dataset's ground-truth masks (simulator mask_0/), --dynamic off is the plain ORB-SLAM2-like baseline.
+//
+// --mapping thread runs local mapping in its own thread, as on the vehicle; --mapping inline maps each keyframe
+// before the next frame (deterministic: the same input gives the same trajectory). --speed 1 feeds frames at the
+// dataset's rate (the real-time case), 0 as fast as tracking goes.
+//
+// Writes TRAJ with the pose of every tracked frame (each relative to its reference keyframe, composed with the
+// keyframe's final pose, as ORB-SLAM2 saves trajectories); with --format kitti and frames missing, TRAJ.times
+// gives the stamps of the written poses (agvslam-eval --times). stdout: first line
+//   FRAMES <n> TRACKED <m> KEYFRAMES <k> LOST <l>
+// then, with ground truth, `ATE_RMSE_M <x>` (SE(3)-aligned, by time stamp) and the drift, then per-stage timing
+// (median / p95 / max ms). --json adds per-frame records (state, counts, times, mapping queue length).
+// A progress bar with the frame rate goes to stderr. Exit status: 0 on success, 2 on bad input (the message names
+// the option, file or field), 1 on any other failure.
+
+#include <CLI/CLI.hpp>
+#include <spdlog/sinks/stdout_color_sinks.h>
+#include <spdlog/spdlog.h>
+#include <unistd.h>
+
+#include <algorithm>
+#include <chrono>
+#include <cmath>
+#include <condition_variable>
+#include <cstdio>
+#include <deque>
+#include <map>
+#include <mutex>
+#include <nlohmann/json.hpp>
+#include <opencv2/core.hpp>
+#include <optional>
+#include <string>
+#include <thread>
+#include <vector>
+
+#include "agvslam/core/error.h"
+#include "agvslam/dynamic/detector.h"
+#include "agvslam/eval/association.h"
+#include "agvslam/eval/metrics.h"
+#include "agvslam/features/features_config.h"
+#include "agvslam/io/dataset.h"
+#include "agvslam/io/trajectory_io.h"
+#include "agvslam/slam/system.h"
+#include "agvslam/stereo/stereo_config.h"
+
+namespace {
+
+using agvslam::InputError;
+namespace slam = agvslam::slam;
+namespace dyn = agvslam::dynamic;
+using Clock = std::chrono::steady_clock;
+
+double ms_since(Clock::time_point t0) { return std::chrono::duration<double, std::milli>(Clock::now() - t0).count(); }
+
+enum class DynamicMode { kDetector, kGroundTruth, kOff };
+
+struct Options {
+  std::string dataset, calib, out, format = "tum", dynamic = "detector", json, frames, mapping = "thread";
+  std::string params_slam, params_features, params_dynamic, params_stereo;
+  double speed = 0;
+};
+
+// "A:B" (inclusive, either side may be empty) -> [first, last] clipped to the sequence.
+void parse_frames(const std::string& text, std::size_t size, std::size_t& first, std::size_t& last) {
+  first = 0;
+  last = size == 0 ? 0 : size - 1;
+  if (size == 0) throw InputError("--dataset", "", "expected a sequence with at least one frame");
+  if (text.empty()) return;
+  const auto colon = text.find(':');
+  if (colon == std::string::npos) throw InputError("--frames", text, "expected A:B (inclusive frame range, e.g. 0:199)");
+  auto parse = [&](const std::string& s, std::size_t& value) {
+    if (s.empty()) return;
+    std::size_t used = 0;
+    long long v = -1;
+    try {
+      v = std::stoll(s, &used);
+    } catch (const std::exception&) {
+      used = 0;
+    }
+    if (used != s.size() || v < 0) throw InputError("--frames", text, "expected non-negative integers in A:B");
+    value = static_cast<std::size_t>(v);
+  };
+  parse(text.substr(0, colon), first);
+  parse(text.substr(colon + 1), last);
+  if (first >= size) {
+    throw InputError("--frames", text, "expected a range inside the sequence's " + std::to_string(size) + " frames");
+  }
+  last = std::min(last, size - 1);
+  if (last < first) throw InputError("--frames", text, "expected A <= B");
+}
+
+struct Series {
+  std::vector<double> v;
+  void add(double x) { v.push_back(x); }
+  double quantile(double q) const {
+    if (v.empty()) return 0;
+    std::vector<double> s = v;
+    const std::size_t k = std::min(s.size() - 1, static_cast<std::size_t>(std::floor(q * static_cast<double>(s.size() - 1) + 0.5)));
+    std::nth_element(s.begin(), s.begin() + static_cast<std::ptrdiff_t>(k), s.end());
+    return s[k];
+  }
+  double max() const { return v.empty() ? 0 : *std::max_element(v.begin(), v.end()); }
+  nlohmann::json json() const {
+    return {{"median_ms", quantile(0.5)}, {"p95_ms", quantile(0.95)}, {"max_ms", max()}, {"count", v.size()}};
+  }
+};
+
+// One input frame with its mask (produced by the reader / detector thread).
+struct Job {
+  std::size_t index = 0;
+  agvslam::StereoFrame frame;
+  cv::Mat mask;
+  double detector_ms = -1;   // -1: no detector
+  double read_ms = 0;
+  std::string error;         // an exception in the worker, re-raised by the main thread
+  bool end = false;
+};
+
+// Bounded queue between the reader/detector thread and tracking.
+class JobQueue {
+ public:
+  explicit JobQueue(std::size_t capacity) : capacity_(capacity) {}
+  void push(Job job) {
+    std::unique_lock<std::mutex> lock(mutex_);
+    not_full_.wait(lock, [&] { return queue_.size() < capacity_ || cancelled_; });
+    if (cancelled_) return;
+    queue_.push_back(std::move(job));
+    not_empty_.notify_one();
+  }
+  Job pop() {
+    std::unique_lock<std::mutex> lock(mutex_);
+    not_empty_.wait(lock, [&] { return !queue_.empty(); });
+    Job job = std::move(queue_.front());
+    queue_.pop_front();
+    not_full_.notify_one();
+    return job;
+  }
+  void cancel() {
+    std::lock_guard<std::mutex> lock(mutex_);
+    cancelled_ = true;
+    not_full_.notify_all();
+  }
+  bool cancelled() {
+    std::lock_guard<std::mutex> lock(mutex_);
+    return cancelled_;
+  }
+
+ private:
+  std::size_t capacity_;
+  std::mutex mutex_;
+  std::condition_variable not_full_, not_empty_;
+  std::deque<Job> queue_;
+  bool cancelled_ = false;
+};
+
+class ProgressBar {
+ public:
+  explicit ProgressBar(std::size_t total) : total_(total), tty_(isatty(STDERR_FILENO) != 0), start_(Clock::now()) {}
+  void update(std::size_t done, const char* state, std::size_t keyframes, bool force = false) {
+    const auto now = Clock::now();
+    const double since_draw = std::chrono::duration<double>(now - last_draw_).count();
+    if (!force && since_draw < (tty_ ? 0.2 : 10.0)) return;
+    last_draw_ = now;
+    const double elapsed = std::chrono::duration<double>(now - start_).count();
+    const double fps = elapsed > 0 ? static_cast<double>(done) / elapsed : 0;
+    constexpr int kWidth = 30;
+    const int filled = total_ > 0 ? static_cast<int>(kWidth * done / total_) : kWidth;
+    std::string bar(static_cast<std::size_t>(filled), '#');
+    bar.resize(kWidth, '.');
+    std::fprintf(stderr, "%s[%s] %zu/%zu %.1f fps  state %-12s keyframes %zu%s", tty_ ? "\r" : "", bar.c_str(), done,
+                 total_, fps, state, keyframes, tty_ ? "   " : "\n");
+    std::fflush(stderr);
+  }
+  void finish() {
+    if (tty_) std::fprintf(stderr, "\n");
+  }
+
+ private:
+  std::size_t total_;
+  bool tty_;
+  Clock::time_point start_, last_draw_{};
+};
+
+int run(const Options& o) {
+  DynamicMode mode = DynamicMode::kDetector;
+  if (o.dynamic == "detector") {
+    mode = DynamicMode::kDetector;
+  } else if (o.dynamic == "gt") {
+    mode = DynamicMode::kGroundTruth;
+  } else if (o.dynamic == "off") {
+    mode = DynamicMode::kOff;
+  } else {
+    throw InputError("--dynamic", o.dynamic, "expected detector, gt or off");
+  }
+  const agvslam::io::TrajectoryFormat format = agvslam::io::parse_trajectory_format(o.format, "--format");
+  if (format == agvslam::io::TrajectoryFormat::kEuroc) throw InputError("--format", o.format, "expected tum or kitti");
+  if (o.mapping != "thread" && o.mapping != "inline") throw InputError("--mapping", o.mapping, "expected thread or inline");
+  if (!(o.speed >= 0)) throw InputError("--speed", std::to_string(o.speed), "expected a factor >= 0 (0: as fast as possible)");
+
+  const auto dataset = agvslam::io::open_dataset(o.dataset, o.calib);
+  std::size_t first = 0, last = 0;
+  parse_frames(o.frames, dataset->size(), first, last);
+  if (mode == DynamicMode::kGroundTruth && dataset->ground_truth_mask(first).empty()) {
+    throw InputError("--dynamic", "gt", "expected a dataset with ground-truth masks (mask_0/, as agvslam-sim writes); " +
+                                            dataset->root() + " has none");
+  }
+
+  slam::SystemConfig config;
+  if (!o.params_slam.empty()) config.slam = slam::load_slam_config(o.params_slam);
+  if (!o.params_features.empty()) {
+    const agvslam::features::FeaturesConfig f = agvslam::features::load_features_config(o.params_features);
+    config.orb = f.orb;
+    config.stereo = f.stereo_matching;
+  }
+  config.frame_rate_hz = dataset->rate_hz();
+  config.threaded_mapping = o.mapping == "thread";
+  dyn::DynamicDetectorConfig dynamic_config;
+  agvslam::stereo::StereoConfig stereo_config;
+  if (mode == DynamicMode::kDetector) {
+    if (!o.params_dynamic.empty()) dynamic_config = dyn::load_dynamic_config(o.params_dynamic);
+    if (!o.params_stereo.empty()) stereo_config = agvslam::stereo::load_stereo_config(o.params_stereo);
+  }
+
+  spdlog::info("agvslam-run: {} dataset {} ({} frames at {:.1f} Hz, using {}..{})", dataset->kind(), dataset->root(),
+               dataset->size(), dataset->rate_hz(), first, last);
+  spdlog::info("  calibration: {}", dataset->calibration().summary());
+  spdlog::info("  dynamic regions: {}", o.dynamic == "detector" ? "detector (paper 004 III.A-B), one frame ahead in a second thread"
+                                        : o.dynamic == "gt"     ? "ground-truth masks (mask_0/)"
+                                                                : "off (ORB-SLAM2-like baseline)");
+  spdlog::info("  mapping: {}, speed {}", o.mapping == "thread" ? "own thread" : "inline (deterministic)",
+               o.speed > 0 ? std::to_string(o.speed) + "x the dataset rate" : std::string("as fast as possible"));
+  spdlog::info("  output: {} ({}){}", o.out, agvslam::io::to_string(format), o.json.empty() ? "" : ", stats " + o.json);
+  spdlog::info("  slam settings{}", o.params_slam.empty() ? " (built-in defaults)" : " from " + o.params_slam);
+  spdlog::info("  feature settings{}", o.params_features.empty() ? " (built-in defaults)" : " from " + o.params_features);
+  if (mode == DynamicMode::kDetector) {
+    spdlog::info("  detector settings{}", o.params_dynamic.empty() ? " (built-in defaults)" : " from " + o.params_dynamic);
+    for (const auto& line : dynamic_config.describe()) spdlog::info("    {}", line);
+    spdlog::info("  stereo settings{}", o.params_stereo.empty() ? " (built-in defaults)" : " from " + o.params_stereo);
+    for (const auto& line : stereo_config.describe()) spdlog::info("    {}", line);
+  }
+
+  slam::System system(dataset->calibration(), config);
+  for (const auto& line : system.describe()) spdlog::info("    {}", line);
+
+  // Reader (+ detector) thread, one frame ahead.
+  JobQueue queue(2);
+  std::thread worker([&] {
+    std::optional<dyn::DynamicDetector> detector;
+    dyn::DetectorResult result;
+    try {
+      if (mode == DynamicMode::kDetector) detector.emplace(dataset->calibration(), dynamic_config, stereo_config);
+      for (std::size_t i = first; i <= last && !queue.cancelled(); ++i) {
+        Job job;
+        job.index = i;
+        const auto t0 = Clock::now();
+        job.frame = dataset->frame(i);
+        job.read_ms = ms_since(t0);
+        if (mode == DynamicMode::kDetector) {
+          const auto t1 = Clock::now();
+          detector->detect(job.frame, result);
+          job.detector_ms = ms_since(t1);
+          job.mask = result.mask.image.clone();
+        } else if (mode == DynamicMode::kGroundTruth) {
+          job.mask = dataset->ground_truth_mask(i);
+        }
+        queue.push(std::move(job));
+      }
+    } catch (const std::exception& e) {
+      Job job;
+      job.error = e.what();
+      queue.push(std::move(job));
+      return;
+    }
+    Job end;
+    end.end = true;
+    queue.push(std::move(end));
+  });
+  struct WorkerGuard {
+    JobQueue& q;
+    std::thread& t;
+    ~WorkerGuard() {
+      q.cancel();
+      if (t.joinable()) t.join();
+    }
+  } guard{queue, worker};
+
+  std::map<std::string, Series> series;
+  const std::vector<std::string> stage_order = {"extract", "stereo", "map_wait", "frame", "local_map", "keyframe",
+                                                "tracking", "detector", "frontend_sum", "frame_interval", "read"};
+  nlohmann::json per_frame = nlohmann::json::array();
+  std::size_t frames = 0, tracked = 0, lost = 0, resets = 0, recovered = 0, max_queue = 0;
+  std::size_t keyframes = 0;
+  ProgressBar progress(last - first + 1);
+  const auto t_run = Clock::now();
+  auto t_prev_output = Clock::now();
+  const double period_s = o.speed > 0 ? 1.0 / (dataset->rate_hz() * o.speed) : 0;
+
+  for (;;) {
+    Job job = queue.pop();
+    if (!job.error.empty()) throw std::runtime_error("reading or detecting frames: " + job.error);
+    if (job.end) break;
+    if (period_s > 0) {  // real-time pacing: frame k is due at k * period
+      const auto due = t_run + std::chrono::duration_cast<Clock::duration>(std::chrono::duration<double>(period_s * static_cast<double>(frames)));
+      std::this_thread::sleep_until(due);
+    }
+    const slam::TrackResult r = system.track_stereo(job.frame.t_ns, job.frame.left, job.frame.right, job.mask);
+    ++frames;
+    if (r.state == slam::TrackingState::kOk) ++tracked;
+    if (r.state == slam::TrackingState::kLost) ++lost;
+    if (r.counts.reset) ++resets;
+    if (r.counts.recovered) ++recovered;
+    keyframes = r.keyframes;
+    max_queue = std::max(max_queue, r.mapping_queue);
+    const double interval = ms_since(t_prev_output);
+    t_prev_output = Clock::now();
+    series["extract"].add(r.timings.extract_ms);
+    series["stereo"].add(r.timings.stereo_ms);
+    series["map_wait"].add(r.timings.map_wait_ms);
+    series["frame"].add(r.timings.frame_ms);
+    series["local_map"].add(r.timings.local_map_ms);
+    series["keyframe"].add(r.timings.keyframe_ms);
+    series["tracking"].add(r.timings.total_ms);
+    series["read"].add(job.read_ms);
+    if (job.detector_ms >= 0) {
+      series["detector"].add(job.detector_ms);
+      series["frontend_sum"].add(job.detector_ms + r.timings.total_ms);
+    }
+    if (frames > 1) series["frame_interval"].add(interval);
+    per_frame.push_back({{"frame", job.index},
+                         {"t_ns", job.frame.t_ns},
+                         {"state", slam::to_string(r.state)},
+                         {"features", r.counts.features},
+                         {"stereo_features", r.counts.stereo_features},
+                         {"inliers", r.counts.inliers},
+                         {"keyframe", r.counts.new_keyframe},
+                         {"keyframes", r.keyframes},
+                         {"map_points", r.map_points},
+                         {"mapping_queue", r.mapping_queue},
+                         {"mask_pixels", job.mask.empty() ? 0 : cv::countNonZero(job.mask)},
+                         {"tracking_ms", r.timings.total_ms},
+                         {"detector_ms", job.detector_ms}});
+    progress.update(frames, slam::to_string(r.state), r.keyframes);
+  }
+  progress.update(frames, "done", keyframes, true);
+  progress.finish();
+  const double run_s = ms_since(t_run) / 1000.0;
+  system.wait_for_mapping();
+  const agvslam::Trajectory trajectory = system.trajectory();
+  const slam::LocalMappingStats mstats = system.mapping_stats();
+  const auto mapping_history = system.local_mapping().timing_history();
+  agvslam::slam::MapCounts map_counts;
+  {
+    std::lock_guard<std::mutex> lock(system.map().mutex());
+    map_counts = system.map().counts();
+  }
+  system.shutdown();
+
+  // Trajectory.
+  agvslam::io::write_trajectory(o.out, trajectory, format);
+  if (format == agvslam::io::TrajectoryFormat::kKitti && trajectory.size() != frames) {
+    std::vector<int64_t> times;
+    for (const auto& p : trajectory) times.push_back(p.t_ns);
+    agvslam::io::write_kitti_times(o.out + ".times", times);
+    spdlog::warn("{} of {} frames tracked: {} lists the stamps of the written poses (agvslam-eval --times)",
+                 trajectory.size(), frames, o.out + ".times");
+  }
+
+  std::printf("FRAMES %zu TRACKED %zu KEYFRAMES %zu LOST %zu\n", frames, tracked, keyframes, lost);
+  // Drift: the largest distance of a tracked position from the first one (for sequences where the camera stands
+  // still, e.g. simulator scene1 and the EuRoC excerpt).
+  double drift_m = 0;
+  for (const auto& p : trajectory) drift_m = std::max(drift_m, (p.T_w_c.translation() - trajectory.front().T_w_c.translation()).norm());
+  nlohmann::json j;
+  const auto gt = dataset->ground_truth();
+  if (gt && !trajectory.empty()) {
+    const auto pairs = agvslam::eval::associate_by_timestamp(*gt, trajectory, 5'000'000);
+    if (pairs.size() >= 3) {
+      const auto ate = agvslam::eval::compute_ate(pairs, agvslam::eval::AlignMode::kSE3);
+      const std::vector<agvslam::SE3d>& gt_poses = pairs.T_w_c_gt;
+      double gt_motion_m = 0;
+      for (const auto& T : gt_poses) gt_motion_m = std::max(gt_motion_m, (T.translation() - gt_poses.front().translation()).norm());
+      std::printf("ATE_RMSE_M %.5f (SE3-aligned, %zu poses, ground-truth path %.2f m)\n", ate.translation_m.rmse,
+                  ate.translation_m.count, agvslam::eval::path_length_m(gt_poses));
+      j["ate"] = {{"rmse_m", ate.translation_m.rmse}, {"mean_m", ate.translation_m.mean}, {"max_m", ate.translation_m.max},
+                  {"poses", ate.translation_m.count}, {"gt_path_m", agvslam::eval::path_length_m(gt_poses)},
+                  {"gt_max_displacement_m", gt_motion_m}};
+    }
+  }
+  std::printf("DRIFT_M %.5f (largest distance from the first tracked position)\n", drift_m);
+  std::printf("counts: %zu frames, %zu tracked, %zu lost, %zu recovered, %zu resets; %zu keyframes, %zu map points "
+              "(%.1f MB); mapping: %llu keyframes processed, %llu skipped (queue full), max queue %zu, %llu culled "
+              "keyframes, %llu created / %llu culled points\n",
+              frames, tracked, lost, recovered, resets, map_counts.keyframes, map_counts.map_points,
+              static_cast<double>(map_counts.memory_bytes) / 1e6, static_cast<unsigned long long>(mstats.keyframes_processed),
+              static_cast<unsigned long long>(mstats.keyframes_skipped), max_queue,
+              static_cast<unsigned long long>(mstats.keyframes_culled), static_cast<unsigned long long>(mstats.points_created),
+              static_cast<unsigned long long>(mstats.points_culled));
+  std::printf("time per frame [ms]   median      p95      max\n");
+  for (const auto& name : stage_order) {
+    const auto it = series.find(name);
+    if (it == series.end() || it->second.v.empty()) continue;
+    std::printf("  %-16s %9.2f %8.2f %8.2f\n", name.c_str(), it->second.quantile(0.5), it->second.quantile(0.95),
+                it->second.max());
+  }
+  std::map<std::string, Series> mapping_series;
+  for (const auto& h : mapping_history) {
+    mapping_series["insert"].add(h.insert_ms);
+    mapping_series["point_culling"].add(h.culling_ms);
+    mapping_series["triangulation"].add(h.triangulation_ms);
+    mapping_series["fusion"].add(h.fusion_ms);
+    mapping_series["local_ba"].add(h.ba_ms);
+    mapping_series["keyframe_culling"].add(h.kf_culling_ms);
+    mapping_series["total"].add(h.total_ms);
+  }
+  std::printf("time per keyframe (local mapping) [ms]   median      p95      max\n");
+  for (const char* name : {"triangulation", "fusion", "local_ba", "total"}) {
+    const Series& s = mapping_series[name];
+    std::printf("  %-16s %9.2f %8.2f %8.2f\n", name, s.quantile(0.5), s.quantile(0.95), s.max());
+  }
+  std::printf("wall time %.1f s, %.1f frames/s\n", run_s, run_s > 0 ? static_cast<double>(frames) / run_s : 0.0);
+
+  if (!o.json.empty()) {
+    j["dataset"] = dataset->root();
+    j["dynamic"] = o.dynamic;
+    j["mapping"] = o.mapping;
+    j["speed"] = o.speed;
+    j["frames"] = {{"first", first}, {"last", last}, {"processed", frames}, {"tracked", tracked}, {"lost", lost},
+                   {"recovered", recovered}, {"resets", resets}};
+    j["drift_m"] = drift_m;
+    j["map"] = {{"keyframes", map_counts.keyframes}, {"map_points", map_counts.map_points},
+                {"observations", map_counts.observations}, {"memory_bytes", map_counts.memory_bytes}};
+    j["local_mapping"] = {{"keyframes_processed", mstats.keyframes_processed}, {"keyframes_skipped", mstats.keyframes_skipped},
+                          {"keyframes_culled", mstats.keyframes_culled}, {"points_created", mstats.points_created},
+                          {"points_fused", mstats.points_fused}, {"points_culled", mstats.points_culled},
+                          {"ba_runs", mstats.ba_runs}, {"ba_aborted", mstats.ba_aborted}, {"ba_outliers", mstats.ba_outliers},
+                          {"max_queue", max_queue}};
+    nlohmann::json jt, jm;
+    for (const auto& [name, s] : series) jt[name] = s.json();
+    for (const auto& [name, s] : mapping_series) jm[name] = s.json();
+    j["timings"] = jt;
+    j["mapping_timings"] = jm;
+    j["wall_s"] = run_s;
+    j["per_frame"] = per_frame;
+    agvslam::io::write_file_atomically(o.json, j.dump(1) + "\n");
+  }
+  return 0;
+}
+
+}  // namespace
+
+int main(int argc, char** argv) {
+  // Logs go to stderr: stdout carries the results, starting with the FRAMES line.
+  spdlog::set_default_logger(spdlog::stderr_color_mt("agvslam-run"));
+  CLI::App app{"agvslam-run: stereo SLAM with dynamic-region removal (paper 004) over a dataset folder"};
+  Options o;
+  app.add_option("--dataset", o.dataset, "sequence folder: KITTI layout (also agvslam-sim output) or EuRoC ASL")->required();
+  app.add_option("--out", o.out, "trajectory file to write (every tracked frame)")->required();
+  app.add_option("--calib", o.calib, "calibration file instead of the dataset's own (KITTI calib.txt, ORB-SLAM YAML, Kalibr)");
+  app.add_option("--format", o.format, "trajectory format: tum (default) or kitti");
+  app.add_option("--dynamic", o.dynamic, "dynamic regions: detector (default), gt (dataset masks) or off");
+  app.add_option("--json", o.json, "statistics file (timings, counts, per-frame records)");
+  app.add_option("--frames", o.frames, "inclusive frame range A:B (either side may be empty)");
+  app.add_option("--params-slam", o.params_slam, "params/slam.yaml");
+  app.add_option("--params-features", o.params_features, "params/features.yaml");
+  app.add_option("--params-dynamic", o.params_dynamic, "params/dynamic.yaml (with --dynamic detector)");
+  app.add_option("--params-stereo", o.params_stereo, "params/stereo.yaml (with --dynamic detector)");
+  app.add_option("--mapping", o.mapping, "local mapping: thread (default, as on the vehicle) or inline (deterministic)");
+  app.add_option("--speed", o.speed, "feed frames at this multiple of the dataset rate (0, default: as fast as possible)");
+  try {
+    app.parse(argc, argv);
+  } catch (const CLI::ParseError& e) {
+    return app.exit(e) == 0 ? 0 : 2;
+  }
+  try {
+    return run(o);
+  } catch (const InputError& e) {
+    spdlog::error("{}", e.what());
+    return 2;
+  } catch (const std::exception& e) {
+    spdlog::error("{}", e.what());
+    return 1;
+  }
+}

@@ -1,0 +1,465 @@
+#include "agvslam/slam/tracking.h"
+
+#include <algorithm>
+#include <chrono>
+#include <cmath>
+#include <unordered_map>
+
+#include "agvslam/slam/local_mapping.h"
+#include "agvslam/slam/map.h"
+
+namespace agvslam::slam {
+
+namespace {
+
+using Clock = std::chrono::steady_clock;
+double ms_since(Clock::time_point t0) {
+  return std::chrono::duration<double, std::milli>(Clock::now() - t0).count();
+}
+
+}  // namespace
+
+const char* to_string(TrackingState state) {
+  switch (state) {
+    case TrackingState::kInitialising: return "initialising";
+    case TrackingState::kOk: return "ok";
+    case TrackingState::kLost: return "lost";
+  }
+  return "?";
+}
+
+Tracking::Tracking(const SlamConfig& config, FrameGeometryPtr geometry, Map& map, LocalMapping& mapper,
+                   double frame_rate_hz)
+    : config_(config), geometry_(std::move(geometry)), map_(map), mapper_(mapper) {
+  const PinholeCamera& cam = geometry_->camera;
+  intrinsics_ = {cam.fx, cam.fy, cam.cx, cam.cy, geometry_->bf};
+  const int rate = std::max(1, static_cast<int>(std::lround(frame_rate_hz)));
+  max_frames_ = config_.tracking.keyframe_max_frames > 0 ? config_.tracking.keyframe_max_frames : rate;
+  min_frames_ = config_.tracking.keyframe_min_frames;
+}
+
+void Tracking::reset() {
+  state_ = TrackingState::kInitialising;
+  current_ = Frame();
+  last_frame_ = Frame();
+  reference_kf_.reset();
+  has_velocity_ = false;
+  lost_frames_ = 0;
+  local_keyframes_.clear();
+  local_points_.clear();
+}
+
+TrackingState Tracking::track(Frame& frame, TrackTimings& timings, TrackingCounts& counts) {
+  std::swap(current_, frame);
+  counts.features = static_cast<int>(current_.size());
+  counts.stereo_features = static_cast<int>(std::count_if(current_.depth.begin(), current_.depth.end(), [](float d) { return d > 0; }));
+
+  const auto t_wait = Clock::now();
+  std::unique_lock<std::mutex> lock(map_.mutex());
+  timings.map_wait_ms = ms_since(t_wait);
+
+  if (state_ == TrackingState::kInitialising) {
+    const auto t0 = Clock::now();
+    if (stereo_initialisation()) {
+      state_ = TrackingState::kOk;
+      counts.new_keyframe = true;
+      counts.inliers = current_.tracked_count();
+    }
+    timings.keyframe_ms = ms_since(t0);
+    if (state_ == TrackingState::kOk) {
+      last_T_c_r_ = SE3d::Identity();
+      std::swap(last_frame_, current_);
+    }
+    return state_;
+  }
+
+  const auto t_frame = Clock::now();
+  bool ok = false;
+  int matches = 0;
+  const bool was_lost = state_ == TrackingState::kLost;
+  if (!was_lost) {
+    check_replaced_in_last_frame();
+    if (has_velocity_ && current_.id >= last_recovery_frame_id_ + 2) {
+      ok = track_with_motion_model(matches);
+    }
+    if (!ok && reference_kf_ && !reference_kf_->bad()) {
+      ok = track_reference_keyframe(*reference_kf_, last_frame_.T_c_w(), matches);
+    }
+  } else {
+    ok = recover(matches);
+    if (ok) {
+      counts.recovered = true;
+      last_recovery_frame_id_ = current_.id;
+    }
+  }
+  counts.frame_matches = matches;
+  timings.frame_ms = ms_since(t_frame);
+
+  current_.reference_keyframe = reference_kf_;
+  if (ok) {
+    const auto t_local = Clock::now();
+    ok = track_local_map(inliers_);
+    counts.inliers = inliers_;
+    timings.local_map_ms = ms_since(t_local);
+  }
+
+  if (ok) {
+    state_ = TrackingState::kOk;
+    lost_frames_ = 0;
+    if (last_frame_.has_pose() && !was_lost) {
+      velocity_ = current_.T_c_w() * last_frame_.T_w_c();
+      has_velocity_ = true;
+    } else {
+      has_velocity_ = false;
+    }
+    const auto t_kf = Clock::now();
+    if (need_new_keyframe()) {
+      create_new_keyframe();
+      counts.new_keyframe = true;
+    }
+    timings.keyframe_ms = ms_since(t_kf);
+    // Outliers may go to a new keyframe (local BA decides), but the next frame does not use them.
+    for (std::size_t i = 0; i < current_.size(); ++i) {
+      if (current_.map_points[i] && current_.outlier[i]) current_.map_points[i].reset();
+    }
+  } else {
+    state_ = TrackingState::kLost;
+    has_velocity_ = false;
+    ++lost_frames_;
+    if (lost_frames_ >= config_.tracking.reset_after_lost_frames &&
+        map_.keyframe_count() <= static_cast<std::size_t>(config_.tracking.reset_max_keyframes)) {
+      // Lost right after initialisation: start again (the caller's System clears the map).
+      counts.reset = true;
+    }
+  }
+  if (!current_.reference_keyframe) current_.reference_keyframe = reference_kf_;
+  // The last frame keeps its pose only when tracked (a lost frame's pose is meaningless).
+  if (state_ == TrackingState::kOk) {
+    last_T_c_r_ = current_.T_c_w() * current_.reference_keyframe->T_w_c();
+    std::swap(last_frame_, current_);
+  }
+  return state_;
+}
+
+bool Tracking::stereo_initialisation() {
+  int with_depth = 0;
+  for (float d : current_.depth) with_depth += d > 0 ? 1 : 0;
+  if (with_depth < config_.tracking.min_init_features) return false;
+  current_.set_pose(SE3d::Identity());
+  auto kf = std::make_shared<KeyFrame>(map_.new_keyframe_id(), current_);
+  map_.add_keyframe(kf);
+  for (std::size_t i = 0; i < current_.size(); ++i) {
+    if (current_.depth[i] <= 0) continue;
+    auto point = std::make_shared<MapPoint>(map_.new_map_point_id(), current_.unproject_stereo(i), kf.get(), current_.id);
+    point->add_observation(kf.get(), static_cast<int>(i));
+    kf->add_map_point(point, i);
+    point->compute_distinctive_descriptor();
+    point->update_normal_and_depth();
+    map_.add_map_point(point);
+    current_.map_points[i] = point;
+  }
+  reference_kf_ = kf;
+  current_.reference_keyframe = kf;
+  last_keyframe_frame_id_ = current_.id;
+  local_keyframes_.assign(1, kf.get());
+  local_points_.clear();
+  for (const MapPointPtr& p : kf->map_points()) {
+    if (p) local_points_.push_back(p.get());
+  }
+  mapper_.try_insert(kf);
+  return true;
+}
+
+void Tracking::check_replaced_in_last_frame() {
+  for (MapPointPtr& p : last_frame_.map_points) {
+    if (!p) continue;
+    // Follow the replacement chain (fusion may have replaced a point more than once).
+    while (p && p->replaced()) p = p->replaced();
+    if (p && p->bad()) p.reset();
+  }
+}
+
+int Tracking::optimize_current_pose() {
+  observations_.clear();
+  observation_keypoint_.clear();
+  for (std::size_t i = 0; i < current_.size(); ++i) {
+    const MapPointPtr& p = current_.map_points[i];
+    if (!p) continue;
+    PoseObservation o;
+    o.p_w = p->p_w;
+    o.uv_px = {current_.keypoints[i].pt.x, current_.keypoints[i].pt.y};
+    o.u_right_px = current_.u_right[i];
+    o.inv_sigma2 = geometry_->inv_level_sigma2[static_cast<std::size_t>(current_.keypoints[i].octave)];
+    observations_.push_back(o);
+    observation_keypoint_.push_back(static_cast<int>(i));
+  }
+  SE3d T = current_.T_c_w();
+  const MotionOnlyStats stats = optimize_pose(intrinsics_, config_.optimizer, observations_, observation_outlier_, T);
+  if (stats.rounds > 0 && is_valid_pose(T)) current_.set_pose(T);
+  std::fill(current_.outlier.begin(), current_.outlier.end(), 0);
+  for (std::size_t k = 0; k < observation_keypoint_.size(); ++k) {
+    current_.outlier[static_cast<std::size_t>(observation_keypoint_[k])] = observation_outlier_.empty() ? 1 : observation_outlier_[k];
+  }
+  return stats.inliers;
+}
+
+int Tracking::discard_outliers() {
+  int in_map = 0;
+  for (std::size_t i = 0; i < current_.size(); ++i) {
+    MapPointPtr& p = current_.map_points[i];
+    if (!p) continue;
+    if (current_.outlier[i]) {
+      p->track.last_frame_seen = current_.id;
+      p.reset();
+      current_.outlier[i] = 0;
+    } else if (!p->observations().empty()) {
+      ++in_map;
+    }
+  }
+  return in_map;
+}
+
+bool Tracking::track_with_motion_model(int& matches) {
+  // The last frame's pose relative to its reference keyframe follows local BA's corrections of that keyframe
+  // (ORB-SLAM2's UpdateLastFrame).
+  const KeyFramePtr& last_ref = last_frame_.reference_keyframe;
+  if (last_ref && !last_ref->bad()) last_frame_.set_pose(last_T_c_r_ * last_ref->T_c_w());
+  current_.set_pose(velocity_ * last_frame_.T_c_w());
+  std::fill(current_.map_points.begin(), current_.map_points.end(), nullptr);
+  const float radius = static_cast<float>(config_.tracking.motion_model_radius_px);
+  matches = matcher_.search_last_frame(current_, last_frame_, radius, true);
+  if (matches < config_.tracking.min_motion_model_matches) {
+    std::fill(current_.map_points.begin(), current_.map_points.end(), nullptr);
+    matches = matcher_.search_last_frame(current_, last_frame_, 2 * radius, true);
+  }
+  if (matches < config_.tracking.min_motion_model_matches) return false;
+  optimize_current_pose();
+  const int in_map = discard_outliers();
+  return in_map >= config_.tracking.min_frame_inliers;
+}
+
+bool Tracking::track_reference_keyframe(const KeyFrame& kf, const SE3d& T_c_w_guess, int& matches) {
+  matches = matcher_.search_keyframe_brute_force(kf, current_, static_cast<float>(config_.tracking.reference_ratio), matches_);
+  if (matches < config_.tracking.min_reference_matches) return false;
+  current_.map_points = matches_;
+  current_.set_pose(T_c_w_guess);
+  optimize_current_pose();
+  const int in_map = discard_outliers();
+  return in_map >= config_.tracking.min_frame_inliers;
+}
+
+bool Tracking::recover(int& matches) {
+  // Without a place-recognition database (issue 5), try the last reference keyframe and its best neighbours,
+  // each from its own pose.
+  if (!reference_kf_ || reference_kf_->bad()) {
+    // The reference was culled while lost: take any keyframe of the map near the last pose.
+    const auto kfs = map_.keyframes();
+    if (kfs.empty()) return false;
+    reference_kf_ = kfs.back();
+  }
+  std::vector<KeyFrame*> candidates{reference_kf_.get()};
+  for (KeyFrame* kf : reference_kf_->best_covisibles(4)) candidates.push_back(kf);
+  for (KeyFrame* kf : candidates) {
+    if (kf->bad()) continue;
+    std::fill(current_.map_points.begin(), current_.map_points.end(), nullptr);
+    if (track_reference_keyframe(*kf, kf->T_c_w(), matches)) {
+      reference_kf_ = kf->shared_from_this();
+      return true;
+    }
+  }
+  std::fill(current_.map_points.begin(), current_.map_points.end(), nullptr);
+  return false;
+}
+
+void Tracking::update_local_map() {
+  // Keyframes that see the frame's points, weighted by how many.
+  std::unordered_map<KeyFrame*, int> counter;
+  for (MapPointPtr& p : current_.map_points) {
+    if (!p) continue;
+    if (p->bad()) {
+      p.reset();
+      continue;
+    }
+    for (const Observation& o : p->observations()) ++counter[o.keyframe];
+  }
+  local_keyframes_.clear();
+  KeyFrame* best = nullptr;
+  int best_count = 0;
+  for (const auto& [kf, n] : counter) {
+    if (kf->bad()) continue;
+    if (n > best_count || (n == best_count && best && kf->id < best->id)) {
+      best_count = n;
+      best = kf;
+    }
+    local_keyframes_.push_back(kf);
+    kf->track.local_for_frame = current_.id;
+  }
+  std::sort(local_keyframes_.begin(), local_keyframes_.end(), [](const KeyFrame* a, const KeyFrame* b) { return a->id < b->id; });
+  // Neighbours: ORB-SLAM2 adds one new neighbour, child and the parent per keyframe.
+  const std::size_t max_kfs = static_cast<std::size_t>(config_.tracking.max_local_keyframes);
+  const std::size_t first_order = local_keyframes_.size();
+  for (std::size_t k = 0; k < first_order && local_keyframes_.size() < max_kfs; ++k) {
+    KeyFrame* kf = local_keyframes_[k];
+    for (KeyFrame* n : kf->best_covisibles(10)) {
+      if (!n->bad() && n->track.local_for_frame != current_.id) {
+        n->track.local_for_frame = current_.id;
+        local_keyframes_.push_back(n);
+        break;
+      }
+    }
+    for (KeyFrame* c : kf->children()) {
+      if (!c->bad() && c->track.local_for_frame != current_.id) {
+        c->track.local_for_frame = current_.id;
+        local_keyframes_.push_back(c);
+        break;
+      }
+    }
+    KeyFrame* parent = kf->parent();
+    if (parent && !parent->bad() && parent->track.local_for_frame != current_.id) {
+      parent->track.local_for_frame = current_.id;
+      local_keyframes_.push_back(parent);
+    }
+  }
+  if (best) {
+    reference_kf_ = best->shared_from_this();
+    current_.reference_keyframe = reference_kf_;
+  }
+  // Their points.
+  local_points_.clear();
+  for (KeyFrame* kf : local_keyframes_) {
+    for (const MapPointPtr& p : kf->map_points()) {
+      if (!p || p->bad() || p->track.reference_for_frame == current_.id) continue;
+      p->track.reference_for_frame = current_.id;
+      local_points_.push_back(p.get());
+    }
+  }
+}
+
+void Tracking::search_local_points() {
+  for (MapPointPtr& p : current_.map_points) {
+    if (!p) continue;
+    if (p->bad()) {
+      p.reset();
+      continue;
+    }
+    p->increase_visible();
+    p->track.last_frame_seen = current_.id;
+    p->track.in_view = false;
+  }
+  int to_match = 0;
+  for (MapPoint* p : local_points_) {
+    if (p->track.last_frame_seen == current_.id || p->bad()) {
+      p->track.in_view = false;
+      continue;
+    }
+    if (current_.is_in_frustum(*p, 0.5)) {
+      p->increase_visible();
+      ++to_match;
+    }
+  }
+  if (to_match > 0) {
+    const float th = static_cast<float>(config_.tracking.local_map_radius) * (current_.id < last_recovery_frame_id_ + 2 ? 5.0f : 1.0f);
+    matcher_.search_local_points(current_, local_points_, th);
+  }
+}
+
+bool Tracking::track_local_map(int& inliers) {
+  update_local_map();
+  search_local_points();
+  optimize_current_pose();
+  inliers = 0;
+  for (std::size_t i = 0; i < current_.size(); ++i) {
+    MapPointPtr& p = current_.map_points[i];
+    if (!p) continue;
+    if (!current_.outlier[i]) {
+      p->increase_found();
+      if (!p->observations().empty()) ++inliers;
+    } else {
+      p.reset();  // stereo: outliers are dropped at once (ORB-SLAM2)
+      current_.outlier[i] = 0;
+    }
+  }
+  const int needed = current_.id < last_recovery_frame_id_ + static_cast<uint64_t>(max_frames_) && last_recovery_frame_id_ > 0
+                         ? std::max(50, config_.tracking.min_local_map_inliers)
+                         : config_.tracking.min_local_map_inliers;
+  return inliers >= needed;
+}
+
+bool Tracking::need_new_keyframe() {
+  if (!reference_kf_) return false;
+  const std::size_t n_kfs = map_.keyframe_count();
+  if (current_.id < last_recovery_frame_id_ + static_cast<uint64_t>(max_frames_) && last_recovery_frame_id_ > 0 &&
+      n_kfs > static_cast<std::size_t>(max_frames_)) {
+    return false;
+  }
+  const int min_obs = n_kfs <= 2 ? 2 : 3;
+  const int ref_matches = reference_kf_->tracked_map_points(min_obs);
+  const bool mapper_idle = mapper_.idle();
+
+  int tracked_close = 0, untracked_close = 0;
+  for (std::size_t i = 0; i < current_.size(); ++i) {
+    if (!current_.is_close(i)) continue;
+    if (current_.map_points[i] && !current_.outlier[i]) {
+      ++tracked_close;
+    } else {
+      ++untracked_close;
+    }
+  }
+  const bool need_close = tracked_close < config_.tracking.keyframe_close_tracked &&
+                          untracked_close > config_.tracking.keyframe_close_untracked;
+  const double ref_ratio = n_kfs < 2 ? 0.4 : config_.tracking.keyframe_ref_ratio;
+  const bool c1a = current_.id >= last_keyframe_frame_id_ + static_cast<uint64_t>(max_frames_);
+  const bool c1b = current_.id >= last_keyframe_frame_id_ + static_cast<uint64_t>(min_frames_) && mapper_idle;
+  const bool c1c = inliers_ < ref_matches * 0.25 || need_close;
+  const bool c2 = (inliers_ < ref_matches * ref_ratio || need_close) && inliers_ > 15;
+  if (!((c1a || c1b || c1c) && c2)) return false;
+  if (mapper_idle) return true;
+  mapper_.interrupt_ba();
+  return mapper_.queue_length() < static_cast<std::size_t>(config_.mapping.queue_capacity);
+}
+
+void Tracking::create_new_keyframe() {
+  auto kf = std::make_shared<KeyFrame>(map_.new_keyframe_id(), current_);
+  // New map points from the closest stereo keypoints without one: all close ones, at least keyframe_max_new_points.
+  std::vector<std::pair<float, std::size_t>> by_depth;
+  for (std::size_t i = 0; i < current_.size(); ++i) {
+    if (current_.depth[i] > 0) by_depth.emplace_back(current_.depth[i], i);
+  }
+  std::sort(by_depth.begin(), by_depth.end());
+  int n_points = 0;
+  for (const auto& [z, i] : by_depth) {
+    MapPointPtr& existing = current_.map_points[i];
+    bool create = !existing;
+    if (existing && existing->observations().empty()) {
+      existing.reset();
+      create = true;
+    }
+    if (create) {
+      auto point = std::make_shared<MapPoint>(map_.new_map_point_id(), current_.unproject_stereo(i), kf.get(), current_.id);
+      point->add_observation(kf.get(), static_cast<int>(i));
+      kf->add_map_point(point, i);
+      point->compute_distinctive_descriptor();
+      point->update_normal_and_depth();
+      map_.add_map_point(point);
+      current_.map_points[i] = point;
+    }
+    ++n_points;
+    if (z > geometry_->close_depth_m && n_points > config_.tracking.keyframe_max_new_points) break;
+  }
+  if (!mapper_.try_insert(kf)) {
+    // The mapper's queue is full: the keyframe is dropped, and so are the points it just created.
+    for (std::size_t i = 0; i < current_.size(); ++i) {
+      const MapPointPtr& p = kf->map_point(i);
+      if (p && p->observations().size() == 1 && p->is_in(kf.get())) {
+        current_.map_points[i].reset();
+        p->set_bad(map_);
+      }
+    }
+    return;
+  }
+  reference_kf_ = kf;
+  current_.reference_keyframe = kf;
+  last_keyframe_frame_id_ = current_.id;
+}
+
+}  // namespace agvslam::slam

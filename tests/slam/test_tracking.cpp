@@ -1,0 +1,174 @@
+// Tracking and local mapping on synthetic stereo frames (known poses, exact descriptors): initialisation, the
+// motion model, keyframes, triangulation of monocular points, culling, loss.
+#include <gtest/gtest.h>
+
+#include "agvslam/slam/local_mapping.h"
+#include "agvslam/slam/map.h"
+#include "agvslam/slam/matcher.h"
+#include "agvslam/slam/tracking.h"
+#include "agvslam/slam/triangulation.h"
+#include "synthetic_world.h"
+
+namespace agvslam::slam {
+namespace {
+
+StereoIntrinsics intrinsics(const FrameGeometry& g) { return {g.camera.fx, g.camera.fy, g.camera.cx, g.camera.cy, g.bf}; }
+
+double position_error(const SE3d& T_c_w, const SE3d& T_true) {
+  return (T_c_w.inverse().translation() - T_true.inverse().translation()).norm();
+}
+
+struct Rig {
+  SlamConfig config;
+  FrameGeometryPtr geometry = test::test_geometry();
+  Map map;
+  std::unique_ptr<LocalMapping> mapper;
+  std::unique_ptr<Tracking> tracking;
+  explicit Rig(const SlamConfig& c = {}) : config(c) {
+    mapper = std::make_unique<LocalMapping>(config, map, intrinsics(*geometry));
+    tracking = std::make_unique<Tracking>(config, geometry, map, *mapper, 20.0);
+  }
+  TrackingState step(const test::World& world, const SE3d& T_true, uint64_t id, double noise_px = 0.3,
+                     bool drop_stereo_far = false) {
+    Frame f;
+    std::vector<int> pok;
+    test::make_frame(world, T_true, geometry, id, noise_px, 100u + static_cast<uint32_t>(id), f, pok);
+    if (drop_stereo_far) {
+      for (std::size_t i = 0; i < f.size(); ++i) {
+        if (f.depth[i] > 6.0f) {
+          f.depth[i] = -1;
+          f.u_right[i] = -1;
+        }
+      }
+    }
+    TrackTimings t;
+    TrackingCounts c;
+    const TrackingState s = tracking->track(f, t, c);
+    mapper->process_pending();
+    return s;
+  }
+};
+
+TEST(Tracking, InitialisesAndFollowsAPath) {
+  Rig rig;
+  const test::World world = test::make_world(1500, 7, 1.5, 15.0);
+  // The world frame is the first camera: express the truth relative to it.
+  const SE3d T0 = test::path_pose(0);
+  double worst = 0;
+  for (int k = 0; k < 40; ++k) {
+    const SE3d T_true = test::path_pose(k, 0.05);
+    const TrackingState s = rig.step(world, T_true, static_cast<uint64_t>(k));
+    ASSERT_EQ(s, TrackingState::kOk) << "frame " << k;
+    const SE3d est_in_truth = rig.tracking->last_frame().T_c_w() * T0;  // T_c_w0 * T_w0_w
+    worst = std::max(worst, position_error(est_in_truth, T_true));
+  }
+  EXPECT_LT(worst, 0.02);
+  std::lock_guard<std::mutex> lock(rig.map.mutex());
+  EXPECT_GE(rig.map.keyframe_count(), 2u);
+  EXPECT_GT(rig.tracking->local_point_count(), 100u);
+}
+
+TEST(Tracking, MonocularPointsAreTriangulatedByTheMapper) {
+  SlamConfig c;
+  c.tracking.min_init_features = 150;  // only the near points have stereo here
+  Rig rig(c);
+  const test::World world = test::make_world(4000, 8, 1.5, 25.0);
+  for (int k = 0; k < 40; ++k) {
+    ASSERT_EQ(rig.step(world, test::path_pose(k, 0.08), static_cast<uint64_t>(k), 0.3, true), TrackingState::kOk) << k;
+  }
+  const LocalMappingStats s = rig.mapper->stats();
+  EXPECT_GT(s.points_created, 50u) << "far points without stereo must be triangulated between keyframes";
+  EXPECT_GT(s.ba_runs, 0u);
+  // The triangulated points lie where the world points are.
+  std::lock_guard<std::mutex> lock(rig.map.mutex());
+  int checked = 0, good = 0;
+  for (const MapPointPtr& p : rig.map.map_points()) {
+    if (p->p_w.z() < 7.0) continue;
+    double best = 1e9;
+    for (const Eigen::Vector3d& q : world.points_w) best = std::min(best, (q - p->p_w).norm());
+    ++checked;
+    good += best < 0.05 * p->p_w.z() ? 1 : 0;
+  }
+  EXPECT_GT(checked, 20);
+  EXPECT_GT(good, checked * 9 / 10);
+}
+
+TEST(Tracking, StandingStillKeepsTheMapSmall) {
+  Rig rig;
+  const test::World world = test::make_world(1200, 9);
+  for (int k = 0; k < 200; ++k) {
+    ASSERT_EQ(rig.step(world, SE3d::Identity(), static_cast<uint64_t>(k), 0.3), TrackingState::kOk) << k;
+  }
+  std::lock_guard<std::mutex> lock(rig.map.mutex());
+  EXPECT_LE(rig.map.keyframe_count(), 3u);
+  EXPECT_LT(rig.tracking->last_frame().T_w_c().translation().norm(), 0.005);
+}
+
+TEST(Tracking, RevisitingTheSameAreaKeepsMemoryBounded) {
+  // Back and forth over the same 1.5 m for 300 frames: culling keeps the map from growing with time.
+  Rig rig;
+  const test::World world = test::make_world(1500, 10, 1.5, 15.0);
+  std::size_t kfs_at_120 = 0, points_at_120 = 0;
+  for (int k = 0; k < 300; ++k) {
+    const int phase = k % 60;
+    const int pos = phase < 30 ? phase : 60 - phase;
+    ASSERT_EQ(rig.step(world, test::path_pose(pos, 0.05), static_cast<uint64_t>(k)), TrackingState::kOk) << k;
+    if (k == 119) {
+      std::lock_guard<std::mutex> lock(rig.map.mutex());
+      kfs_at_120 = rig.map.keyframe_count();
+      points_at_120 = rig.map.map_point_count();
+    }
+  }
+  std::lock_guard<std::mutex> lock(rig.map.mutex());
+  EXPECT_LE(rig.map.keyframe_count(), kfs_at_120 + 3);
+  EXPECT_LE(rig.map.map_point_count(), points_at_120 * 12 / 10);
+}
+
+TEST(Tracking, EmptyFrameIsLostNotGarbage) {
+  SlamConfig c;
+  c.tracking.reset_max_keyframes = 0;
+  Rig rig(c);
+  const test::World world = test::make_world(1200, 11);
+  for (int k = 0; k < 10; ++k) ASSERT_EQ(rig.step(world, test::path_pose(k, 0.05), static_cast<uint64_t>(k)), TrackingState::kOk);
+  const test::World empty;
+  EXPECT_EQ(rig.step(empty, test::path_pose(10, 0.05), 10), TrackingState::kLost);
+  EXPECT_EQ(rig.step(empty, test::path_pose(11, 0.05), 11), TrackingState::kLost);
+  // The view returns near where it was lost: recovered against the reference keyframe.
+  EXPECT_EQ(rig.step(world, test::path_pose(12, 0.05), 12), TrackingState::kOk);
+  EXPECT_LT(position_error(rig.tracking->last_frame().T_c_w() * test::path_pose(0), test::path_pose(12, 0.05)), 0.02);
+}
+
+TEST(Tracking, TooFewStereoFeaturesDoNotInitialise) {
+  Rig rig;
+  const test::World world = test::make_world(200, 12);
+  EXPECT_EQ(rig.step(world, SE3d::Identity(), 0), TrackingState::kInitialising);
+  std::lock_guard<std::mutex> lock(rig.map.mutex());
+  EXPECT_EQ(rig.map.keyframe_count(), 0u);
+}
+
+TEST(Matcher, TriangulationSearchFindsTheTrueCorrespondences) {
+  Map map;
+  const FrameGeometryPtr g = test::test_geometry();
+  const test::World world = test::make_world(800, 13, 2.0, 20.0);
+  Frame f1, f2;
+  std::vector<int> p1, p2;
+  test::make_frame(world, test::path_pose(0), g, 0, 0.2, 1, f1, p1);
+  test::make_frame(world, test::path_pose(5), g, 1, 0.2, 2, f2, p2);
+  // Half of the keypoints without stereo.
+  for (std::size_t i = 0; i < f1.size(); i += 2) f1.u_right[i] = f1.depth[i] = -1;
+  KeyFrame kf1(0, f1), kf2(1, f2);
+  const PinholeCamera& cam = g->camera;
+  Eigen::Matrix3d K;
+  K << cam.fx, 0, cam.cx, 0, cam.fy, cam.cy, 0, 0, 1;
+  Matcher matcher;
+  std::vector<std::pair<int, int>> matches;
+  std::lock_guard<std::mutex> lock(map.mutex());
+  const int n = matcher.search_for_triangulation(kf1, kf2, fundamental_from_poses(kf1.T_c_w(), kf2.T_c_w(), K), matches);
+  ASSERT_GT(n, static_cast<int>(std::min(f1.size(), f2.size()) / 2));
+  int correct = 0;
+  for (const auto& [a, b] : matches) correct += p1[static_cast<std::size_t>(a)] == p2[static_cast<std::size_t>(b)] ? 1 : 0;
+  EXPECT_EQ(correct, n);
+}
+
+}  // namespace
+}  // namespace agvslam::slam
