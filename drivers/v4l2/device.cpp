@@ -55,7 +55,7 @@ V4l2Device::V4l2Device(const std::string& path, const CaptureRequest& request) :
     if (fd_ < 0) {
       const int e = errno;
       ::close(raw);
-      throw V4l2Error(path_, (e == ENOTTY ? "is not a V4L2 device (libv4l2: " + errno_text(e) + "); expected a V4L2 capture device node" : "libv4l2 cannot take the device: " + errno_text(e)), e == ENOTTY, e);
+      throw V4l2Error(path_, (e == ENOTTY ? "is not a V4L2 device (libv4l2: " + errno_text(e) + "); expected a V4L2 capture device node" : "libv4l2 cannot take the device: " + errno_text(e) + (e == EINVAL ? " (it has no current format: a v4l2loopback device without a writer, or a camera still starting)" : "")), e == ENOTTY, e);
     }
     v4l2_capability cap{};
     if (xioctl(fd_, VIDIOC_QUERYCAP, &cap) < 0) {
@@ -267,14 +267,13 @@ bool V4l2Device::dequeue(cv::Mat& grey, CapturedImage& info) {
   return true;
 }
 
-V4l2GreyOutput::V4l2GreyOutput(const std::string& path, int width, int height)
-    : path_(path), width_(width), height_(height) {
+V4l2GreyOutput::V4l2GreyOutput(const std::string& path, int width, int height, Mode mode)
+    : path_(path), width_(width), height_(height), mode_(mode) {
   fd_ = ::open(path.c_str(), O_RDWR | O_CLOEXEC);
   if (fd_ < 0) throw V4l2Error(path_, "cannot open for output: " + errno_text(errno), false, errno);
   auto fail_out = [&](const std::string& what, bool configuration) {
     const int e = errno;
-    ::close(fd_);
-    fd_ = -1;
+    release();
     throw V4l2Error(path_, what + ": " + errno_text(e), configuration, e);
   };
   v4l2_capability cap{};
@@ -301,22 +300,65 @@ V4l2GreyOutput::V4l2GreyOutput(const std::string& path, int width, int height)
                  std::to_string(f.fmt.pix.height) + ")",
              true);
   }
+  if (mode_ == Mode::kQueue) {
+    v4l2_requestbuffers req{};
+    req.count = 4;
+    req.type = V4L2_BUF_TYPE_VIDEO_OUTPUT;
+    req.memory = V4L2_MEMORY_MMAP;
+    if (::ioctl(fd_, VIDIOC_REQBUFS, &req) < 0 || req.count < 1) fail_out("VIDIOC_REQBUFS (output, mmap)", false);
+    for (uint32_t i = 0; i < req.count; ++i) {
+      v4l2_buffer b{};
+      b.type = V4L2_BUF_TYPE_VIDEO_OUTPUT;
+      b.memory = V4L2_MEMORY_MMAP;
+      b.index = i;
+      if (::ioctl(fd_, VIDIOC_QUERYBUF, &b) < 0) fail_out("VIDIOC_QUERYBUF (output)", false);
+      void* p = ::mmap(nullptr, b.length, PROT_READ | PROT_WRITE, MAP_SHARED, fd_, b.m.offset);
+      if (p == MAP_FAILED) fail_out("mmap of output buffer " + std::to_string(i), false);
+      buffers_.push_back({p, b.length});
+      if (b.length < static_cast<std::size_t>(width) * static_cast<std::size_t>(height)) {
+        errno = EINVAL;
+        fail_out("output buffer of " + std::to_string(b.length) + " bytes is smaller than a frame", false);
+      }
+    }
+  }
 }
 
-V4l2GreyOutput::~V4l2GreyOutput() {
+void V4l2GreyOutput::release() noexcept {
+  for (auto& b : buffers_) ::munmap(b.start, b.length);
+  buffers_.clear();
   if (fd_ >= 0) ::close(fd_);
+  fd_ = -1;
 }
+
+V4l2GreyOutput::~V4l2GreyOutput() { release(); }
 
 void V4l2GreyOutput::announce() {
   v4l2_buf_type type = V4L2_BUF_TYPE_VIDEO_OUTPUT;
   if (::ioctl(fd_, VIDIOC_STREAMON, &type) < 0) throw V4l2Error(path_, "VIDIOC_STREAMON (output) failed: " + errno_text(errno), false, errno);
 }
 
-void V4l2GreyOutput::write(const cv::Mat& grey) {
+void V4l2GreyOutput::write(const cv::Mat& grey, int64_t t_ns) {
   if (grey.type() != CV_8UC1 || grey.cols != width_ || grey.rows != height_ || !grey.isContinuous())
     throw V4l2Error(path_, "write: expected a continuous CV_8UC1 image of " + std::to_string(width_) + "x" +
                                std::to_string(height_));
   const std::size_t n = grey.total();
+  if (mode_ == Mode::kQueue) {
+    // v4l2loopback hands a queued output buffer to its readers at once and never blocks the writer: the buffers
+    // are used round robin without VIDIOC_DQBUF.
+    const Buffer& buf = buffers_[next_];
+    std::memcpy(buf.start, grey.data, n);
+    v4l2_buffer b{};
+    b.type = V4L2_BUF_TYPE_VIDEO_OUTPUT;
+    b.memory = V4L2_MEMORY_MMAP;
+    b.index = static_cast<uint32_t>(next_);
+    b.bytesused = static_cast<uint32_t>(n);
+    b.field = V4L2_FIELD_NONE;
+    b.timestamp.tv_sec = static_cast<time_t>(t_ns / 1000000000LL);
+    b.timestamp.tv_usec = static_cast<suseconds_t>((t_ns % 1000000000LL) / 1000);
+    if (::ioctl(fd_, VIDIOC_QBUF, &b) < 0) throw V4l2Error(path_, "VIDIOC_QBUF (output) failed: " + errno_text(errno), false, errno);
+    next_ = (next_ + 1) % buffers_.size();
+    return;
+  }
   const ssize_t w = ::write(fd_, grey.data, n);
   if (w < 0) throw V4l2Error(path_, "write failed: " + errno_text(errno), false, errno);
   if (static_cast<std::size_t>(w) != n)

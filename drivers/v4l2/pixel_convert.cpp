@@ -23,11 +23,20 @@ void yuyv_to_grey(const uint8_t* src, std::size_t bytes_per_line, cv::Mat& grey)
 }
 
 uint64_t image_hash(const cv::Mat& grey) {
+  // FNV-1a over 64-bit little-endian words (the tail of a row byte by byte): 8x fewer steps than bytewise FNV,
+  // which matters in the emulated VM where the check runs per frame.
   uint64_t h = 1469598103934665603ULL;
   const std::size_t row_bytes = static_cast<std::size_t>(grey.cols) * grey.elemSize();
   for (int y = 0; y < grey.rows; ++y) {
     const uint8_t* p = grey.ptr<uint8_t>(y);
-    for (std::size_t i = 0; i < row_bytes; ++i) {
+    std::size_t i = 0;
+    for (; i + 8 <= row_bytes; i += 8) {
+      uint64_t w;
+      std::memcpy(&w, p + i, 8);
+      h ^= w;
+      h *= 1099511628211ULL;
+    }
+    for (; i < row_bytes; ++i) {
       h ^= p[i];
       h *= 1099511628211ULL;
     }

@@ -2,7 +2,8 @@
 // camera driver and the daemon can be tested with real images through a real kernel V4L2 path.
 //
 //   agvslam-v4l2-feed --dataset DIR --left /dev/videoL --right /dev/videoR [--rate-hz R] [--frames A:B]
-//                     [--manifest FILE] [--wait-file FILE] [--wait-timeout-s S] [--start-delay-s S] [--json OUT]
+//                     [--manifest FILE] [--wait-file FILE] [--wait-timeout-s S] [--start-delay-s S]
+//                     [--stamp queue|write] [--json OUT]
 //   agvslam-v4l2-feed --dataset DIR --side-by-side --left /dev/videoN ...     one device, left|right side by side
 //   agvslam-v4l2-feed --dataset DIR --frames A:B --manifest FILE --dry-run    only write the manifest
 //
@@ -36,7 +37,7 @@ namespace v4l2 = agvslam::drivers::v4l2;
 using agvslam::InputError;
 
 struct Options {
-  std::string dataset, left, right, frames, manifest, wait_file, json;
+  std::string dataset, left, right, frames, manifest, wait_file, json, stamp = "queue";
   bool side_by_side = false, dry_run = false;
   double rate_hz = 0, wait_timeout_s = 60, start_delay_s = 0;
 };
@@ -74,11 +75,11 @@ int run(const Options& o) {
   parse_range(o.frames, ds->size(), a, b);
   const double rate = o.rate_hz > 0 ? o.rate_hz : ds->rate_hz();
   spdlog::info("agvslam-v4l2-feed: dataset {} ({}, {} frames, {} Hz), frames {}:{}, rate {} Hz, {} {}{}{}, manifest {}, "
-               "wait-file {} (timeout {} s), start delay {} s",
+               "wait-file {} (timeout {} s), start delay {} s, stamps {}",
                ds->root(), ds->kind(), ds->size(), ds->rate_hz(), a, b, rate, o.side_by_side ? "side-by-side" : "left",
                o.left, o.side_by_side ? "" : " right ", o.side_by_side ? "" : o.right,
                o.manifest.empty() ? "-" : o.manifest, o.wait_file.empty() ? "-" : o.wait_file, o.wait_timeout_s,
-               o.start_delay_s);
+               o.start_delay_s, o.stamp);
 
   std::vector<cv::Mat> left, right;
   for (std::size_t i = a; i < b; ++i) {
@@ -101,12 +102,13 @@ int run(const Options& o) {
   }
   if (o.dry_run) return 0;
 
+  const auto mode = o.stamp == "write" ? v4l2::V4l2GreyOutput::Mode::kWrite : v4l2::V4l2GreyOutput::Mode::kQueue;
   std::unique_ptr<v4l2::V4l2GreyOutput> out_l, out_r;
   if (o.side_by_side) {
-    out_l = std::make_unique<v4l2::V4l2GreyOutput>(o.left, 2 * w, h);
+    out_l = std::make_unique<v4l2::V4l2GreyOutput>(o.left, 2 * w, h, mode);
   } else {
-    out_l = std::make_unique<v4l2::V4l2GreyOutput>(o.left, w, h);
-    out_r = std::make_unique<v4l2::V4l2GreyOutput>(o.right, w, h);
+    out_l = std::make_unique<v4l2::V4l2GreyOutput>(o.left, w, h, mode);
+    out_r = std::make_unique<v4l2::V4l2GreyOutput>(o.right, w, h, mode);
   }
   out_l->announce();
   if (out_r) out_r->announce();
@@ -137,10 +139,10 @@ int run(const Options& o) {
     if (start - due > period_ns / 2) ++late;
     if (o.side_by_side) {
       cv::hconcat(left[k], right[k], sbs);
-      out_l->write(sbs);
+      out_l->write(sbs, due);
     } else {
-      out_l->write(left[k]);
-      out_r->write(right[k]);
+      out_l->write(left[k], due);
+      out_r->write(right[k], due);
     }
     write_ms.push_back(static_cast<double>(v4l2::monotonic_now_ns() - start) / 1e6);
   }
@@ -175,6 +177,10 @@ int main(int argc, char** argv) {
   app.add_option("--wait-file", o.wait_file, "start playing once this file exists");
   app.add_option("--wait-timeout-s", o.wait_timeout_s, "give up waiting for --wait-file after this long");
   app.add_option("--start-delay-s", o.start_delay_s, "sleep this long before the first frame");
+  app.add_option("--stamp", o.stamp,
+                 "queue: both eyes carry the scheduled capture time (mmap + VIDIOC_QBUF); write: write(), the driver "
+                 "stamps and numbers each eye when written")
+      ->check(CLI::IsMember({"queue", "write"}));
   app.add_option("--json", o.json, "write statistics as JSON");
   try {
     app.parse(argc, argv);

@@ -95,23 +95,36 @@ class V4l2Device {
   std::vector<uint8_t> yuv420_;         // MJPEG decode target
 };
 
-// A V4L2 output device (e.g. a v4l2loopback node) that takes GREY frames through write(): each write() is one
-// frame, time-stamped (CLOCK_MONOTONIC) and numbered by the receiving driver. Used by agvslam-v4l2-feed.
+// A V4L2 output device (e.g. a v4l2loopback node) that takes GREY frames. Used by agvslam-v4l2-feed. Two ways:
+//   kQueue  mmap output buffers queued with VIDIOC_QBUF carrying the caller's time stamp (CLOCK_MONOTONIC), so
+//           both eyes of a pair can carry one capture time, as from a hardware-triggered stereo camera
+//   kWrite  write(): the receiving driver stamps each frame when it is written and numbers it (v4l2loopback sets
+//           the buffer sequence only on this path), as two free-running cameras
 class V4l2GreyOutput {
  public:
-  V4l2GreyOutput(const std::string& path, int width, int height);  // throws V4l2Error
+  enum class Mode { kQueue, kWrite };
+  V4l2GreyOutput(const std::string& path, int width, int height, Mode mode = Mode::kQueue);  // throws V4l2Error
   ~V4l2GreyOutput();
   V4l2GreyOutput(const V4l2GreyOutput&) = delete;
   V4l2GreyOutput& operator=(const V4l2GreyOutput&) = delete;
   // Announces the format to readers without writing a frame (v4l2loopback: VIDIOC_STREAMON on the output).
   void announce();
-  void write(const cv::Mat& grey);  // CV_8UC1 of the configured size; throws V4l2Error
+  // One frame, CV_8UC1 of the configured size; t_ns is its capture time (kQueue; kWrite ignores it).
+  void write(const cv::Mat& grey, int64_t t_ns);
   const std::string& path() const { return path_; }
 
  private:
+  void release() noexcept;
   std::string path_;
   int fd_ = -1;
   int width_, height_;
+  Mode mode_;
+  struct Buffer {
+    void* start = nullptr;
+    std::size_t length = 0;
+  };
+  std::vector<Buffer> buffers_;
+  std::size_t next_ = 0;
 };
 
 }  // namespace agvslam::drivers::v4l2

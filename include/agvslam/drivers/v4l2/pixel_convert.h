@@ -14,7 +14,7 @@ void grey_to_grey(const uint8_t* src, std::size_t bytes_per_line, cv::Mat& grey)
 // Takes the luma bytes of a packed YUYV 4:2:2 image (Y0 U Y1 V ...): exact, no colour maths.
 void yuyv_to_grey(const uint8_t* src, std::size_t bytes_per_line, cv::Mat& grey);
 
-// 64-bit FNV-1a over the image's pixels, row by row (stride-independent): used by the tools to check that
+// 64-bit FNV-1a over the image's pixels taken as 64-bit words, row by row (stride-independent): used by the tools to check that
 // frames arrive pixel-exact.
 uint64_t image_hash(const cv::Mat& grey);
 
