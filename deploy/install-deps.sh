@@ -9,6 +9,7 @@ packages=(
   libyaml-cpp-dev libspdlog-dev libfmt-dev libcli11-dev nlohmann-json3-dev
   libgtest-dev libgmock-dev libbenchmark-dev
   cyclonedds-dev cyclonedds-tools can-utils iproute2 util-linux  # pose outputs: DDS (idlc), CAN tools, netns tests
+  libv4l-dev v4l-utils qemu-system-x86 busybox-static kmod cpio  # V4L2 camera (libv4l2); VM harness (tests/vm)
 )
 
 missing=()

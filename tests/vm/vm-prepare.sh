@@ -30,6 +30,10 @@ elapsed() { awk -v a="$1" -v b="$(now)" 'BEGIN{printf "%.1f", b-a}'; }
 t=$(now)
 if [ ! -f "$VM_CACHE/kver" ]; then
   image_pkg=$(apt-cache depends linux-image-amd64 2>/dev/null | awk '/Depends: linux-image-[0-9]/{print $2; exit}')
+  if [ -z "$image_pkg" ] && [ "$(id -u)" -eq 0 ]; then  # no package lists yet on this machine
+    apt-get update -qq >"$VM_CACHE/apt-update.log" 2>&1 || true
+    image_pkg=$(apt-cache depends linux-image-amd64 2>/dev/null | awk '/Depends: linux-image-[0-9]/{print $2; exit}')
+  fi
   [ -n "$image_pkg" ] || vm_skip "apt-cache does not know linux-image-amd64 (run apt-get update)"
   kver=${image_pkg#linux-image-}
   series=$(echo "$kver" | cut -d. -f1,2)
