@@ -341,12 +341,17 @@ int run(const Options& o) {
                          {"state", slam::to_string(r.state)},
                          {"features", r.counts.features},
                          {"stereo_features", r.counts.stereo_features},
+                         {"method", r.counts.method},
+                         {"frame_matches", r.counts.frame_matches},
                          {"inliers", r.counts.inliers},
                          {"keyframe", r.counts.new_keyframe},
                          {"keyframes", r.keyframes},
                          {"map_points", r.map_points},
                          {"mapping_queue", r.mapping_queue},
                          {"mask_pixels", job.mask.empty() ? 0 : cv::countNonZero(job.mask)},
+                         {"p_w_c", r.pose_valid ? nlohmann::json::array({r.T_w_c.translation().x(), r.T_w_c.translation().y(),
+                                                                         r.T_w_c.translation().z()})
+                                                : nlohmann::json()},
                          {"tracking_ms", r.timings.total_ms},
                          {"detector_ms", job.detector_ms}});
     progress.update(frames, slam::to_string(r.state), r.keyframes);

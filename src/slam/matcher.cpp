@@ -64,7 +64,7 @@ void Matcher::rotation_outliers(std::vector<int>& out) const {
   }
 }
 
-int Matcher::search_last_frame(Frame& current, const Frame& last, float radius_px, bool check_orientation) {
+int Matcher::search_last_frame(Frame& current, const Frame& last, float radius_px, bool check_orientation, float ratio) {
   const FrameGeometry& g = *current.geometry;
   const SE3d& T_c_w = current.T_c_w();
   // The current camera centre in the last camera's frame: moving forward, points appear at coarser levels.
@@ -96,17 +96,21 @@ int Matcher::search_last_frame(Frame& current, const Frame& last, float radius_p
     }
     if (candidates_.empty()) continue;
     const double u_right = u - g.bf * inv_z;
-    int best_dist = 256, best = -1;
+    int best_dist = 256, second_dist = 256, best = -1;
     for (const int j : candidates_) {
       const std::size_t sj = static_cast<std::size_t>(j);
       if (current.map_points[sj]) continue;
       if (current.u_right[sj] > 0 && std::fabs(u_right - current.u_right[sj]) > radius) continue;
       const int d = hamming_distance(point->descriptor.data(), current.descriptor(sj));
       if (d < best_dist) {
+        second_dist = best_dist;
         best_dist = d;
         best = j;
+      } else if (d < second_dist) {
+        second_dist = d;
       }
     }
+    if (ratio < 1.0f && static_cast<float>(best_dist) > ratio * static_cast<float>(second_dist)) continue;
     if (best >= 0 && best_dist <= kMatchThresholdHigh) {
       current.map_points[static_cast<std::size_t>(best)] = point;
       ++matches;

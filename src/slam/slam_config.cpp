@@ -24,6 +24,8 @@ void TrackingConfig::validate(const std::string& source) const {
   require(close_depth_baselines > 1 && close_depth_baselines <= 1000, "close_depth_baselines",
           "expected a number in (1, 1000] (baselines)");
   require(min_init_features >= 10, "min_init_features", "expected an integer >= 10");
+  require(min_init_stereo >= 10 && min_init_stereo <= min_init_features, "min_init_stereo",
+          "expected an integer in [10, min_init_features]");
   require(motion_model_radius_px >= 1 && motion_model_radius_px <= 100, "motion_model_radius_px",
           "expected an integer in [1, 100] px");
   require(min_motion_model_matches >= 5, "min_motion_model_matches", "expected an integer >= 5");
@@ -46,11 +48,11 @@ void TrackingConfig::validate(const std::string& source) const {
 std::string TrackingConfig::describe() const {
   char buf[512];
   std::snprintf(buf, sizeof(buf),
-                "tracking: close points < %.0f baselines, init >= %d stereo features, motion model window %d px "
+                "tracking: close points < %.0f baselines, init > %d features (>= %d stereo), motion model window %d px "
                 "(>= %d matches), >= %d frame inliers, reference matching ratio %.2f (>= %d), local map window x%.1f "
                 "(>= %d inliers, <= %d keyframes), keyframe every <= %d frames (0 = rate), ref ratio %.2f, close "
                 "%d/%d, >= %d new points; reset after %d lost frames with <= %d keyframes",
-                close_depth_baselines, min_init_features, motion_model_radius_px, min_motion_model_matches,
+                close_depth_baselines, min_init_features, min_init_stereo, motion_model_radius_px, min_motion_model_matches,
                 min_frame_inliers, reference_ratio, min_reference_matches, local_map_radius, min_local_map_inliers,
                 max_local_keyframes, keyframe_max_frames, keyframe_ref_ratio, keyframe_close_tracked,
                 keyframe_close_untracked, keyframe_max_new_points, reset_after_lost_frames, reset_max_keyframes);
@@ -125,13 +127,14 @@ SlamConfig load_slam_config(const std::string& path) {
 
   TrackingConfig& t = c.tracking;
   in.check_keys("tracking",
-                {"close_depth_baselines", "min_init_features", "motion_model_radius_px", "min_motion_model_matches",
+                {"close_depth_baselines", "min_init_features", "min_init_stereo", "motion_model_radius_px", "min_motion_model_matches",
                  "min_frame_inliers", "min_reference_matches", "reference_ratio", "local_map_radius",
                  "min_local_map_inliers", "max_local_keyframes", "keyframe_max_frames", "keyframe_min_frames",
                  "keyframe_ref_ratio", "keyframe_close_tracked", "keyframe_close_untracked",
                  "keyframe_max_new_points", "reset_max_keyframes", "reset_after_lost_frames"});
   in.read("tracking", "close_depth_baselines", t.close_depth_baselines, "a number (baselines)");
   in.read("tracking", "min_init_features", t.min_init_features, "an integer");
+  in.read("tracking", "min_init_stereo", t.min_init_stereo, "an integer");
   in.read("tracking", "motion_model_radius_px", t.motion_model_radius_px, "an integer (px)");
   in.read("tracking", "min_motion_model_matches", t.min_motion_model_matches, "an integer");
   in.read("tracking", "min_frame_inliers", t.min_frame_inliers, "an integer");

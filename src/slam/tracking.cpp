@@ -63,6 +63,7 @@ TrackingState Tracking::track(Frame& frame, TrackTimings& timings, TrackingCount
     if (stereo_initialisation()) {
       state_ = TrackingState::kOk;
       counts.new_keyframe = true;
+      counts.method = "init";
       counts.inliers = current_.tracked_count();
     }
     timings.keyframe_ms = ms_since(t0);
@@ -81,12 +82,15 @@ TrackingState Tracking::track(Frame& frame, TrackTimings& timings, TrackingCount
     check_replaced_in_last_frame();
     if (has_velocity_ && current_.id >= last_recovery_frame_id_ + 2) {
       ok = track_with_motion_model(matches);
+      counts.method = "motion_model";
     }
     if (!ok && reference_kf_ && !reference_kf_->bad()) {
       ok = track_reference_keyframe(*reference_kf_, last_frame_.T_c_w(), matches);
+      counts.method = "reference";
     }
   } else {
     ok = recover(matches);
+    counts.method = "recovery";
     if (ok) {
       counts.recovered = true;
       last_recovery_frame_id_ = current_.id;
@@ -144,7 +148,10 @@ TrackingState Tracking::track(Frame& frame, TrackTimings& timings, TrackingCount
 bool Tracking::stereo_initialisation() {
   int with_depth = 0;
   for (float d : current_.depth) with_depth += d > 0 ? 1 : 0;
-  if (with_depth < config_.tracking.min_init_features) return false;
+  if (static_cast<int>(current_.size()) <= config_.tracking.min_init_features ||
+      with_depth < config_.tracking.min_init_stereo) {
+    return false;
+  }
   current_.set_pose(SE3d::Identity());
   auto kf = std::make_shared<KeyFrame>(map_.new_keyframe_id(), current_);
   map_.add_keyframe(kf);
@@ -232,9 +239,35 @@ bool Tracking::track_with_motion_model(int& matches) {
     std::fill(current_.map_points.begin(), current_.map_points.end(), nullptr);
     matches = matcher_.search_last_frame(current_, last_frame_, 2 * radius, true);
   }
-  if (matches < config_.tracking.min_motion_model_matches) return false;
-  optimize_current_pose();
-  const int in_map = discard_outliers();
+  int in_map = 0;
+  if (matches >= config_.tracking.min_motion_model_matches) {
+    optimize_current_pose();
+    in_map = discard_outliers();
+  }
+  // Beyond ORB-SLAM2: when the model was poor (an abrupt turn or stop: the vehicle's angular velocity changes
+  // within a frame), most points fall outside the window and the pose rests on a few, partly wrong matches.
+  // Search again from the predicted pose with a window wide enough for a few degrees of unexpected rotation,
+  // with a ratio test against repetitive structure, and keep the better of the two results.
+  const int last_tracked = last_frame_.tracked_count();
+  if (in_map < last_tracked / 2) {
+    const SE3d T_first = current_.T_c_w();
+    const std::vector<MapPointPtr> matches_first = current_.map_points;
+    current_.set_pose(velocity_ * last_frame_.T_c_w());
+    std::fill(current_.map_points.begin(), current_.map_points.end(), nullptr);
+    const int wide = matcher_.search_last_frame(current_, last_frame_, 4 * radius, true, 0.8f);
+    int in_map_wide = 0;
+    if (wide >= config_.tracking.min_motion_model_matches) {
+      optimize_current_pose();
+      in_map_wide = discard_outliers();
+    }
+    if (in_map_wide > in_map) {
+      in_map = in_map_wide;
+      matches = wide;
+    } else {
+      current_.set_pose(T_first);
+      current_.map_points = matches_first;
+    }
+  }
   return in_map >= config_.tracking.min_frame_inliers;
 }
 

@@ -70,7 +70,7 @@ TEST(Tracking, InitialisesAndFollowsAPath) {
 
 TEST(Tracking, MonocularPointsAreTriangulatedByTheMapper) {
   SlamConfig c;
-  c.tracking.min_init_features = 150;  // only the near points have stereo here
+  c.tracking.min_init_stereo = 100;  // only the near points have stereo here
   Rig rig(c);
   const test::World world = test::make_world(4000, 8, 1.5, 25.0);
   for (int k = 0; k < 40; ++k) {

@@ -31,8 +31,9 @@ class Matcher {
  public:
   // Projects the last frame's (inlier) map points into `current` with its predicted pose and matches them within
   // radius_px x scale of the level (ORB-SLAM2's SearchByProjection(Frame, Frame) with the stereo forward/backward
-  // level rule and the right-image check). Returns the number of new matches.
-  int search_last_frame(Frame& current, const Frame& last, float radius_px, bool check_orientation);
+  // level rule and the right-image check). ratio < 1 adds a best-to-second-best test (for wide windows).
+  // Returns the number of new matches.
+  int search_last_frame(Frame& current, const Frame& last, float radius_px, bool check_orientation, float ratio = 1.0f);
 
   // Local map points (with track scratch filled by Frame::is_in_frustum) into the frame, within radius_factor x
   // the viewing-angle window x scale, best-to-second ratio 0.8 at the same level (ORB-SLAM2's

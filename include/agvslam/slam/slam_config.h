@@ -13,7 +13,8 @@ struct TrackingConfig {
   // A stereo point is "close" (trusted for depth, created as a map point at once) when its depth is below
   // close_depth_baselines * baseline_m (ORB-SLAM2's ThDepth: 35-40 baselines).
   double close_depth_baselines = 40.0;
-  int min_init_features = 500;           // stereo initialisation needs this many keypoints with depth
+  int min_init_features = 500;           // stereo initialisation needs more keypoints than this (ORB-SLAM2) ...
+  int min_init_stereo = 100;             // ... of which at least this many with stereo depth
   int motion_model_radius_px = 7;        // search window (x scale of the level) when projecting the last frame
   int min_motion_model_matches = 20;     // below this the window is doubled, then the model is given up
   int min_frame_inliers = 10;            // motion-model / reference-keyframe tracking succeeds above this

@@ -41,6 +41,7 @@ struct TrackingCounts {
   int features = 0;            // keypoints in the frame
   int stereo_features = 0;     // of which with stereo depth
   int frame_matches = 0;       // matches of the motion model / reference keyframe step
+  const char* method = "";     // which step tracked the frame: init, motion_model, reference, recovery
   int inliers = 0;             // map point inliers after local-map tracking
   bool new_keyframe = false;
   bool recovered = false;      // tracked again after being lost
