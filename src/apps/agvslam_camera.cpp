@@ -143,6 +143,7 @@ int run(const Options& o) {
   };
   std::vector<Got> got;
   std::vector<double> latency_ms, pair_dt_ms, interval_ms;
+  double last_left_mean = 0, last_right_mean = 0;
   const int64_t t_start = v4l2::monotonic_now_ns();
   const int64_t t_end = t_start + static_cast<int64_t>(o.timeout_s * 1e9);
   const int64_t t_stop = o.duration_s > 0 ? t_start + static_cast<int64_t>(o.duration_s * 1e9) : INT64_MAX;
@@ -159,6 +160,8 @@ int run(const Options& o) {
       got.push_back({v4l2::image_hash(f.left), v4l2::image_hash(f.right), f.t_ns});
       latency_ms.push_back(static_cast<double>(info.dequeued_ns - f.t_ns) / 1e6);
       pair_dt_ms.push_back(std::abs(static_cast<double>(info.t_left_ns - info.t_right_ns)) / 1e6);
+      last_left_mean = cv::mean(f.left)[0];
+      last_right_mean = cv::mean(f.right)[0];
       if (!o.save.empty() && (got.size() - 1) % static_cast<std::size_t>(std::max(1, o.save_every)) == 0) {
         char name[32];
         std::snprintf(name, sizeof name, "%06zu.png", got.size() - 1);
@@ -224,6 +227,8 @@ int run(const Options& o) {
                         {"latency_ms", summary(latency_ms)},
                         {"pair_dt_ms", summary(pair_dt_ms)},
                         {"interval_ms", summary(interval_ms)},
+                        {"last_left_mean", last_left_mean},
+                        {"last_right_mean", last_right_mean},
                         {"failures", failures}};
     std::ofstream(o.json) << j.dump(2) << "\n";
   }
