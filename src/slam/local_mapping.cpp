@@ -226,6 +226,7 @@ void LocalMapping::process_new_keyframe(KeyFrame& kf) {
   }
   kf.update_connections();
   map_.add_keyframe(kf.shared_from_this());
+  if (place_) place_->on_keyframe_inserted(kf);
 }
 
 void LocalMapping::cull_recent_points(const KeyFrame& kf) {
@@ -495,6 +496,7 @@ void LocalMapping::cull_keyframes(KeyFrame& kf) {
       if (observers >= observers_needed) ++redundant;
     }
     if (n_points > 0 && redundant > config_.mapping.keyframe_redundancy * n_points) {
+      if (place_) place_->on_keyframe_erased(*k);
       k->set_bad(map_);
       ++culled;
     }
@@ -505,6 +507,7 @@ void LocalMapping::cull_keyframes(KeyFrame& kf) {
     for (auto it = local.rbegin(); it != local.rend() && map_.keyframe_count() > cap; ++it) {
       KeyFrame* k = *it;
       if (k->bad() || k->is_origin() || k->not_erase() || k == &kf) continue;
+      if (place_) place_->on_keyframe_erased(*k);
       k->set_bad(map_);
       ++culled;
     }

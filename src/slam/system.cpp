@@ -73,6 +73,11 @@ void System::reset_now() {
   }
 }
 
+void System::set_place_recognition(const std::shared_ptr<PlaceRecognition>& place) {
+  mapper_->set_place_recognition(place);
+  tracking_->set_place_recognition(place);
+}
+
 void System::wait_for_mapping() { mapper_->wait_until_idle(); }
 
 TrackResult System::track_stereo(int64_t t_ns, const cv::Mat& left, const cv::Mat& right, const cv::Mat& dynamic_mask) {

@@ -282,15 +282,17 @@ bool Tracking::track_reference_keyframe(const KeyFrame& kf, const SE3d& T_c_w_gu
 }
 
 bool Tracking::recover(int& matches) {
-  // Without a place-recognition database (issue 5), try the last reference keyframe and its best neighbours,
-  // each from its own pose.
+  // The place-recognition candidates (issue 5, when set), then the last reference keyframe and its best
+  // neighbours, each from its own pose.
   if (!reference_kf_ || reference_kf_->bad()) {
     // The reference was culled while lost: take any keyframe of the map near the last pose.
     const auto kfs = map_.keyframes();
     if (kfs.empty()) return false;
     reference_kf_ = kfs.back();
   }
-  std::vector<KeyFrame*> candidates{reference_kf_.get()};
+  std::vector<KeyFrame*> candidates;
+  if (place_) candidates = place_->relocalisation_candidates(current_);
+  candidates.push_back(reference_kf_.get());
   for (KeyFrame* kf : reference_kf_->best_covisibles(4)) candidates.push_back(kf);
   for (KeyFrame* kf : candidates) {
     if (kf->bad()) continue;

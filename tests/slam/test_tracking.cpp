@@ -138,6 +138,44 @@ TEST(Tracking, EmptyFrameIsLostNotGarbage) {
   EXPECT_LT(position_error(rig.tracking->last_frame().T_c_w() * test::path_pose(0), test::path_pose(12, 0.05)), 0.02);
 }
 
+// Records the calls of the place-recognition slot (issue 5 implements it; here only the wiring is tested).
+class RecordingPlaceRecognition final : public PlaceRecognition {
+ public:
+  void on_keyframe_inserted(KeyFrame& kf) override { inserted.push_back(kf.id); }
+  void on_keyframe_erased(KeyFrame& kf) override { erased.push_back(kf.id); }
+  std::vector<KeyFrame*> relocalisation_candidates(const Frame& /*frame*/) override {
+    ++queries;
+    return {};
+  }
+  std::vector<uint64_t> inserted, erased;
+  int queries = 0;
+};
+
+TEST(Tracking, PlaceRecognitionSlotSeesEveryKeyframeAndEveryLostFrame) {
+  SlamConfig c;
+  c.tracking.reset_max_keyframes = 0;
+  Rig rig(c);
+  auto place = std::make_shared<RecordingPlaceRecognition>();
+  rig.mapper->set_place_recognition(place);
+  rig.tracking->set_place_recognition(place);
+  const test::World world = test::make_world(1500, 14, 1.5, 15.0);
+  for (int k = 0; k < 60; ++k) {
+    ASSERT_EQ(rig.step(world, test::path_pose(k < 30 ? k : 59 - k, 0.05), static_cast<uint64_t>(k)), TrackingState::kOk);
+  }
+  const test::World empty;
+  // The first failing frame is tried the normal way; the following lost frames ask for candidates.
+  EXPECT_EQ(rig.step(empty, test::path_pose(0), 60), TrackingState::kLost);
+  EXPECT_EQ(rig.step(empty, test::path_pose(0), 61), TrackingState::kLost);
+  EXPECT_EQ(rig.step(empty, test::path_pose(0), 62), TrackingState::kLost);
+  EXPECT_EQ(place->queries, 2);
+  std::lock_guard<std::mutex> lock(rig.map.mutex());
+  EXPECT_EQ(place->inserted.size() - place->erased.size(), rig.map.keyframe_count());
+  for (const KeyFramePtr& kf : rig.map.keyframes()) {
+    EXPECT_NE(std::find(place->inserted.begin(), place->inserted.end(), kf->id), place->inserted.end());
+    EXPECT_EQ(std::find(place->erased.begin(), place->erased.end(), kf->id), place->erased.end());
+  }
+}
+
 TEST(Tracking, TooFewStereoFeaturesDoNotInitialise) {
   Rig rig;
   const test::World world = test::make_world(200, 12);

@@ -18,6 +18,7 @@
 #include <deque>
 #include <functional>
 #include <list>
+#include <memory>
 #include <mutex>
 #include <thread>
 #include <vector>
@@ -25,6 +26,7 @@
 #include "agvslam/slam/key_frame.h"
 #include "agvslam/slam/matcher.h"
 #include "agvslam/slam/optimizer.h"
+#include "agvslam/slam/place_recognition.h"
 #include "agvslam/slam/slam_config.h"
 
 namespace agvslam::slam {
@@ -83,6 +85,8 @@ class LocalMapping {
   // The loop-closing slot (issue 5): called with each processed keyframe, in the mapping thread, without the
   // map mutex.
   void set_keyframe_sink(std::function<void(const KeyFramePtr&)> sink) { sink_ = std::move(sink); }
+  // Issue 5's keyframe database (set before the first keyframe).
+  void set_place_recognition(std::shared_ptr<PlaceRecognition> place) { place_ = std::move(place); }
 
   LocalMappingStats stats() const;
   // Per-keyframe step times since the start (a few dozen bytes per keyframe).
@@ -115,6 +119,7 @@ class LocalMapping {
 
   std::list<MapPointPtr> recent_points_;
   std::function<void(const KeyFramePtr&)> sink_;
+  std::shared_ptr<PlaceRecognition> place_;
   mutable std::mutex stats_mutex_;
   LocalMappingStats stats_;
   std::vector<KeyframeMappingTimes> history_;

@@ -27,6 +27,7 @@
 #include "agvslam/features/stereo_matcher.h"
 #include "agvslam/slam/local_mapping.h"
 #include "agvslam/slam/map.h"
+#include "agvslam/slam/place_recognition.h"
 #include "agvslam/slam/slam_config.h"
 #include "agvslam/slam/tracking.h"
 
@@ -66,6 +67,9 @@ class System {
 
   void request_reset();
   void shutdown();
+  // Attaches issue 5's keyframe database (before the first frame): keyframes get BowData, loss is recovered
+  // through its candidates.
+  void set_place_recognition(const std::shared_ptr<PlaceRecognition>& place);
 
   // The trajectory of every tracked frame, each pose expressed relative to its reference keyframe and composed
   // with that keyframe's current (bundle-adjusted) pose, as ORB-SLAM2 saves it. Frames that were not tracked are

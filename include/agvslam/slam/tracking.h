@@ -10,12 +10,14 @@
 // Tracking::recover()).
 
 #include <cstdint>
+#include <memory>
 #include <vector>
 
 #include "agvslam/slam/frame.h"
 #include "agvslam/slam/key_frame.h"
 #include "agvslam/slam/matcher.h"
 #include "agvslam/slam/optimizer.h"
+#include "agvslam/slam/place_recognition.h"
 #include "agvslam/slam/slam_config.h"
 
 namespace agvslam::slam {
@@ -63,6 +65,9 @@ class Tracking {
   // The last tracked frame's pose relative to its reference keyframe (last_frame().reference_keyframe).
   const SE3d& last_relative_pose() const { return last_T_c_r_; }
 
+  // Issue 5's keyframe database: relocalisation candidates while lost (set before the first frame).
+  void set_place_recognition(std::shared_ptr<PlaceRecognition> place) { place_ = std::move(place); }
+
   // Forgets everything (the map must be cleared by the caller, with the mapper reset first).
   void reset();
 
@@ -108,6 +113,7 @@ class Tracking {
   std::vector<KeyFrame*> local_keyframes_;
   std::vector<MapPoint*> local_points_;
   Matcher matcher_;
+  std::shared_ptr<PlaceRecognition> place_;
   std::vector<PoseObservation> observations_;
   std::vector<int> observation_keypoint_;
   std::vector<uint8_t> observation_outlier_;
