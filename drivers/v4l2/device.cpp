@@ -2,7 +2,6 @@
 
 #include <fcntl.h>
 #include <libv4l2.h>
-#include <libv4lconvert.h>
 #include <linux/videodev2.h>
 #include <sys/ioctl.h>
 #include <sys/mman.h>
@@ -76,9 +75,15 @@ V4l2Device::V4l2Device(const std::string& path, const CaptureRequest& request) :
     set_format(request);
     set_rate(request.fps);
     if (pix_ == V4L2_PIX_FMT_MJPEG) {
-      convert_ = v4lconvert_create(fd_);
-      if (!convert_) throw V4l2Error(path_, "libv4lconvert_create failed (needed to decode MJPEG)");
-      yuv420_.resize(static_cast<std::size_t>(width_) * static_cast<std::size_t>(height_) * 3 / 2);
+      if (width_ % 16 != 0 || height_ % 8 != 0)  // 4:2:2 JPEG blocks are 16x8, 4:2:0 16x16
+        throw V4l2Error(path_, "MJPEG at " + std::to_string(width_) + "x" + std::to_string(height_) +
+                                   ": libv4lconvert decodes only widths that are multiples of 16 and heights of 8 "
+                                   "(16 for 4:2:0)", true);
+      try {
+        mjpeg_ = std::make_unique<MjpegDecoder>(fd_);
+      } catch (const std::runtime_error& e) {
+        throw V4l2Error(path_, e.what());
+      }
     }
     start_streaming(request.buffers);
   } catch (...) {
@@ -98,10 +103,7 @@ void V4l2Device::release() noexcept {
   for (auto& b : buffers_)
     if (b.start) v4l2_munmap(b.start, b.length);
   buffers_.clear();
-  if (convert_) {
-    v4lconvert_destroy(convert_);
-    convert_ = nullptr;
-  }
+  mjpeg_.reset();
   if (fd_ >= 0) {
     v4l2_close(fd_);
     fd_ = -1;
@@ -244,31 +246,23 @@ bool V4l2Device::dequeue(cv::Mat& grey, CapturedImage& info) {
       } else {
         yuyv_to_grey(data, bytes_per_line_, grey);
       }
-    } else {
-      v4l2_format src{}, dst{};
-      src.type = dst.type = V4L2_BUF_TYPE_VIDEO_CAPTURE;
-      src.fmt.pix.width = dst.fmt.pix.width = static_cast<uint32_t>(width_);
-      src.fmt.pix.height = dst.fmt.pix.height = static_cast<uint32_t>(height_);
-      src.fmt.pix.pixelformat = V4L2_PIX_FMT_MJPEG;
-      src.fmt.pix.sizeimage = static_cast<uint32_t>(used);
-      dst.fmt.pix.pixelformat = V4L2_PIX_FMT_YUV420;
-      dst.fmt.pix.bytesperline = static_cast<uint32_t>(width_);
-      dst.fmt.pix.sizeimage = static_cast<uint32_t>(yuv420_.size());
-      const int r = v4lconvert_convert(convert_, &src, &dst, const_cast<uint8_t*>(data), static_cast<int>(used),
-                                       yuv420_.data(), static_cast<int>(yuv420_.size()));
-      if (r < 0) {
-        info.error_flag = true;  // a damaged JPEG: dropped and counted as corrupt
-      } else {
-        grey_to_grey(yuv420_.data(), static_cast<std::size_t>(width_), grey);
-      }
+    } else if (!mjpeg_->decode(data, used, grey)) {
+      info.error_flag = true;  // a damaged JPEG: dropped and counted as corrupt
+      if (decode_failures_++ % 100 == 0)
+        spdlog::warn("{}: MJPEG frame of {} bytes not decoded ({} so far): {}", path_, used, decode_failures_,
+                     mjpeg_->error());
     }
   }
   if (xioctl(fd_, VIDIOC_QBUF, &b) < 0) fail("VIDIOC_QBUF");
   return true;
 }
 
-V4l2GreyOutput::V4l2GreyOutput(const std::string& path, int width, int height, Mode mode)
-    : path_(path), width_(width), height_(height), mode_(mode) {
+V4l2Output::V4l2Output(const std::string& path, int width, int height, Mode mode, PixelFormat format)
+    : path_(path), width_(width), height_(height), mode_(mode), format_(format) {
+  if (format != PixelFormat::kGrey && format != PixelFormat::kMjpeg)
+    throw V4l2Error(path, "output: expected grey or mjpeg", true);
+  const uint32_t pix = fourcc(format);
+  const std::string pix_name = fourcc_to_string(pix);
   fd_ = ::open(path.c_str(), O_RDWR | O_CLOEXEC);
   if (fd_ < 0) throw V4l2Error(path_, "cannot open for output: " + errno_text(errno), false, errno);
   auto fail_out = [&](const std::string& what, bool configuration) {
@@ -287,15 +281,15 @@ V4l2GreyOutput::V4l2GreyOutput(const std::string& path, int width, int height, M
   f.type = V4L2_BUF_TYPE_VIDEO_OUTPUT;
   f.fmt.pix.width = static_cast<uint32_t>(width);
   f.fmt.pix.height = static_cast<uint32_t>(height);
-  f.fmt.pix.pixelformat = V4L2_PIX_FMT_GREY;
+  f.fmt.pix.pixelformat = pix;
   f.fmt.pix.field = V4L2_FIELD_NONE;
-  f.fmt.pix.bytesperline = static_cast<uint32_t>(width);
-  f.fmt.pix.sizeimage = static_cast<uint32_t>(width * height);
-  if (::ioctl(fd_, VIDIOC_S_FMT, &f) < 0) fail_out("VIDIOC_S_FMT GREY " + std::to_string(width) + "x" + std::to_string(height), true);
-  if (f.fmt.pix.pixelformat != V4L2_PIX_FMT_GREY || static_cast<int>(f.fmt.pix.width) != width ||
+  f.fmt.pix.bytesperline = format == PixelFormat::kGrey ? static_cast<uint32_t>(width) : 0;
+  f.fmt.pix.sizeimage = static_cast<uint32_t>(width * height);  // MJPEG: the largest JPEG accepted
+  if (::ioctl(fd_, VIDIOC_S_FMT, &f) < 0) fail_out("VIDIOC_S_FMT " + pix_name + " " + std::to_string(width) + "x" + std::to_string(height), true);
+  if (f.fmt.pix.pixelformat != pix || static_cast<int>(f.fmt.pix.width) != width ||
       static_cast<int>(f.fmt.pix.height) != height) {
     errno = EINVAL;
-    fail_out("refused GREY " + std::to_string(width) + "x" + std::to_string(height) + " (got " +
+    fail_out("refused " + pix_name + " " + std::to_string(width) + "x" + std::to_string(height) + " (got " +
                  fourcc_to_string(f.fmt.pix.pixelformat) + " " + std::to_string(f.fmt.pix.width) + "x" +
                  std::to_string(f.fmt.pix.height) + ")",
              true);
@@ -323,30 +317,36 @@ V4l2GreyOutput::V4l2GreyOutput(const std::string& path, int width, int height, M
   }
 }
 
-void V4l2GreyOutput::release() noexcept {
+void V4l2Output::release() noexcept {
   for (auto& b : buffers_) ::munmap(b.start, b.length);
   buffers_.clear();
   if (fd_ >= 0) ::close(fd_);
   fd_ = -1;
 }
 
-V4l2GreyOutput::~V4l2GreyOutput() { release(); }
+V4l2Output::~V4l2Output() { release(); }
 
-void V4l2GreyOutput::announce() {
+void V4l2Output::announce() {
   v4l2_buf_type type = V4L2_BUF_TYPE_VIDEO_OUTPUT;
   if (::ioctl(fd_, VIDIOC_STREAMON, &type) < 0) throw V4l2Error(path_, "VIDIOC_STREAMON (output) failed: " + errno_text(errno), false, errno);
 }
 
-void V4l2GreyOutput::write(const cv::Mat& grey, int64_t t_ns) {
-  if (grey.type() != CV_8UC1 || grey.cols != width_ || grey.rows != height_ || !grey.isContinuous())
+void V4l2Output::write(const cv::Mat& grey, int64_t t_ns) {
+  if (format_ != PixelFormat::kGrey || grey.type() != CV_8UC1 || grey.cols != width_ || grey.rows != height_ ||
+      !grey.isContinuous())
     throw V4l2Error(path_, "write: expected a continuous CV_8UC1 image of " + std::to_string(width_) + "x" +
-                               std::to_string(height_));
-  const std::size_t n = grey.total();
+                               std::to_string(height_) + " for a GREY output");
+  write_bytes(grey.data, grey.total(), t_ns);
+}
+
+void V4l2Output::write_bytes(const uint8_t* data, std::size_t n, int64_t t_ns) {
   if (mode_ == Mode::kQueue) {
     // v4l2loopback hands a queued output buffer to its readers at once and never blocks the writer: the buffers
     // are used round robin without VIDIOC_DQBUF.
     const Buffer& buf = buffers_[next_];
-    std::memcpy(buf.start, grey.data, n);
+    if (n > buf.length)
+      throw V4l2Error(path_, "frame of " + std::to_string(n) + " bytes does not fit a " + std::to_string(buf.length) + "-byte buffer");
+    std::memcpy(buf.start, data, n);
     v4l2_buffer b{};
     b.type = V4L2_BUF_TYPE_VIDEO_OUTPUT;
     b.memory = V4L2_MEMORY_MMAP;
@@ -359,7 +359,7 @@ void V4l2GreyOutput::write(const cv::Mat& grey, int64_t t_ns) {
     next_ = (next_ + 1) % buffers_.size();
     return;
   }
-  const ssize_t w = ::write(fd_, grey.data, n);
+  const ssize_t w = ::write(fd_, data, n);
   if (w < 0) throw V4l2Error(path_, "write failed: " + errno_text(errno), false, errno);
   if (static_cast<std::size_t>(w) != n)
     throw V4l2Error(path_, "short write: " + std::to_string(w) + " of " + std::to_string(n) + " bytes");

@@ -1,6 +1,12 @@
 #include "agvslam/drivers/v4l2/pixel_convert.h"
 
+#include <libv4l-plugin.h>
+#include <libv4lconvert.h>
+#include <linux/videodev2.h>
+
+#include <cerrno>
 #include <cstring>
+#include <stdexcept>
 
 namespace agvslam::drivers::v4l2 {
 
@@ -43,5 +49,67 @@ uint64_t image_hash(const cv::Mat& grey) {
   }
   return h;
 }
+
+namespace {
+// Without a device: libv4lconvert only needs VIDIOC_QUERYCAP to succeed; everything else "not supported".
+int no_device_ioctl(void*, int, unsigned long request, void* arg) {
+  if (request == VIDIOC_QUERYCAP) {
+    auto* cap = static_cast<v4l2_capability*>(arg);
+    std::memset(cap, 0, sizeof *cap);
+    std::memcpy(cap->driver, "agvslam", 8);
+    cap->capabilities = V4L2_CAP_VIDEO_CAPTURE | V4L2_CAP_STREAMING | V4L2_CAP_DEVICE_CAPS;
+    cap->device_caps = V4L2_CAP_VIDEO_CAPTURE | V4L2_CAP_STREAMING;
+    return 0;
+  }
+  errno = EINVAL;
+  return -1;
+}
+ssize_t no_device_read(void*, int, void*, size_t) {
+  errno = EINVAL;
+  return -1;
+}
+ssize_t no_device_write(void*, int, const void*, size_t) {
+  errno = EINVAL;
+  return -1;
+}
+libv4l_dev_ops no_device_ops() {
+  libv4l_dev_ops ops{};
+  ops.ioctl = no_device_ioctl;
+  ops.read = no_device_read;
+  ops.write = no_device_write;
+  return ops;
+}
+}  // namespace
+
+MjpegDecoder::MjpegDecoder(int fd) {
+  static libv4l_dev_ops ops = no_device_ops();  // libv4lconvert keeps the pointer
+  convert_ = fd >= 0 ? v4lconvert_create(fd) : v4lconvert_create_with_dev_ops(-1, nullptr, &ops);
+  if (!convert_) throw std::runtime_error("libv4lconvert: cannot create a converter (needed to decode MJPEG)");
+}
+
+MjpegDecoder::~MjpegDecoder() {
+  if (convert_) v4lconvert_destroy(convert_);
+}
+
+bool MjpegDecoder::decode(const uint8_t* jpeg, std::size_t size, cv::Mat& grey) {
+  const std::size_t need = grey.total() * 3 / 2;
+  if (yuv420_.size() != need) yuv420_.resize(need);
+  v4l2_format src{}, dst{};
+  src.type = dst.type = V4L2_BUF_TYPE_VIDEO_CAPTURE;
+  src.fmt.pix.width = dst.fmt.pix.width = static_cast<uint32_t>(grey.cols);
+  src.fmt.pix.height = dst.fmt.pix.height = static_cast<uint32_t>(grey.rows);
+  src.fmt.pix.pixelformat = V4L2_PIX_FMT_MJPEG;
+  src.fmt.pix.sizeimage = static_cast<uint32_t>(size);
+  dst.fmt.pix.pixelformat = V4L2_PIX_FMT_YUV420;
+  dst.fmt.pix.bytesperline = static_cast<uint32_t>(grey.cols);
+  dst.fmt.pix.sizeimage = static_cast<uint32_t>(need);
+  const int r = v4lconvert_convert(convert_, &src, &dst, const_cast<uint8_t*>(jpeg), static_cast<int>(size),
+                                   yuv420_.data(), static_cast<int>(need));
+  if (r < 0) return false;
+  grey_to_grey(yuv420_.data(), static_cast<std::size_t>(grey.cols), grey);
+  return true;
+}
+
+std::string MjpegDecoder::error() const { return v4lconvert_get_error_message(convert_); }
 
 }  // namespace agvslam::drivers::v4l2

@@ -5,7 +5,8 @@
 //   agvslam-camera [--config params/camera.yaml [--section camera]] [--left DEV] [--right DEV] [--side-by-side]
 //                  [--width W] [--height H] [--format grey|yuyv|mjpeg] [--fps F] [--tolerance-ms T]
 //                  [--stall-ms S] [--backoff-ms A:B] [--frames N] [--duration-s S] [--timeout-s S] [--wait]
-//                  [--ready-file FILE] [--expect-manifest FILE ...] [--min-losses N] [--save DIR]
+//                  [--ready-file FILE] [--expect-manifest FILE ...] [--expect-dataset DIR [--expect-frames A:B]
+//                  [--max-mean-abs-error E]] [--min-losses N] [--save DIR]
 //                  [--save-every K] [--json OUT]
 //
 // Stops after --frames pairs (default: the manifests' length, else 100), --duration-s, or --timeout-s without
@@ -13,7 +14,8 @@
 // is an error). --ready-file is written each time the camera starts streaming (its content: how many times).
 // --expect-manifest (agvslam-v4l2-feed's, repeatable, concatenated) checks every frame arrived pixel-exact, in
 // order, left with its own right, none missing or extra. --min-losses N requires N device losses each followed
-// by a reopen. Exit status: 0 ok, 1 a check failed or the device failed, 2 bad option or camera configuration
+// by a reopen. --expect-dataset compares each pair with the dataset's frame (lossy paths such as MJPEG) within
+// a mean absolute error. Exit status: 0 ok, 1 a check failed or the device failed, 2 bad option or camera configuration
 // (device not a capture device, format not offered, size refused).
 
 #include <CLI/CLI.hpp>
@@ -32,6 +34,7 @@
 #include "agvslam/drivers/v4l2/device.h"
 #include "agvslam/drivers/v4l2/pixel_convert.h"
 #include "agvslam/drivers/v4l2/stereo_camera.h"
+#include "agvslam/io/dataset.h"
 
 namespace {
 
@@ -39,7 +42,9 @@ namespace v4l2 = agvslam::drivers::v4l2;
 using agvslam::InputError;
 
 struct Options {
-  std::string config, section = "camera", left, right, format, backoff, ready_file, save, json;
+  std::string config, section = "camera", left, right, format, backoff, ready_file, save, json, expect_dataset,
+      expect_frames;
+  double max_mean_abs_error = 2.0;
   std::vector<std::string> manifests;
   bool side_by_side = false, wait = false;
   int width = 0, height = 0, stall_ms = 0, frames = 0, min_losses = 0, save_every = 1;
@@ -115,7 +120,28 @@ int run(const Options& o) {
     auto part = read_manifest(m);
     expected.insert(expected.end(), part.begin(), part.end());
   }
-  const std::size_t want = o.frames > 0 ? static_cast<std::size_t>(o.frames) : (expected.empty() ? 100 : expected.size());
+  // --expect-dataset: the frames a lossy path (MJPEG) must reproduce within --max-mean-abs-error grey levels,
+  // loaded before the camera opens so the check keeps up with the stream.
+  std::vector<agvslam::StereoFrame> reference;
+  if (!o.expect_dataset.empty()) {
+    const auto ds = agvslam::io::open_dataset(o.expect_dataset);
+    std::size_t a = 0, b = ds->size();
+    if (!o.expect_frames.empty()) {
+      const auto colon = o.expect_frames.find(':');
+      try {
+        if (colon == std::string::npos) throw std::invalid_argument("");
+        a = std::stoul(o.expect_frames.substr(0, colon));
+        b = std::min(b, static_cast<std::size_t>(std::stoul(o.expect_frames.substr(colon + 1))));
+      } catch (const std::exception&) {
+        throw InputError("--expect-frames", o.expect_frames, "expected A:B (B exclusive)");
+      }
+    }
+    for (std::size_t i = a; i < b; ++i) reference.push_back(ds->frame(i));
+  }
+  const std::size_t want = o.frames > 0                ? static_cast<std::size_t>(o.frames)
+                           : !reference.empty()         ? reference.size()
+                           : !expected.empty()          ? expected.size()
+                                                        : 100;
   spdlog::info("agvslam-camera: {}", c.describe());
   spdlog::info("stop after {} pairs{}, timeout {} s, {} at start, ready-file {}, manifests {} ({} frames), min losses {}, "
                "save {}",
@@ -144,6 +170,8 @@ int run(const Options& o) {
   std::vector<Got> got;
   std::vector<double> latency_ms, pair_dt_ms, interval_ms;
   double last_left_mean = 0, last_right_mean = 0;
+  std::vector<double> reference_error;  // mean |captured - reference| per image (grey levels)
+  std::size_t reference_size_mismatch = 0;
   const int64_t t_start = v4l2::monotonic_now_ns();
   const int64_t t_end = t_start + static_cast<int64_t>(o.timeout_s * 1e9);
   const int64_t t_stop = o.duration_s > 0 ? t_start + static_cast<int64_t>(o.duration_s * 1e9) : INT64_MAX;
@@ -160,6 +188,19 @@ int run(const Options& o) {
       got.push_back({v4l2::image_hash(f.left), v4l2::image_hash(f.right), f.t_ns});
       latency_ms.push_back(static_cast<double>(info.dequeued_ns - f.t_ns) / 1e6);
       pair_dt_ms.push_back(std::abs(static_cast<double>(info.t_left_ns - info.t_right_ns)) / 1e6);
+      if (got.size() <= reference.size()) {
+        // A reference up to 15 px larger is compared on its top-left part (the feeder crops MJPEG frames to
+        // multiples of 16).
+        const auto& ref = reference[got.size() - 1];
+        const int dw = ref.left.cols - f.left.cols, dh = ref.left.rows - f.left.rows;
+        if (dw < 0 || dh < 0 || dw > 15 || dh > 15 || ref.right.size() != ref.left.size() || f.right.size() != f.left.size()) {
+          ++reference_size_mismatch;
+        } else {
+          const cv::Rect roi(0, 0, f.left.cols, f.left.rows);
+          reference_error.push_back(cv::norm(f.left, ref.left(roi), cv::NORM_L1) / static_cast<double>(f.left.total()));
+          reference_error.push_back(cv::norm(f.right, ref.right(roi), cv::NORM_L1) / static_cast<double>(f.right.total()));
+        }
+      }
       last_left_mean = cv::mean(f.left)[0];
       last_right_mean = cv::mean(f.right)[0];
       if (!o.save.empty() && (got.size() - 1) % static_cast<std::size_t>(std::max(1, o.save_every)) == 0) {
@@ -205,6 +246,15 @@ int run(const Options& o) {
     if (mismatches > 0) failures.push_back(std::to_string(mismatches) + " pairs differ from the manifest");
     if (got.size() > expected.size()) failures.push_back(std::to_string(got.size() - expected.size()) + " pairs more than the manifest");
   }
+  if (!reference.empty()) {
+    const double worst = percentile(reference_error, 1.0);
+    std::printf("reference %s: mean |captured - reference| per image: median %.2f, max %.2f grey levels (limit %.2f)\n",
+                o.expect_dataset.c_str(), percentile(reference_error, 0.5), worst, o.max_mean_abs_error);
+    if (reference_size_mismatch > 0) failures.push_back(std::to_string(reference_size_mismatch) + " pairs differ in size from the reference");
+    if (worst > o.max_mean_abs_error)
+      failures.push_back("an image differs from its reference by " + std::to_string(worst) + " grey levels on average (limit " +
+                         std::to_string(o.max_mean_abs_error) + "): wrong frame or a broken conversion");
+  }
   if (st.device_losses < static_cast<uint64_t>(o.min_losses))
     failures.push_back("expected at least " + std::to_string(o.min_losses) + " device losses, saw " + std::to_string(st.device_losses));
   if (st.reopens < static_cast<uint64_t>(o.min_losses))
@@ -228,6 +278,7 @@ int run(const Options& o) {
                         {"pair_dt_ms", summary(pair_dt_ms)},
                         {"interval_ms", summary(interval_ms)},
                         {"last_left_mean", last_left_mean},
+                        {"reference_mean_abs_error", summary(reference_error)},
                         {"last_right_mean", last_right_mean},
                         {"failures", failures}};
     std::ofstream(o.json) << j.dump(2) << "\n";
@@ -262,6 +313,10 @@ int main(int argc, char** argv) {
   app.add_flag("--wait", o.wait, "keep retrying a device that is not there or not ready at start");
   app.add_option("--ready-file", o.ready_file, "written each time streaming starts");
   app.add_option("--expect-manifest", o.manifests, "agvslam-v4l2-feed manifest(s) the frames must match");
+  app.add_option("--expect-dataset", o.expect_dataset,
+                 "dataset whose frames (--expect-frames A:B) the pairs must match within --max-mean-abs-error");
+  app.add_option("--expect-frames", o.expect_frames, "A:B, the frames of --expect-dataset that are played");
+  app.add_option("--max-mean-abs-error", o.max_mean_abs_error, "grey levels, mean over an image (default 2)");
   app.add_option("--min-losses", o.min_losses, "require at least this many device losses, each reopened");
   app.add_option("--save", o.save, "write left_/right_NNNNNN.png here");
   app.add_option("--save-every", o.save_every, "save every K-th pair");

@@ -3,7 +3,7 @@
 //
 //   agvslam-v4l2-feed --dataset DIR --left /dev/videoL --right /dev/videoR [--rate-hz R] [--frames A:B]
 //                     [--manifest FILE] [--wait-file FILE] [--wait-timeout-s S] [--start-delay-s S]
-//                     [--stamp queue|write] [--json OUT]
+//                     [--stamp queue|write] [--format grey|mjpeg] [--jpeg-quality Q] [--json OUT]
 //   agvslam-v4l2-feed --dataset DIR --side-by-side --left /dev/videoN ...     one device, left|right side by side
 //   agvslam-v4l2-feed --dataset DIR --frames A:B --manifest FILE --dry-run    only write the manifest
 //
@@ -22,6 +22,8 @@
 #include <nlohmann/json.hpp>
 #include <spdlog/sinks/stdout_color_sinks.h>
 #include <spdlog/spdlog.h>
+#include <opencv2/imgcodecs.hpp>
+#include <opencv2/imgproc.hpp>
 #include <thread>
 #include <ctime>
 
@@ -37,7 +39,8 @@ namespace v4l2 = agvslam::drivers::v4l2;
 using agvslam::InputError;
 
 struct Options {
-  std::string dataset, left, right, frames, manifest, wait_file, json, stamp = "queue";
+  std::string dataset, left, right, frames, manifest, wait_file, json, stamp = "queue", format = "grey";
+  int jpeg_quality = 90;
   bool side_by_side = false, dry_run = false;
   double rate_hz = 0, wait_timeout_s = 60, start_delay_s = 0;
 };
@@ -75,17 +78,25 @@ int run(const Options& o) {
   parse_range(o.frames, ds->size(), a, b);
   const double rate = o.rate_hz > 0 ? o.rate_hz : ds->rate_hz();
   spdlog::info("agvslam-v4l2-feed: dataset {} ({}, {} frames, {} Hz), frames {}:{}, rate {} Hz, {} {}{}{}, manifest {}, "
-               "wait-file {} (timeout {} s), start delay {} s, stamps {}",
+               "wait-file {} (timeout {} s), start delay {} s, stamps {}, format {} (JPEG quality {})",
                ds->root(), ds->kind(), ds->size(), ds->rate_hz(), a, b, rate, o.side_by_side ? "side-by-side" : "left",
                o.left, o.side_by_side ? "" : " right ", o.side_by_side ? "" : o.right,
                o.manifest.empty() ? "-" : o.manifest, o.wait_file.empty() ? "-" : o.wait_file, o.wait_timeout_s,
-               o.start_delay_s, o.stamp);
+               o.start_delay_s, o.stamp, o.format, o.jpeg_quality);
 
   std::vector<cv::Mat> left, right;
   for (std::size_t i = a; i < b; ++i) {
     agvslam::StereoFrame f = ds->frame(i);
     left.push_back(f.left.isContinuous() ? f.left : f.left.clone());
     right.push_back(f.right.isContinuous() ? f.right : f.right.clone());
+  }
+  if (o.format == "mjpeg") {
+    // libv4lconvert decodes JPEGs whose size is a multiple of the 16x16 block (as every UVC camera's is): crop.
+    const cv::Rect roi(0, 0, left.front().cols & ~15, left.front().rows & ~15);
+    if (roi.width != left.front().cols || roi.height != left.front().rows)
+      spdlog::info("MJPEG: frames cropped to their top-left {}x{} (multiples of 16)", roi.width, roi.height);
+    for (auto& m : left) m = m(roi).clone();
+    for (auto& m : right) m = m(roi).clone();
   }
   const int w = left.front().cols, h = left.front().rows;
   if (!o.manifest.empty()) {
@@ -102,17 +113,38 @@ int run(const Options& o) {
   }
   if (o.dry_run) return 0;
 
-  const auto mode = o.stamp == "write" ? v4l2::V4l2GreyOutput::Mode::kWrite : v4l2::V4l2GreyOutput::Mode::kQueue;
-  std::unique_ptr<v4l2::V4l2GreyOutput> out_l, out_r;
+  const bool mjpeg = o.format == "mjpeg";
+  const auto pf = mjpeg ? v4l2::PixelFormat::kMjpeg : v4l2::PixelFormat::kGrey;
+  // MJPEG: every frame encoded once before playing (3 channels of the grey value, OpenCV's 4:2:0 sampling).
+  std::vector<std::vector<uint8_t>> jpeg_l, jpeg_r;
+  if (mjpeg) {
+    cv::Mat bgr, both;
+    for (std::size_t k = 0; k < left.size(); ++k) {
+      auto encode = [&](const cv::Mat& g, std::vector<std::vector<uint8_t>>& out) {
+        cv::cvtColor(g, bgr, cv::COLOR_GRAY2BGR);
+        out.emplace_back();
+        cv::imencode(".jpg", bgr, out.back(), {cv::IMWRITE_JPEG_QUALITY, o.jpeg_quality});
+      };
+      if (o.side_by_side) {
+        cv::hconcat(left[k], right[k], both);
+        encode(both, jpeg_l);
+      } else {
+        encode(left[k], jpeg_l);
+        encode(right[k], jpeg_r);
+      }
+    }
+  }
+  const auto mode = o.stamp == "write" ? v4l2::V4l2Output::Mode::kWrite : v4l2::V4l2Output::Mode::kQueue;
+  std::unique_ptr<v4l2::V4l2Output> out_l, out_r;
   if (o.side_by_side) {
-    out_l = std::make_unique<v4l2::V4l2GreyOutput>(o.left, 2 * w, h, mode);
+    out_l = std::make_unique<v4l2::V4l2Output>(o.left, 2 * w, h, mode, pf);
   } else {
-    out_l = std::make_unique<v4l2::V4l2GreyOutput>(o.left, w, h, mode);
-    out_r = std::make_unique<v4l2::V4l2GreyOutput>(o.right, w, h, mode);
+    out_l = std::make_unique<v4l2::V4l2Output>(o.left, w, h, mode, pf);
+    out_r = std::make_unique<v4l2::V4l2Output>(o.right, w, h, mode, pf);
   }
   out_l->announce();
   if (out_r) out_r->announce();
-  spdlog::info("devices announced {}x{} GREY", o.side_by_side ? 2 * w : w, h);
+  spdlog::info("devices announced {}x{} {}", o.side_by_side ? 2 * w : w, h, mjpeg ? "MJPEG" : "GREY");
 
   if (!o.wait_file.empty()) {
     const auto until = std::chrono::steady_clock::now() + std::chrono::duration<double>(o.wait_timeout_s);
@@ -137,7 +169,10 @@ int run(const Options& o) {
     clock_nanosleep(CLOCK_MONOTONIC, TIMER_ABSTIME, &ts, nullptr);
     const int64_t start = v4l2::monotonic_now_ns();
     if (start - due > period_ns / 2) ++late;
-    if (o.side_by_side) {
+    if (mjpeg) {
+      out_l->write_bytes(jpeg_l[k].data(), jpeg_l[k].size(), due);
+      if (out_r) out_r->write_bytes(jpeg_r[k].data(), jpeg_r[k].size(), due);
+    } else if (o.side_by_side) {
       cv::hconcat(left[k], right[k], sbs);
       out_l->write(sbs, due);
     } else {
@@ -181,6 +216,9 @@ int main(int argc, char** argv) {
                  "queue: both eyes carry the scheduled capture time (mmap + VIDIOC_QBUF); write: write(), the driver "
                  "stamps and numbers each eye when written")
       ->check(CLI::IsMember({"queue", "write"}));
+  app.add_option("--format", o.format, "grey (default) or mjpeg (each frame a JPEG, as UVC cameras send)")
+      ->check(CLI::IsMember({"grey", "mjpeg"}));
+  app.add_option("--jpeg-quality", o.jpeg_quality, "JPEG quality for --format mjpeg (1..100)")->check(CLI::Range(1, 100));
   app.add_option("--json", o.json, "write statistics as JSON");
   try {
     app.parse(argc, argv);

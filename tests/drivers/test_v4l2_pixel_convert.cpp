@@ -48,3 +48,37 @@ TEST(PixelConvert, HashIsStrideIndependentAndSeesOnePixel) {
   changed.at<uint8_t>(0, 0) ^= 0x80;
   EXPECT_NE(v4l2::image_hash(changed), v4l2::image_hash(copy));
 }
+
+// MJPEG through libv4lconvert without a device, on a real KITTI image encoded as a UVC camera would (3-channel
+// JPEG of the grey values).
+#include <opencv2/imgcodecs.hpp>
+#include <opencv2/imgproc.hpp>
+
+#include "common/test_data.h"
+
+TEST(MjpegDecoder, DecodesARealFrameWithinJpegLoss) {
+  AGVSLAM_REQUIRE_SHARED(path, "data/kitti06_f000-050/image_l/000000.png");
+  const cv::Mat full = cv::imread(path, cv::IMREAD_GRAYSCALE);
+  ASSERT_FALSE(full.empty());
+  const cv::Mat grey = full(cv::Rect(0, 0, full.cols & ~15, full.rows & ~15)).clone();
+  cv::Mat bgr;
+  cv::cvtColor(grey, bgr, cv::COLOR_GRAY2BGR);
+  std::vector<uint8_t> jpeg;
+  ASSERT_TRUE(cv::imencode(".jpg", bgr, jpeg, {cv::IMWRITE_JPEG_QUALITY, 90}));
+  v4l2::MjpegDecoder dec;
+  cv::Mat out(grey.size(), CV_8UC1);
+  ASSERT_TRUE(dec.decode(jpeg.data(), jpeg.size(), out)) << dec.error();
+  const double mean_abs = cv::norm(out, grey, cv::NORM_L1) / static_cast<double>(grey.total());
+  EXPECT_LT(mean_abs, 2.0);
+  // A different frame is far off: the check the VM case relies on can tell frames apart.
+  const cv::Mat other = cv::imread(path.substr(0, path.size() - 10) + "000005.png", cv::IMREAD_GRAYSCALE);
+  ASSERT_FALSE(other.empty());
+  EXPECT_GT(cv::norm(out, other(cv::Rect(0, 0, out.cols, out.rows)), cv::NORM_L1) / static_cast<double>(grey.total()), 10.0);
+  // Garbage is refused with a message, not a crash.
+  std::vector<uint8_t> broken(jpeg.begin(), jpeg.begin() + 200);
+  EXPECT_FALSE(dec.decode(broken.data(), broken.size(), out));
+  EXPECT_FALSE(dec.error().empty());
+  // A size libv4lconvert cannot decode is refused too.
+  cv::Mat odd(grey.rows, grey.cols - 2, CV_8UC1);
+  EXPECT_FALSE(dec.decode(jpeg.data(), jpeg.size(), odd));
+}

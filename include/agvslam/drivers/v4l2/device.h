@@ -5,6 +5,7 @@
 
 #include <cstddef>
 #include <cstdint>
+#include <memory>
 #include <stdexcept>
 #include <string>
 #include <vector>
@@ -12,8 +13,7 @@
 #include <opencv2/core.hpp>
 
 #include "agvslam/drivers/v4l2/camera_config.h"
-
-struct v4lconvert_data;
+#include "agvslam/drivers/v4l2/pixel_convert.h"
 
 namespace agvslam::drivers::v4l2 {
 
@@ -91,26 +91,31 @@ class V4l2Device {
     std::size_t length = 0;
   };
   std::vector<Buffer> buffers_;
-  v4lconvert_data* convert_ = nullptr;  // MJPEG only
-  std::vector<uint8_t> yuv420_;         // MJPEG decode target
+  std::unique_ptr<MjpegDecoder> mjpeg_;  // MJPEG only
+  uint64_t decode_failures_ = 0;
 };
 
-// A V4L2 output device (e.g. a v4l2loopback node) that takes GREY frames. Used by agvslam-v4l2-feed. Two ways:
+// A V4L2 output device (e.g. a v4l2loopback node) that takes GREY frames, or MJPEG frames (one JPEG per buffer,
+// bytesused = its size, as a UVC camera delivers them). Used by agvslam-v4l2-feed. Two ways:
 //   kQueue  mmap output buffers queued with VIDIOC_QBUF carrying the caller's time stamp (CLOCK_MONOTONIC), so
 //           both eyes of a pair can carry one capture time, as from a hardware-triggered stereo camera
 //   kWrite  write(): the receiving driver stamps each frame when it is written and numbers it (v4l2loopback sets
 //           the buffer sequence only on this path), as two free-running cameras
-class V4l2GreyOutput {
+class V4l2Output {
  public:
   enum class Mode { kQueue, kWrite };
-  V4l2GreyOutput(const std::string& path, int width, int height, Mode mode = Mode::kQueue);  // throws V4l2Error
-  ~V4l2GreyOutput();
-  V4l2GreyOutput(const V4l2GreyOutput&) = delete;
-  V4l2GreyOutput& operator=(const V4l2GreyOutput&) = delete;
+  // format: PixelFormat::kGrey or kMjpeg. Throws V4l2Error.
+  V4l2Output(const std::string& path, int width, int height, Mode mode = Mode::kQueue,
+                 PixelFormat format = PixelFormat::kGrey);
+  ~V4l2Output();
+  V4l2Output(const V4l2Output&) = delete;
+  V4l2Output& operator=(const V4l2Output&) = delete;
   // Announces the format to readers without writing a frame (v4l2loopback: VIDIOC_STREAMON on the output).
   void announce();
   // One frame, CV_8UC1 of the configured size; t_ns is its capture time (kQueue; kWrite ignores it).
   void write(const cv::Mat& grey, int64_t t_ns);
+  // One frame as bytes (a JPEG for kMjpeg; width * height bytes for kGrey).
+  void write_bytes(const uint8_t* data, std::size_t size, int64_t t_ns);
   const std::string& path() const { return path_; }
 
  private:
@@ -119,6 +124,7 @@ class V4l2GreyOutput {
   int fd_ = -1;
   int width_, height_;
   Mode mode_;
+  PixelFormat format_;
   struct Buffer {
     void* start = nullptr;
     std::size_t length = 0;
