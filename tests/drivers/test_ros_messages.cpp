@@ -2,7 +2,10 @@
 
 #include <gtest/gtest.h>
 
+#include <fstream>
+#include <map>
 #include <nlohmann/json.hpp>
+#include <sstream>
 
 #include "agvslam/core/error.h"
 #include "agvslam/drivers/dds/dds_config.h"
@@ -84,6 +87,48 @@ TEST(RosMessages, TypeNamesFollowRmwCyclonedds) {
   EXPECT_STREQ(agvslam_msgs_msg_dds__Status__desc.m_typename, kStatusTypeName);
   EXPECT_STREQ(kPoseTypeName, "geometry_msgs::msg::dds_::PoseWithCovarianceStamped_");
   EXPECT_STREQ(kOdomTypeName, "nav_msgs::msg::dds_::Odometry_");
+}
+
+// The ROS 2 package shipped for the status type (drivers/dds/ros2/agvslam_msgs/msg/Status.msg) must declare the
+// same fields, in the same order, with the same types, as the IDL the daemon publishes with.
+TEST(RosMessages, StatusMsgMatchesTheIdl) {
+  const std::string root = AGVSLAM_SOURCE_DIR;
+  std::ifstream msg(root + "/drivers/dds/ros2/agvslam_msgs/msg/Status.msg");
+  std::ifstream idl(root + "/drivers/dds/idl/agvslam_ros2.idl");
+  ASSERT_TRUE(msg && idl);
+  const std::map<std::string, std::string> ros_to_idl = {{"std_msgs/Header", "std_msgs::msg::dds_::Header_"},
+                                                         {"uint8", "uint8"},
+                                                         {"uint64", "unsigned long long"},
+                                                         {"float32", "float"}};
+  std::vector<std::string> from_msg, from_idl;
+  std::string line;
+  while (std::getline(msg, line)) {
+    line = line.substr(0, line.find('#'));
+    if (line.find_first_not_of(" \t") == std::string::npos || line.find('=') != std::string::npos) continue;
+    std::istringstream in(line);
+    std::string type, name;
+    in >> type >> name;
+    ASSERT_TRUE(ros_to_idl.count(type)) << type;
+    from_msg.push_back(ros_to_idl.at(type) + " " + name);
+  }
+  bool inside = false;
+  while (std::getline(idl, line)) {
+    if (line.find("struct Status_") != std::string::npos) {
+      inside = true;
+      continue;
+    }
+    if (!inside) continue;
+    if (line.find("};") != std::string::npos) break;
+    line = line.substr(0, line.find("//"));
+    const auto semi = line.find(';');
+    if (semi == std::string::npos) continue;
+    line = line.substr(0, semi);
+    const auto b = line.find_first_not_of(' ');
+    const auto sp = line.find_last_of(' ');
+    from_idl.push_back(line.substr(b, sp - b) + " " + line.substr(sp + 1));
+  }
+  EXPECT_EQ(from_msg, from_idl);
+  EXPECT_EQ(from_idl.size(), 8U);
 }
 
 TEST(DdsConfig, ValidatesDescribesAndBuildsCycloneXml) {
