@@ -6,8 +6,10 @@
 #include <cmath>
 #include <cstdio>
 #include <cstdlib>
+#include <opencv2/imgproc.hpp>
 
 #include "agvslam/core/error.h"
+#include "sad_kernels.h"
 
 namespace agvslam::features {
 
@@ -18,16 +20,6 @@ double ms_since(Clock::time_point t0) { return std::chrono::duration<double, std
 // Block-matching window: 2 h + 1 rows, 2 h + 1 columns rounded up to a multiple of 4.
 int window_cols(int half_window) { return (2 * half_window + 1 + 3) / 4 * 4; }
 
-// SAD of a window_rows x window_cols block of `a` at (xa, y0) and `b` at (xb, y0) (top-left corners).
-int32_t block_sad(const cv::Mat& a, int xa, const cv::Mat& b, int xb, int y0, int rows, int cols) {
-  int32_t sum = 0;
-  for (int r = 0; r < rows; ++r) {
-    const uint8_t* pa = a.ptr<uint8_t>(y0 + r) + xa;
-    const uint8_t* pb = b.ptr<uint8_t>(y0 + r) + xb;
-    for (int c = 0; c < cols; ++c) sum += std::abs(static_cast<int32_t>(pa[c]) - static_cast<int32_t>(pb[c]));
-  }
-  return sum;
-}
 }  // namespace
 
 const char* to_string(StereoMethod method) {
@@ -89,7 +81,28 @@ StereoMatcher::StereoMatcher(const StereoMatcherConfig& config, const StereoCali
     throw InputError("StereoMatcher", "calibration", "expected fx > 0 and baseline_m > 0");
   }
   min_disparity_px_ = calibration_.bf() / config_.max_depth_m;
+  sad_kernel_ = detail::best_sad_kernel(&sad_kernel_name_);
   max_disparity_px_ = calibration_.bf() / config_.min_depth_m;
+}
+
+// The right pyramid, resampled exactly like the left one, in buffers with kRightPadding spare bytes after each
+// row (the SAD kernels read past the last candidate).
+void StereoMatcher::build_right_pyramid(const OrbExtractor& left, const cv::Mat& right) {
+  const std::size_t n = left.pyramid().size();
+  right_padded_.resize(n);
+  right_pyramid_.resize(n);
+  for (std::size_t level = 0; level < n; ++level) {
+    const cv::Size sz = left.pyramid()[level].size();
+    cv::Mat& buffer = right_padded_[level];
+    buffer.create(sz.height, sz.width + kRightPadding, CV_8UC1);
+    cv::Mat roi = buffer(cv::Rect(0, 0, sz.width, sz.height));
+    if (level == 0) {
+      right.copyTo(roi);
+    } else {
+      cv::resize(right_pyramid_[level - 1], roi, sz, 0, 0, cv::INTER_LINEAR_EXACT);
+    }
+    right_pyramid_[level] = roi;
+  }
 }
 
 const std::vector<cv::Mat>& StereoMatcher::right_pyramid() const {
@@ -107,7 +120,7 @@ void StereoMatcher::match(const OrbExtractor& left, const KeypointSet& keypoints
 
   Clock::time_point t = Clock::now();
   if (config_.method == StereoMethod::kBlockMatching) {
-    left.build_pyramid(right, right_pyramid_);
+    build_right_pyramid(left, right);
   } else {
     if (!right_extractor_) right_extractor_.emplace(left.config());
     right_extractor_->extract(right, cv::Mat(), right_keypoints_);
@@ -141,8 +154,11 @@ void StereoMatcher::match_blocks(const OrbExtractor& left, const KeypointSet& ke
   const std::vector<cv::Mat>& left_pyramid = left.pyramid();
   const int h = config_.sad_half_window;
   const int rows = 2 * h + 1;
-  const int cols = window_cols(h);
+  const int blocks = (2 * h + 1 + 3) / 4;
+  const int cols = 4 * blocks;
   const double bf = calibration_.bf();
+  const uint8_t* left_rows[16];
+  const uint8_t* right_rows[16];
   for (std::size_t i = 0; i < keypoints.keypoints.size(); ++i) {
     const cv::KeyPoint& kp = keypoints.keypoints[i];
     const int level = kp.octave;
@@ -151,40 +167,44 @@ void StereoMatcher::match_blocks(const OrbExtractor& left, const KeypointSet& ke
     const cv::Mat& li = left_pyramid[static_cast<std::size_t>(level)];
     const cv::Mat& ri = right_pyramid_[static_cast<std::size_t>(level)];
     const int xl = cvRound(kp.pt.x * inv), yl = cvRound(kp.pt.y * inv);
-    if (yl - h < 0 || yl + h >= li.rows || xl - h < 0 || xl - h + cols > li.cols) continue;
+    // The kernels read 16 bytes of each left window row.
+    if (yl - h < 0 || yl + h >= li.rows || xl - h < 0 || xl - h + 16 > li.cols) continue;
     // Candidate disparities at this level: from -1 (so that points beyond max_depth find their true minimum, near
-    // 0, instead of a false one inside the range; they are refused below) to one beyond the largest disparity,
-    // limited so that the right window stays inside the image.
-    int d_lo = -1;
-    int d_hi = static_cast<int>(std::ceil(max_disparity_px_ * inv)) + 1;
-    d_hi = std::min(d_hi, xl - h);
-    d_lo = std::max(d_lo, xl - h + cols - ri.cols);
-    if (d_hi - d_lo < 2) continue;
-    const int m = d_hi - d_lo + 1;
-    costs_.resize(static_cast<std::size_t>(m));
-    const int y0 = yl - h, xa = xl - h;
-    for (int k = 0; k < m; ++k) {
-      costs_[static_cast<std::size_t>(k)] = block_sad(li, xa, ri, xa - (d_lo + k), y0, rows, cols);
+    // 0, instead of a false one inside the range; they are refused below) to one beyond the largest disparity.
+    // Candidate k is the right window starting at column xr_lo + k (disparity xl - h - xr_lo - k), all inside
+    // the image.
+    const int d_hi = static_cast<int>(std::ceil(max_disparity_px_ * inv)) + 1;
+    const int x0 = xl - h;
+    const int xr_lo = std::max(0, x0 - d_hi);
+    const int xr_hi = std::min(ri.cols - cols, x0 + 1);
+    const int n = xr_hi - xr_lo + 1;
+    if (n < 3) continue;
+    const int y0 = yl - h;
+    for (int r = 0; r < rows; ++r) {
+      left_rows[r] = li.ptr<uint8_t>(y0 + r) + x0;
+      right_rows[r] = ri.ptr<uint8_t>(y0 + r) + xr_lo;
     }
+    const std::size_t padded = static_cast<std::size_t>((n + 15) / 16 * 16);
+    if (costs_.size() < padded) costs_.resize(padded);
+    uint16_t* c = costs_.data();
+    sad_kernel_(left_rows, right_rows, rows, blocks, n, c);
     int best = 0;
-    for (int k = 1; k < m; ++k) {
-      if (costs_[static_cast<std::size_t>(k)] < costs_[static_cast<std::size_t>(best)]) best = k;
+    for (int k = 1; k < n; ++k) {
+      if (c[k] < c[best]) best = k;
     }
-    if (best == 0 || best == m - 1) continue;  // minimum at the end of the range: outside [min, max] depth
-    int32_t second = INT32_MAX;
-    for (int k = 0; k < m; ++k) {
-      if (std::abs(k - best) >= 2) second = std::min(second, costs_[static_cast<std::size_t>(k)]);
-    }
-    const int32_t c0 = costs_[static_cast<std::size_t>(best)];
-    if (second != INT32_MAX && static_cast<double>(c0) > config_.uniqueness_ratio * static_cast<double>(second)) {
-      continue;
-    }
-    const double c_minus = costs_[static_cast<std::size_t>(best) - 1];
-    const double c_plus = costs_[static_cast<std::size_t>(best) + 1];
+    if (best == 0 || best == n - 1) continue;  // minimum at the end of the range or of the image
+    uint16_t second = UINT16_MAX;
+    for (int k = 0; k < best - 1; ++k) second = std::min(second, c[k]);
+    for (int k = best + 2; k < n; ++k) second = std::min(second, c[k]);
+    const int32_t c0 = c[best];
+    if (static_cast<double>(c0) > config_.uniqueness_ratio * static_cast<double>(second)) continue;
+    // Parabola through the costs around the minimum (in right-image columns).
+    const double c_minus = c[best - 1];
+    const double c_plus = c[best + 1];
     const double denom = c_minus + c_plus - 2.0 * c0;
     const double delta = denom > 0 ? (c_minus - c_plus) / (2.0 * denom) : 0.0;
-    const double d_level = d_lo + best + delta;
-    const float disparity = kp.pt.x - s * static_cast<float>(xl - d_level);
+    const double xr_window = xr_lo + best + delta;
+    const float disparity = kp.pt.x - s * static_cast<float>(xr_window + h);
     float u_right = -1, depth = -1;
     if (!accept(kp.pt.x, disparity, min_disparity_px_, max_disparity_px_, bf, u_right, depth)) continue;
     out.u_right_px[i] = u_right;
@@ -253,7 +273,7 @@ void StereoMatcher::match_descriptors(const OrbExtractor& left, const KeypointSe
     if (su_r0 - search - w < 0 || su_r0 + search + w >= ri.cols) continue;
     const int center_l = li.at<uint8_t>(sv_l, su_l);
     int best_sad = INT_MAX, best_inc = 0;
-    costs_.assign(static_cast<std::size_t>(2 * search + 1), 0);
+    descriptor_costs_.assign(static_cast<std::size_t>(2 * search + 1), 0);
     for (int inc = -search; inc <= search; ++inc) {
       const int xr = su_r0 + inc;
       const int center_r = ri.at<uint8_t>(sv_l, xr);
@@ -267,12 +287,12 @@ void StereoMatcher::match_descriptors(const OrbExtractor& left, const KeypointSe
         best_sad = sad;
         best_inc = inc;
       }
-      costs_[static_cast<std::size_t>(search + inc)] = sad;
+      descriptor_costs_[static_cast<std::size_t>(search + inc)] = sad;
     }
     if (best_inc == -search || best_inc == search) continue;
-    const float dist1 = static_cast<float>(costs_[static_cast<std::size_t>(search + best_inc - 1)]);
-    const float dist2 = static_cast<float>(costs_[static_cast<std::size_t>(search + best_inc)]);
-    const float dist3 = static_cast<float>(costs_[static_cast<std::size_t>(search + best_inc + 1)]);
+    const float dist1 = static_cast<float>(descriptor_costs_[static_cast<std::size_t>(search + best_inc - 1)]);
+    const float dist2 = static_cast<float>(descriptor_costs_[static_cast<std::size_t>(search + best_inc)]);
+    const float dist3 = static_cast<float>(descriptor_costs_[static_cast<std::size_t>(search + best_inc + 1)]);
     const float delta_r = (dist1 - dist3) / (2.0f * (dist1 + dist3 - 2.0f * dist2));
     if (delta_r < -1 || delta_r > 1) continue;
     const float best_u_r = s * (static_cast<float>(su_r0 + best_inc) + delta_r);

@@ -67,20 +67,29 @@ class StereoMatcher {
   // Wall time of the last call (ms): right pyramid (or right ORB extraction), matching.
   double t_right_ms() const { return t_right_ms_; }
   double t_match_ms() const { return t_match_ms_; }
+  // The SAD kernel block matching uses on this CPU ("avx2", "sse41" or "scalar").
+  const char* sad_kernel_name() const { return sad_kernel_name_; }
 
  private:
   void match_blocks(const OrbExtractor& left, const KeypointSet& keypoints, StereoDepth& out);
   void match_descriptors(const OrbExtractor& left, const KeypointSet& keypoints, StereoDepth& out);
   void reject_outliers(StereoDepth& out);
+  void build_right_pyramid(const OrbExtractor& left, const cv::Mat& right);
+  using SadKernel = void (*)(const uint8_t* const*, const uint8_t* const*, int, int, int, uint16_t*);
+  static constexpr int kRightPadding = 64;
 
   StereoMatcherConfig config_;
   StereoCalibration calibration_;
   double min_disparity_px_ = 0, max_disparity_px_ = 0;  // level 0, from max_depth_m / min_depth_m
-  std::vector<cv::Mat> right_pyramid_;
+  std::vector<cv::Mat> right_pyramid_;                   // views into right_padded_
+  std::vector<cv::Mat> right_padded_;
+  SadKernel sad_kernel_ = nullptr;                       // best for this CPU (SSE4.1 / AVX2 / scalar)
+  const char* sad_kernel_name_ = "scalar";
   std::optional<OrbExtractor> right_extractor_;          // kDescriptor only
   KeypointSet right_keypoints_;
   std::vector<std::vector<int>> row_index_;              // kDescriptor: right keypoints per level-0 row
-  std::vector<int32_t> costs_;                           // per candidate disparity of one keypoint
+  std::vector<uint16_t> costs_;                          // SAD per candidate of one keypoint (block matching)
+  std::vector<int32_t> descriptor_costs_;                // SAD per offset (descriptor method)
   std::vector<std::pair<int32_t, int>> match_costs_;     // (SAD, keypoint) of the accepted matches
   double t_right_ms_ = 0, t_match_ms_ = 0;
 };
