@@ -1,109 +1,91 @@
 // V4L2 camera path on the host (no device): per-frame cost of converting what a camera delivers into grey
 // (GREY copy, YUYV luma, MJPEG through libv4lconvert), the side-by-side split, the frame hash, pairing.
-// to lo in a domain of their own. The publish -> receive latency between two processes is measured by
-// tests/drivers/dds_latency.sh (agvslam-pose-replay -> agvslam-echo under unshare -n).
 #include <benchmark/benchmark.h>
-#include <unistd.h>
 
-#include <memory>
+#include <deque>
+#include <vector>
 
-#include "agvslam/drivers/can/pose_frames.h"
-#include "agvslam/drivers/dds/publisher.h"
-#include "agvslam/drivers/pose_sample.h"
+#include <opencv2/imgcodecs.hpp>
+#include <opencv2/imgproc.hpp>
+
+#include "agvslam/drivers/v4l2/pairing.h"
+#include "agvslam/drivers/v4l2/pixel_convert.h"
+
+namespace v4l2 = agvslam::drivers::v4l2;
 
 namespace {
+constexpr int kW = 752, kH = 480;
 
-namespace drv = agvslam::drivers;
-
-void BM_DriversCanEncodeClassic(benchmark::State& state) {
-  const drv::PoseSample s = drv::synthetic_pose_sample(17, 1700000000000000000LL);
-  std::array<drv::can::CanFrameBytes, drv::can::kMaxClassicFrames> frames;
-  uint8_t counter = 0;
+void BM_V4l2GreyCopy(benchmark::State& state) {
+  std::vector<uint8_t> src(static_cast<std::size_t>(kW) * kH, 77);
+  cv::Mat grey(kH, kW, CV_8UC1);
   for (auto _ : state) {
-    const std::size_t n = drv::can::encode_classic_frames(s, counter++, drv::can::FrameLayout{}, true, true, true, frames);
-    benchmark::DoNotOptimize(n);
-    benchmark::DoNotOptimize(frames.data());
+    v4l2::grey_to_grey(src.data(), kW, grey);
+    benchmark::DoNotOptimize(grey.data);
   }
-  state.SetItemsProcessed(state.iterations());
-  state.SetLabel("5 frames per pose");
+  state.SetBytesProcessed(static_cast<int64_t>(state.iterations()) * kW * kH);
 }
-BENCHMARK(BM_DriversCanEncodeClassic);
+BENCHMARK(BM_V4l2GreyCopy)->Unit(benchmark::kMicrosecond);
 
-void BM_DriversCanEncodeFd(benchmark::State& state) {
-  const drv::PoseSample s = drv::synthetic_pose_sample(17, 1700000000000000000LL);
-  uint8_t counter = 0;
+void BM_V4l2YuyvToGrey(benchmark::State& state) {
+  std::vector<uint8_t> src(static_cast<std::size_t>(kW) * kH * 2);
+  for (std::size_t i = 0; i < src.size(); ++i) src[i] = static_cast<uint8_t>(i * 31);
+  cv::Mat grey(kH, kW, CV_8UC1);
   for (auto _ : state) {
-    auto f = drv::can::encode_fd_frame(s, counter++, drv::can::FrameLayout{});
-    benchmark::DoNotOptimize(f);
+    v4l2::yuyv_to_grey(src.data(), 2 * kW, grey);
+    benchmark::DoNotOptimize(grey.data);
   }
-  state.SetItemsProcessed(state.iterations());
+  state.SetBytesProcessed(static_cast<int64_t>(state.iterations()) * kW * kH * 2);
 }
-BENCHMARK(BM_DriversCanEncodeFd);
+BENCHMARK(BM_V4l2YuyvToGrey)->Unit(benchmark::kMicrosecond);
 
-void BM_DriversDdsFillMessages(benchmark::State& state) {
-  const drv::PoseSample s = drv::synthetic_pose_sample(17, 1700000000000000000LL);
-  const drv::dds::FrameIds frames;
-  drv::dds::PoseMsg p{};
-  drv::dds::OdomMsg o{};
-  drv::dds::StatusMsg st{};
+// MJPEG 752x480 (quality 90, OpenCV's 4:2:0) to grey with libv4lconvert: what a camera sending MJPEG costs per
+// eye. The image is smoothed noise, about as hard for the entropy decoder as a textured scene.
+void BM_V4l2MjpegToGrey(benchmark::State& state) {
+  cv::Mat grey(kH, kW, CV_8UC1), bgr;
+  cv::randu(grey, 0, 256);
+  cv::GaussianBlur(grey, grey, cv::Size(5, 5), 1.5);
+  cv::cvtColor(grey, bgr, cv::COLOR_GRAY2BGR);
+  std::vector<uint8_t> jpeg;
+  cv::imencode(".jpg", bgr, jpeg, {cv::IMWRITE_JPEG_QUALITY, 90});
+  v4l2::MjpegDecoder dec;
+  cv::Mat out(kH, kW, CV_8UC1);
   for (auto _ : state) {
-    drv::dds::fill_pose_msg(s, frames, p);
-    drv::dds::fill_odom_msg(s, frames, o);
-    drv::dds::fill_status_msg(s, frames, st);
-    benchmark::DoNotOptimize(&p);
-    benchmark::DoNotOptimize(&o);
-    benchmark::DoNotOptimize(&st);
+    if (!dec.decode(jpeg.data(), jpeg.size(), out)) state.SkipWithError(dec.error().c_str());
+    benchmark::DoNotOptimize(out.data);
   }
-  state.SetItemsProcessed(state.iterations());
+  state.counters["jpeg_kB"] = static_cast<double>(jpeg.size()) / 1024.0;
 }
-BENCHMARK(BM_DriversDdsFillMessages);
+BENCHMARK(BM_V4l2MjpegToGrey)->Unit(benchmark::kMillisecond);
 
-drv::dds::DdsConfig bench_dds_config(int offset) {
-  drv::dds::DdsConfig cfg;
-  cfg.domain_id = 20 + static_cast<int>((getpid() + offset) % 200);
-  cfg.network_interface = "lo";
-  cfg.topic_namespace = "agvslam_bench";
-  return cfg;
-}
-
-// Serialise and write pose, odom and status (no subscriber: the cost the publisher thread pays per pose).
-void BM_DriversDdsWriteNow(benchmark::State& state) {
-  std::unique_ptr<drv::dds::DdsPosePublisher> pub;
-  try {
-    pub = std::make_unique<drv::dds::DdsPosePublisher>(bench_dds_config(0), false);
-  } catch (const std::exception& e) {
-    state.SkipWithError(e.what());
-    return;
-  }
-  drv::PoseSample s = drv::synthetic_pose_sample(17, 1700000000000000000LL);
+void BM_V4l2SideBySideSplit(benchmark::State& state) {
+  cv::Mat sbs(kH, 2 * kW, CV_8UC1);
+  cv::randu(sbs, 0, 256);
+  cv::Mat l, r;
   for (auto _ : state) {
-    s.t_ns += 50000000;
-    benchmark::DoNotOptimize(pub->write_now(s));
+    v4l2::split_side_by_side(sbs, l, r);
+    benchmark::DoNotOptimize(l.data);
   }
-  state.SetItemsProcessed(state.iterations());
-  state.SetLabel("3 topics");
 }
-BENCHMARK(BM_DriversDdsWriteNow);
+BENCHMARK(BM_V4l2SideBySideSplit)->Unit(benchmark::kMicrosecond);
 
-// What the tracker's thread pays: copy into the bounded queue and wake the publisher thread.
-void BM_DriversDdsPublishEnqueue(benchmark::State& state) {
-  std::unique_ptr<drv::dds::DdsPosePublisher> pub;
-  try {
-    pub = std::make_unique<drv::dds::DdsPosePublisher>(bench_dds_config(1), true);
-  } catch (const std::exception& e) {
-    state.SkipWithError(e.what());
-    return;
-  }
-  drv::PoseSample s = drv::synthetic_pose_sample(17, 1700000000000000000LL);
+void BM_V4l2ImageHash(benchmark::State& state) {
+  cv::Mat grey(kH, kW, CV_8UC1);
+  cv::randu(grey, 0, 256);
+  for (auto _ : state) benchmark::DoNotOptimize(v4l2::image_hash(grey));
+}
+BENCHMARK(BM_V4l2ImageHash)->Unit(benchmark::kMicrosecond);
+
+void BM_V4l2PairerPerPair(benchmark::State& state) {
+  v4l2::TimestampPairer p(5000000, 4);
+  std::deque<int> released;
+  int64_t t = 0;
   for (auto _ : state) {
-    s.t_ns += 50000000;
-    benchmark::DoNotOptimize(pub->publish(s));
+    t += 50000000;
+    p.push_left({t, 0, 0}, released);
+    p.push_right({t + 1000000, 0, 1}, released);
+    benchmark::DoNotOptimize(p.pop(released));
   }
-  const auto st = pub->stats();
-  state.counters["dropped_fraction"] =
-      st.submitted > 0 ? static_cast<double>(st.dropped_queue_full) / static_cast<double>(st.submitted) : 0.0;
-  state.SetItemsProcessed(state.iterations());
 }
-BENCHMARK(BM_DriversDdsPublishEnqueue);
-
+BENCHMARK(BM_V4l2PairerPerPair);
 }  // namespace
