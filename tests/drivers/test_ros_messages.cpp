@@ -68,7 +68,8 @@ TEST(RosMessages, PoseOdomStatusCarryTheSample) {
 TEST(RosMessages, JsonUsesRosFieldNamesAndRoundTripPrecision) {
   const PoseSample s = synthetic_pose_sample(5, 1700000000000000001LL);
   OdomMsg o{};
-  fill_odom_msg(s, FrameIds{}, o);
+  const FrameIds frames;  // the message borrows its strings
+  fill_odom_msg(s, frames, o);
   const nlohmann::json j = to_json(o);
   EXPECT_EQ(j.at("header").at("stamp").at("nanosec").get<uint32_t>(), 1U);
   EXPECT_EQ(j.at("header").at("frame_id"), "map");

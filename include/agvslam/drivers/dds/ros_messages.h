@@ -35,6 +35,10 @@ int64_t from_ros_time(const builtin_interfaces_msg_dds__Time_& t);
 void fill_pose_msg(const PoseSample& s, const FrameIds& frames, PoseMsg& out);
 void fill_odom_msg(const PoseSample& s, const FrameIds& frames, OdomMsg& out);
 void fill_status_msg(const PoseSample& s, const FrameIds& frames, StatusMsg& out);
+// The messages borrow the frame names: a temporary FrameIds would leave them dangling.
+void fill_pose_msg(const PoseSample&, FrameIds&&, PoseMsg&) = delete;
+void fill_odom_msg(const PoseSample&, FrameIds&&, OdomMsg&) = delete;
+void fill_status_msg(const PoseSample&, FrameIds&&, StatusMsg&) = delete;
 
 // JSON objects with the ROS field names ({"header": {"stamp": {"sec":.., "nanosec":..}, "frame_id":..}, ...}).
 // Doubles are printed with round-trip precision, so two processes' outputs compare exactly.
