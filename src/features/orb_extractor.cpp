@@ -9,7 +9,7 @@
 #include <opencv2/imgproc.hpp>
 
 #include "agvslam/core/error.h"
-#include "orb_pattern.h"
+#include "orb_kernels.h"
 
 namespace agvslam::features {
 
@@ -133,6 +133,7 @@ OrbExtractor::OrbExtractor(const OrbExtractorConfig& config) : config_(config) {
   }
   pyramid_.resize(static_cast<std::size_t>(n));
   bordered_.resize(static_cast<std::size_t>(n));
+  resizers_.resize(static_cast<std::size_t>(n));
   blurred_.resize(static_cast<std::size_t>(n));
   level_nodes_.resize(static_cast<std::size_t>(n));
   stats_.keypoints_per_level.assign(static_cast<std::size_t>(n), 0);
@@ -168,7 +169,7 @@ void OrbExtractor::build_bordered_pyramid(const cv::Mat& image) {
     if (level == 0) {
       image.copyTo(roi);
     } else {
-      cv::resize(pyramid_[static_cast<std::size_t>(level) - 1], roi, sz, 0, 0, cv::INTER_LINEAR_EXACT);
+      resizers_[static_cast<std::size_t>(level)].resize(pyramid_[static_cast<std::size_t>(level) - 1], roi);  // == cv::resize INTER_LINEAR_EXACT
     }
     cv::copyMakeBorder(roi, ext, b, b, b, b, cv::BORDER_REFLECT_101 | cv::BORDER_ISOLATED);
     pyramid_[static_cast<std::size_t>(level)] = roi;
@@ -279,17 +280,7 @@ void OrbExtractor::compute_orientation(int level, std::size_t first, std::vector
     const Candidate& c = candidates_[static_cast<std::size_t>(kept_[k])];
     const uint8_t* center = img.ptr<uint8_t>(c.y) + c.x;
     int m_01 = 0, m_10 = 0;
-    for (int u = -kOrbHalfPatchSize; u <= kOrbHalfPatchSize; ++u) m_10 += u * center[u];
-    for (int v = 1; v <= kOrbHalfPatchSize; ++v) {
-      int v_sum = 0;
-      const int d = umax_[static_cast<std::size_t>(v)];
-      for (int u = -d; u <= d; ++u) {
-        const int val_plus = center[u + v * step], val_minus = center[u - v * step];
-        v_sum += val_plus - val_minus;
-        m_10 += u * (val_plus + val_minus);
-      }
-      m_01 += v * v_sum;
-    }
+    detail::ic_moments(center, step, umax_.data(), m_01, m_10);
     keypoints[first + k].angle = cv::fastAtan2(static_cast<float>(m_01), static_cast<float>(m_10));
   }
 }
@@ -298,33 +289,17 @@ void compute_orb_descriptors(const std::vector<cv::Mat>& blurred_pyramid, const 
                              const std::vector<cv::KeyPoint>& keypoints, cv::Mat& descriptors) {
   CV_Assert(descriptors.type() == CV_8UC1 && descriptors.cols == kOrbDescriptorBytes &&
             descriptors.rows == static_cast<int>(keypoints.size()));
-  const int8_t* const pattern0 = detail::kOrbBitPattern31;
   const float deg_to_rad = static_cast<float>(CV_PI / 180.f);
   for (std::size_t j = 0; j < keypoints.size(); ++j) {
     const cv::KeyPoint& kpt = keypoints[j];
     const cv::Mat& img = blurred_pyramid[static_cast<std::size_t>(kpt.octave)];
     const float scale = 1.f / scale_factors[static_cast<std::size_t>(kpt.octave)];
+    // OpenCV's ORB: the angle in float radians, cos and sin in double, then float.
     const float angle = kpt.angle * deg_to_rad;
     const float a = static_cast<float>(std::cos(static_cast<double>(angle)));
     const float b = static_cast<float>(std::sin(static_cast<double>(angle)));
-    const int step = static_cast<int>(img.step);
     const uint8_t* center = img.ptr<uint8_t>(cvRound(kpt.pt.y * scale)) + cvRound(kpt.pt.x * scale);
-    uint8_t* desc = descriptors.ptr<uint8_t>(static_cast<int>(j));
-    const int8_t* pattern = pattern0;
-    auto value = [&](int idx) {
-      const float px = static_cast<float>(pattern[2 * idx]), py = static_cast<float>(pattern[2 * idx + 1]);
-      const float x = px * a - py * b;
-      const float y = px * b + py * a;
-      return static_cast<int>(center[cvRound(y) * step + cvRound(x)]);
-    };
-    for (int i = 0; i < kOrbDescriptorBytes; ++i, pattern += 32) {
-      int val = 0;
-      for (int bit = 0; bit < 8; ++bit) {
-        const int t0 = value(2 * bit), t1 = value(2 * bit + 1);
-        val |= (t0 < t1 ? 1 : 0) << bit;
-      }
-      desc[i] = static_cast<uint8_t>(val);
-    }
+    detail::orb_descriptor(center, static_cast<int>(img.step), a, b, descriptors.ptr<uint8_t>(static_cast<int>(j)));
   }
 }
 

@@ -91,6 +91,7 @@ void StereoMatcher::build_right_pyramid(const OrbExtractor& left, const cv::Mat&
   const std::size_t n = left.pyramid().size();
   right_padded_.resize(n);
   right_pyramid_.resize(n);
+  right_resizers_.resize(n);
   for (std::size_t level = 0; level < n; ++level) {
     const cv::Size sz = left.pyramid()[level].size();
     cv::Mat& buffer = right_padded_[level];
@@ -99,7 +100,7 @@ void StereoMatcher::build_right_pyramid(const OrbExtractor& left, const cv::Mat&
     if (level == 0) {
       right.copyTo(roi);
     } else {
-      cv::resize(right_pyramid_[level - 1], roi, sz, 0, 0, cv::INTER_LINEAR_EXACT);
+      right_resizers_[level].resize(right_pyramid_[level - 1], roi);  // == cv::resize INTER_LINEAR_EXACT
     }
     right_pyramid_[level] = roi;
   }

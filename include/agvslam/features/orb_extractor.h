@@ -16,6 +16,7 @@
 #include <string>
 #include <vector>
 
+#include "agvslam/features/linear_resize.h"
 #include "agvslam/features/quadtree_distribution.h"
 
 namespace agvslam::features {
@@ -119,6 +120,7 @@ class OrbExtractor {
   OrbExtractorConfig config_;
   std::vector<cv::Mat> pyramid_;           // views into bordered_
   std::vector<cv::Mat> bordered_;          // each level with a kBlurBorder reflected border
+  std::vector<LinearExactResizer> resizers_;  // level l - 1 -> l
   std::vector<float> scale_factors_, inv_scale_factors_, level_sigma2_, inv_level_sigma2_;
   std::vector<int> features_per_level_;
   std::vector<int> umax_;                  // half-width of each row of the orientation disc

@@ -83,6 +83,7 @@ class StereoMatcher {
   double min_disparity_px_ = 0, max_disparity_px_ = 0;  // level 0, from max_depth_m / min_depth_m
   std::vector<cv::Mat> right_pyramid_;                   // views into right_padded_
   std::vector<cv::Mat> right_padded_;
+  std::vector<LinearExactResizer> right_resizers_;
   SadKernel sad_kernel_ = nullptr;                       // best for this CPU (SSE4.1 / AVX2 / scalar)
   const char* sad_kernel_name_ = "scalar";
   std::optional<OrbExtractor> right_extractor_;          // kDescriptor only
