@@ -105,6 +105,10 @@ uint8_t frame_crc(const CanFrameBytes& f) {
 }
 
 void put_bits_le(uint8_t* data, unsigned start_bit, unsigned length, uint64_t raw) {
+  if (start_bit % 8 == 0 && length % 8 == 0) {  // whole bytes (most signals): no bit loop
+    for (unsigned b = 0; b < length / 8; ++b) data[start_bit / 8 + b] = static_cast<uint8_t>(raw >> (8 * b));
+    return;
+  }
   for (unsigned i = 0; i < length; ++i) {
     const unsigned bit = start_bit + i;
     const auto mask = static_cast<uint8_t>(1U << (bit % 8));
@@ -118,6 +122,10 @@ void put_bits_le(uint8_t* data, unsigned start_bit, unsigned length, uint64_t ra
 
 uint64_t get_bits_le(const uint8_t* data, unsigned start_bit, unsigned length) {
   uint64_t raw = 0;
+  if (start_bit % 8 == 0 && length % 8 == 0) {
+    for (unsigned b = 0; b < length / 8; ++b) raw |= static_cast<uint64_t>(data[start_bit / 8 + b]) << (8 * b);
+    return raw;
+  }
   for (unsigned i = 0; i < length; ++i) {
     const unsigned bit = start_bit + i;
     raw |= static_cast<uint64_t>((data[bit / 8] >> (bit % 8)) & 1U) << i;
