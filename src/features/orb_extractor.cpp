@@ -9,6 +9,7 @@
 #include <opencv2/imgproc.hpp>
 
 #include "agvslam/core/error.h"
+#include "fast_kernels.h"
 #include "orb_kernels.h"
 
 namespace agvslam::features {
@@ -201,9 +202,13 @@ bool OrbExtractor::masked(float x0_px, float y0_px, int level) const {
   return bottom[xb] - bottom[xa] - top[xb] + top[xa] != 0;
 }
 
-// FAST corners of one level, outside the dilated mask, with ORB-SLAM2's per-cell retry at the lower threshold:
-// one FAST pass over the whole level at ini_fast_threshold, the corners bucketed into cells of cell_size_px, and
-// a second pass at min_fast_threshold only in the cells that got none.
+// FAST corners of one level, outside the dilated mask, with ORB-SLAM2's per-cell retry at the lower threshold.
+// ORB-SLAM2 runs cv::FAST (with non-maximum suppression) at ini_fast_threshold in cells of cell_size_px and again
+// at min_fast_threshold in the cells that got nothing. Here the FAST strength of every pixel is computed once
+// (fast_kernels.h) and both passes read it: the local maxima of the strength above min_fast_threshold are the
+// corners of the low pass, those above ini_fast_threshold the corners of the first pass (non-maximum
+// suppression at either threshold is the same test on the strength). A cell keeps its first-pass corners, or,
+// when it has none, its low-pass corners. Responses are OpenCV's FAST scores.
 void OrbExtractor::detect_level(int level) {
   candidates_.clear();
   const cv::Mat& img = pyramid_[static_cast<std::size_t>(level)];
@@ -212,62 +217,49 @@ void OrbExtractor::detect_level(int level) {
   const int max_bx = img.cols - kFastBorder;
   const int max_by = img.rows - kFastBorder;
   const int width = max_bx - min_b, height = max_by - min_b;
-  if (width < 7 || height < 7) return;
+  if (width < 9 || height < 9) return;
   const int w = config_.cell_size_px;
   const int n_cols = std::max(1, width / w), n_rows = std::max(1, height / w);
   const int w_cell = (width + n_cols - 1) / n_cols;
   const int h_cell = (height + n_rows - 1) / n_rows;
   cell_counts_.assign(static_cast<std::size_t>(n_cols) * static_cast<std::size_t>(n_rows), 0);
 
-  auto add = [&](int x, int y, float score) {
-    if (masked(static_cast<float>(x) * s, static_cast<float>(y) * s, level)) {
-      ++stats_.masked_candidates;
-      return;
-    }
-    const int cx = std::clamp((x - min_b - 3) / w_cell, 0, n_cols - 1);
-    const int cy = std::clamp((y - min_b - 3) / h_cell, 0, n_rows - 1);
-    const int cell = cy * n_cols + cx;
-    ++cell_counts_[static_cast<std::size_t>(cell)];
-    candidates_.push_back({static_cast<int16_t>(x), static_cast<int16_t>(y), static_cast<int16_t>(score),
-                           static_cast<int16_t>(cell)});
-  };
-
-  cv::FAST(img(cv::Rect(min_b, min_b, width, height)), fast_buffer_, config_.ini_fast_threshold, true);
-  for (const cv::KeyPoint& k : fast_buffer_) {
-    add(static_cast<int>(k.pt.x) + min_b, static_cast<int>(k.pt.y) + min_b, k.response);
+  // Strength where corners may lie ([min_b + 3, max_b - 3), as cv::FAST on ORB-SLAM2's area) and one pixel
+  // around them (their neighbours in the suppression).
+  strength_.create(img.rows, img.cols, CV_8UC1);
+  const int sx0 = min_b + 2, sx1 = max_bx - 2, sy0 = min_b + 2, sy1 = max_by - 2;
+  for (int y = sy0; y < sy1; ++y) {
+    detail::fast_strength_row(img.ptr<uint8_t>(y) + sx0, static_cast<int>(img.step), sx1 - sx0,
+                              strength_.ptr<uint8_t>(y) + sx0);
   }
-
-  // Cells without a corner: FAST again at the low threshold on the cell plus the 3-pixel FAST margin (ORB-SLAM2's
-  // cell rectangles, including its limits at the right and bottom border).
-  for (int i = 0; i < n_rows; ++i) {
-    const int ini_y = min_b + i * h_cell;
-    if (ini_y >= max_by - 3) continue;
-    const int max_y = std::min(ini_y + h_cell + 6, max_by);
-    for (int j = 0; j < n_cols; ++j) {
-      if (cell_counts_[static_cast<std::size_t>(i * n_cols + j)] != 0) continue;
-      const int ini_x = min_b + j * w_cell;
-      if (ini_x >= max_bx - 6) continue;
-      const int max_x = std::min(ini_x + w_cell + 6, max_bx);
-      if (max_x - ini_x < 7 || max_y - ini_y < 7) continue;
-      if (mask_active_) {
-        // Skip cells that lie entirely on dynamic pixels (nothing could be kept there).
-        const int xa = std::min(static_cast<int>(static_cast<float>(ini_x + 3) * s), mask_integral_.cols - 1);
-        const int ya = std::min(static_cast<int>(static_cast<float>(ini_y + 3) * s), mask_integral_.rows - 1);
-        const int xb = std::min(static_cast<int>(std::ceil(static_cast<float>(max_x - 3) * s)), mask_integral_.cols - 1);
-        const int yb = std::min(static_cast<int>(std::ceil(static_cast<float>(max_y - 3) * s)), mask_integral_.rows - 1);
-        const int32_t* top = mask_integral_.ptr<int32_t>(ya);
-        const int32_t* bottom = mask_integral_.ptr<int32_t>(yb);
-        const int64_t sum = static_cast<int64_t>(bottom[xb]) - bottom[xa] - top[xb] + top[xa];
-        if (xb > xa && yb > ya && sum == static_cast<int64_t>(xb - xa) * (yb - ya) * 255) continue;
+  const int low = config_.min_fast_threshold, high = config_.ini_fast_threshold;
+  const int step = static_cast<int>(strength_.step);
+  maxima_.resize(static_cast<std::size_t>(img.cols));
+  for (int y = min_b + 3; y < max_by - 3; ++y) {
+    const uint8_t* row = strength_.ptr<uint8_t>(y);
+    const int found = detail::local_maxima_row(row, step, min_b + 3, max_bx - 3, low, maxima_.data());
+    for (int i = 0; i < found; ++i) {
+      const int x = maxima_[static_cast<std::size_t>(i)];
+      if (masked(static_cast<float>(x) * s, static_cast<float>(y) * s, level)) {
+        ++stats_.masked_candidates;
+        continue;
       }
-      ++stats_.retry_cells;
-      cv::FAST(img(cv::Rect(ini_x, ini_y, max_x - ini_x, max_y - ini_y)), fast_buffer_, config_.min_fast_threshold,
-               true);
-      for (const cv::KeyPoint& k : fast_buffer_) {
-        add(static_cast<int>(k.pt.x) + ini_x, static_cast<int>(k.pt.y) + ini_y, k.response);
-      }
+      const int strength = row[x];
+      const int cx = std::clamp((x - min_b - 3) / w_cell, 0, n_cols - 1);
+      const int cy = std::clamp((y - min_b - 3) / h_cell, 0, n_rows - 1);
+      const int cell = cy * n_cols + cx;
+      if (strength > high) ++cell_counts_[static_cast<std::size_t>(cell)];
+      candidates_.push_back({static_cast<int16_t>(x), static_cast<int16_t>(y), static_cast<int16_t>(strength - 1),
+                             static_cast<int16_t>(cell)});
     }
   }
+  // Cells with first-pass corners keep only those; the others keep their low-threshold corners.
+  std::size_t kept = 0;
+  for (const Candidate& c : candidates_) {
+    if (c.score + 1 > high || cell_counts_[static_cast<std::size_t>(c.cell)] == 0) candidates_[kept++] = c;
+  }
+  candidates_.resize(kept);
+  for (int count : cell_counts_) stats_.retry_cells += count == 0;
 }
 
 // Intensity-centroid angle (degrees) of each keypoint of one level: OpenCV's / ORB-SLAM2's IC_Angle on the

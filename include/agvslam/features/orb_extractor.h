@@ -60,7 +60,7 @@ struct KeypointSet {
 struct OrbExtractorStats {
   int candidates = 0;        // FAST corners outside the mask, all levels, before the quadtree
   int masked_candidates = 0; // corners dropped because they lie within the dilated dynamic mask
-  int retry_cells = 0;       // cells that had no corner at ini_fast_threshold and were searched again
+  int retry_cells = 0;       // cells without a corner at ini_fast_threshold (they take min_fast_threshold ones)
   std::vector<int> keypoints_per_level;
   // Wall time of each stage (ms): pyramid, mask, FAST + cells, quadtree, orientation, blur, descriptors.
   double t_pyramid_ms = 0, t_mask_ms = 0, t_fast_ms = 0, t_distribute_ms = 0, t_orientation_ms = 0, t_blur_ms = 0,
@@ -127,7 +127,8 @@ class OrbExtractor {
   std::vector<cv::Mat> blurred_;           // Gaussian 7x7, sigma 2 of each level (the descriptor image)
   cv::Mat mask_integral_;                  // integral image of (dynamic_mask != 0), level 0; empty = no mask
   bool mask_active_ = false;
-  std::vector<cv::KeyPoint> fast_buffer_;  // cv::FAST output
+  cv::Mat strength_;                       // FAST strength of the current level
+  std::vector<int> maxima_;                // columns of the local maxima of one strength row
   std::vector<Candidate> candidates_;      // corners of the current level
   std::vector<int> cell_counts_;
   std::vector<QuadtreeCandidate> quadtree_input_;
