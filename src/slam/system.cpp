@@ -82,6 +82,7 @@ void System::wait_for_mapping() { mapper_->wait_until_idle(); }
 
 TrackResult System::track_stereo(int64_t t_ns, const cv::Mat& left, const cv::Mat& right, const cv::Mat& dynamic_mask) {
   const auto t_start = Clock::now();
+  const double cpu_start = thread_cpu_ms();
   TrackResult r;
   r.t_ns = t_ns;
   r.frame_id = next_frame_id_++;
@@ -127,6 +128,7 @@ TrackResult System::track_stereo(int64_t t_ns, const cv::Mat& left, const cv::Ma
   }
   r.mapping_queue = mapper_->queue_length();
   r.timings.total_ms = ms_since(t_start);
+  r.timings.total_cpu_ms = thread_cpu_ms() - cpu_start;
   return r;
 }
 

@@ -3,6 +3,7 @@
 #include <algorithm>
 #include <chrono>
 #include <cmath>
+#include <ctime>
 #include <unordered_map>
 
 #include "agvslam/slam/local_mapping.h"
@@ -18,6 +19,12 @@ double ms_since(Clock::time_point t0) {
 }
 
 }  // namespace
+
+double thread_cpu_ms() {
+  timespec ts{};
+  clock_gettime(CLOCK_THREAD_CPUTIME_ID, &ts);
+  return static_cast<double>(ts.tv_sec) * 1e3 + static_cast<double>(ts.tv_nsec) * 1e-6;
+}
 
 const char* to_string(TrackingState state) {
   switch (state) {

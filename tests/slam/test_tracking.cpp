@@ -124,6 +124,25 @@ TEST(Tracking, RevisitingTheSameAreaKeepsMemoryBounded) {
   EXPECT_LE(rig.map.map_point_count(), points_at_120 * 12 / 10);
 }
 
+TEST(LocalMapping, CullsRedundantKeyframes) {
+  // A keyframe on every frame (forced) of a camera creeping 1 cm per frame: almost every keyframe sees what its
+  // neighbours see, and the mapper removes them (90 % of the close points seen by 3 others).
+  SlamConfig c;
+  c.tracking.keyframe_max_frames = 1;
+  c.tracking.keyframe_close_tracked = 1000000;
+  c.tracking.keyframe_close_untracked = -1;
+  Rig rig(c);
+  const test::World world = test::make_world(4000, 15, 1.5, 4.5);  // all close (< 40 baselines)
+  for (int k = 0; k < 40; ++k) ASSERT_EQ(rig.step(world, test::path_pose(k, 0.01), static_cast<uint64_t>(k)), TrackingState::kOk);
+  const LocalMappingStats s = rig.mapper->stats();
+  EXPECT_GE(s.keyframes_processed, 35u);
+  EXPECT_GT(s.keyframes_culled, s.keyframes_processed / 2);
+  std::lock_guard<std::mutex> lock(rig.map.mutex());
+  EXPECT_EQ(rig.map.keyframe_count(), s.keyframes_processed - s.keyframes_culled);
+  // Poses of frames whose reference keyframe was culled still resolve through the removed keyframes' parents.
+  for (const KeyFramePtr& kf : rig.map.keyframes()) EXPECT_FALSE(kf->bad());
+}
+
 TEST(Tracking, EmptyFrameIsLostNotGarbage) {
   SlamConfig c;
   c.tracking.reset_max_keyframes = 0;

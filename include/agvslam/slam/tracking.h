@@ -37,7 +37,12 @@ struct TrackTimings {
   double local_map_ms = 0;     // local map update, projection search and motion-only BA
   double keyframe_ms = 0;      // keyframe decision and creation
   double total_ms = 0;         // all of track_stereo
+  double total_cpu_ms = 0;     // CPU time of the calling thread in track_stereo (what one core spends, whatever
+                               // else runs on the machine)
 };
+
+// CPU time consumed by the calling thread so far (ms).
+double thread_cpu_ms();
 
 struct TrackingCounts {
   int features = 0;            // keypoints in the frame
