@@ -357,8 +357,10 @@ void OrbExtractor::extract(const cv::Mat& image, const cv::Mat& dynamic_mask, Ke
   t = Clock::now();
   for (int level = 0; level < config_.n_levels; ++level) {
     if (stats_.keypoints_per_level[static_cast<std::size_t>(level)] == 0) continue;
-    cv::GaussianBlur(pyramid_[static_cast<std::size_t>(level)], blurred_[static_cast<std::size_t>(level)],
-                     cv::Size(7, 7), 2, 2, cv::BORDER_REFLECT_101);
+    const cv::Mat& src = pyramid_[static_cast<std::size_t>(level)];
+    cv::Mat& dst = blurred_[static_cast<std::size_t>(level)];
+    dst.create(src.size(), CV_8UC1);
+    if (!blur_.blur(src, dst)) cv::GaussianBlur(src, dst, cv::Size(7, 7), 2, 2, cv::BORDER_REFLECT_101);
   }
   stats_.t_blur_ms = ms_since(t);
 

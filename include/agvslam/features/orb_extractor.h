@@ -17,6 +17,7 @@
 #include <vector>
 
 #include "agvslam/features/linear_resize.h"
+#include "agvslam/features/orb_blur.h"
 #include "agvslam/features/quadtree_distribution.h"
 
 namespace agvslam::features {
@@ -125,6 +126,7 @@ class OrbExtractor {
   std::vector<int> features_per_level_;
   std::vector<int> umax_;                  // half-width of each row of the orientation disc
   std::vector<cv::Mat> blurred_;           // Gaussian 7x7, sigma 2 of each level (the descriptor image)
+  OrbBlur blur_;
   cv::Mat mask_integral_;                  // integral image of (dynamic_mask != 0), level 0; empty = no mask
   bool mask_active_ = false;
   cv::Mat strength_;                       // FAST strength of the current level
