@@ -34,7 +34,8 @@ FeaturesConfig load_features_config(const std::string& path) {
   }
 
   in.check_keys("stereo_matching", {"method", "min_depth_m", "max_depth_m", "sad_half_window", "sad_search_px",
-                                    "max_descriptor_distance", "uniqueness_ratio", "outlier_factor"});
+                                    "max_descriptor_distance", "uniqueness_ratio", "min_curvature",
+                                    "outlier_factor"});
   StereoMatcherConfig& s = c.stereo_matching;
   std::string method = to_string(s.method);
   in.read("stereo_matching", "method", method, "block_matching or descriptor");
@@ -47,6 +48,7 @@ FeaturesConfig load_features_config(const std::string& path) {
   in.read("stereo_matching", "sad_search_px", s.sad_search_px, "an integer (px)");
   in.read("stereo_matching", "max_descriptor_distance", s.max_descriptor_distance, "an integer (bits)");
   in.read("stereo_matching", "uniqueness_ratio", s.uniqueness_ratio, "a number");
+  in.read("stereo_matching", "min_curvature", s.min_curvature, "a number (grey levels)");
   in.read("stereo_matching", "outlier_factor", s.outlier_factor, "a number");
   c.validate(path);
   return c;

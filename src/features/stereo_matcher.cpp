@@ -53,6 +53,7 @@ void StereoMatcherConfig::validate(const std::string& source) const {
   require(max_descriptor_distance >= 0 && max_descriptor_distance <= 256, "max_descriptor_distance",
           "expected an integer in [0, 256] bits");
   require(uniqueness_ratio > 0 && uniqueness_ratio <= 1, "uniqueness_ratio", "expected a number in (0, 1]");
+  require(min_curvature >= 0 && min_curvature <= 50, "min_curvature", "expected a number in [0, 50] grey levels");
   require(outlier_factor >= 1 && outlier_factor <= 100, "outlier_factor", "expected a number in [1, 100]");
 }
 
@@ -61,9 +62,9 @@ std::string StereoMatcherConfig::describe() const {
   if (method == StereoMethod::kBlockMatching) {
     std::snprintf(buf, sizeof(buf),
                   "stereo_matching: block_matching at the keypoint's level, SAD %dx%d, depth [%.2f, %.1f] m, "
-                  "uniqueness %.2f, outliers > %.2f x median SAD",
+                  "uniqueness %.2f, min curvature %.2f DN, outliers > %.2f x median SAD",
                   window_cols(sad_half_window), 2 * sad_half_window + 1, min_depth_m, max_depth_m, uniqueness_ratio,
-                  outlier_factor);
+                  min_curvature, outlier_factor);
   } else {
     std::snprintf(buf, sizeof(buf),
                   "stereo_matching: descriptor (ORB-SLAM2), Hamming < %d, SAD %dx%d +-%d px, depth [%.2f, %.1f] m, "
@@ -203,6 +204,9 @@ void StereoMatcher::match_blocks(const OrbExtractor& left, const KeypointSet& ke
     const double c_minus = c[best - 1];
     const double c_plus = c[best + 1];
     const double denom = c_minus + c_plus - 2.0 * c0;
+    // Texture along the row: how much the SAD rises one pixel off the minimum, per window pixel (grey levels).
+    // Windows of sensor noise on a blank surface rise little and match anywhere.
+    if (0.5 * denom < config_.min_curvature * rows * cols) continue;
     const double delta = denom > 0 ? (c_minus - c_plus) / (2.0 * denom) : 0.0;
     const double xr_window = xr_lo + best + delta;
     const float disparity = kp.pt.x - s * static_cast<float>(xr_window + h);

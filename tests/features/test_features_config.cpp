@@ -62,6 +62,7 @@ TEST(FeaturesConfig, ShippedParamsFileLoadsAndMatchesTheDefaults) {
   EXPECT_EQ(c.stereo_matching.sad_search_px, d.stereo_matching.sad_search_px);
   EXPECT_EQ(c.stereo_matching.max_descriptor_distance, d.stereo_matching.max_descriptor_distance);
   EXPECT_DOUBLE_EQ(c.stereo_matching.uniqueness_ratio, d.stereo_matching.uniqueness_ratio);
+  EXPECT_DOUBLE_EQ(c.stereo_matching.min_curvature, d.stereo_matching.min_curvature);
   EXPECT_DOUBLE_EQ(c.stereo_matching.outlier_factor, d.stereo_matching.outlier_factor);
   const auto lines = c.describe();
   ASSERT_EQ(lines.size(), 2u);
@@ -99,6 +100,7 @@ TEST(FeaturesConfig, ErrorsNameTheFileAndTheField) {
   expect_error("stereo_matching:\n  sad_half_window: 9\n", "stereo_matching.sad_half_window");
   expect_error("stereo_matching:\n  uniqueness_ratio: 1.5\n", "stereo_matching.uniqueness_ratio");
   expect_error("stereo_matching:\n  outlier_factor: 0.5\n", "stereo_matching.outlier_factor");
+  expect_error("stereo_matching:\n  min_curvature: -1\n", "stereo_matching.min_curvature");
   expect_error("stereo_matching:\n  max_descriptor_distance: 300\n", "stereo_matching.max_descriptor_distance");
   expect_error("stereo_matching:\n  sad_search: 5\n", "stereo_matching.sad_search");
 }

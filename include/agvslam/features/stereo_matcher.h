@@ -22,7 +22,8 @@ namespace agvslam::features {
 // How the right-image match of a left keypoint is found.
 //   kBlockMatching: SAD of the keypoint's window at its pyramid level along the same row of the right image's
 //     pyramid over the whole disparity range [bf / max_depth, bf / min_depth], best and second-best minimum
-//     (uniqueness test), parabola through the costs around the best. No right-image features are extracted.
+//     (uniqueness test), a minimum curvature of the costs at the best (texture along the row), parabola through
+//     the costs around the best. No right-image features are extracted.
 //     The window is 2 h + 1 rows by 2 h + 1 columns rounded up to a multiple of 4 (12 for h = 5), starting h
 //     columns left of the keypoint, so that the SAD runs four columns at a time.
 //   kDescriptor: ORB-SLAM2's ComputeStereoMatches: ORB features of the right image, best descriptor within the
@@ -41,6 +42,7 @@ struct StereoMatcherConfig {
   int max_descriptor_distance = 75;  // ORB-SLAM2's (TH_HIGH + TH_LOW) / 2
   StereoMethod method = StereoMethod::kBlockMatching;
   double uniqueness_ratio = 0.9;   // block matching: best SAD <= ratio * best SAD >= 2 px (level px) away
+  double min_curvature = 1.0;      // block matching: SAD rise 1 px off the minimum, per window pixel (grey levels)
   double outlier_factor = 2.1;     // reject SAD > factor * median SAD of the image's matches (ORB-SLAM2 1.5 * 1.4)
 
   void validate(const std::string& source) const;
