@@ -190,5 +190,19 @@ TEST(VocabularyFileSave, UnwritablePathIsAnInputErrorAndEmptyVocabularyCannotBeS
   EXPECT_THROW(Vocabulary().serialize(), std::logic_error);
 }
 
+TEST(ShippedVocabulary, LoadsWithTheDocumentedShapeAndIdentity) {
+  // params/vocabulary/README.md documents these; saved maps record the identity. Retraining changes it: update the
+  // README and this test together.
+  const std::string path = std::string(AGVSLAM_SOURCE_DIR) + "/params/vocabulary/agvslam_orb_k10l5.bin";
+  const Vocabulary v = Vocabulary::load(path);
+  EXPECT_EQ(v.branching(), 10);
+  EXPECT_EQ(v.levels(), 5);
+  EXPECT_EQ(v.word_count(), 99822u);
+  EXPECT_EQ(v.identity_hex(), "44994e8fd623b9be");
+  EXPECT_EQ(v.training_images(), 4392u);
+  EXPECT_NE(v.description().find("seeds 900..960"), std::string::npos);
+  EXPECT_LT(fs::file_size(path), 10u * 1024 * 1024);
+}
+
 }  // namespace
 }  // namespace agvslam::place
