@@ -5,6 +5,7 @@
 #include <opencv2/imgproc.hpp>
 
 #include "agvslam/eval/association.h"
+#include "agvslam/features/features_config.h"
 #include "agvslam/eval/metrics.h"
 #include "agvslam/io/dataset.h"
 #include "agvslam/slam/system.h"
@@ -31,7 +32,12 @@ double ate_rmse(const io::StereoDataset& d, const Trajectory& est) {
 TEST(System, KittiExcerptTracksEveryFrameAccurately) {
   AGVSLAM_REQUIRE_SHARED(root, "data/kitti06_f000-050");
   const auto d = io::open_dataset(root);
-  System slam(d->calibration(), inline_config(*d));
+  SystemConfig c = inline_config(*d);
+  // ORB-SLAM2's KITTI settings (2000 features, descriptor stereo matching).
+  const features::FeaturesConfig f = features::load_features_config(AGVSLAM_SOURCE_DIR "/params/features_kitti.yaml");
+  c.orb = f.orb;
+  c.stereo = f.stereo_matching;
+  System slam(d->calibration(), c);
   int ok = 0;
   for (std::size_t i = 0; i < d->size(); ++i) {
     const StereoFrame f = d->frame(i);
