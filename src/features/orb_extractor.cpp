@@ -184,7 +184,8 @@ void OrbExtractor::prepare_mask(const cv::Mat& dynamic_mask, cv::Size image_size
   if (cv::countNonZero(dynamic_mask) == 0) return;
   // Integral image of the mask (255 per dynamic pixel): a keypoint is refused when the square of half-side
   // dilation * scale around it holds any dynamic pixel (the square contains the disc of that radius).
-  cv::integral(dynamic_mask != 0, mask_integral_, CV_32S);
+  cv::threshold(dynamic_mask, mask_binary_, 0, 255, cv::THRESH_BINARY);  // any non-zero value is dynamic
+  cv::integral(mask_binary_, mask_integral_, CV_32S);
   mask_active_ = true;
 }
 

@@ -341,6 +341,9 @@ TEST(OrbExtractor, NoKeypointInsideTheDilatedDynamicMask) {
   expect_mask_respected(img, mask, c, "dilation 0");
   c.mask_dilation_px = 12;
   expect_mask_respected(img, mask, c, "dilation 12");
+  c.mask_dilation_px = 5;
+  const cv::Mat ones = mask / 255;  // any non-zero value marks a dynamic pixel
+  expect_mask_respected(img, ones, c, "mask of ones");
 }
 
 TEST(OrbExtractor, SimulatorGroundTruthMaskOfAWalkingPerson) {

@@ -127,6 +127,7 @@ class OrbExtractor {
   std::vector<int> umax_;                  // half-width of each row of the orientation disc
   std::vector<cv::Mat> blurred_;           // Gaussian 7x7, sigma 2 of each level (the descriptor image)
   OrbBlur blur_;
+  cv::Mat mask_binary_;                    // dynamic_mask as 0 / 255
   cv::Mat mask_integral_;                  // integral image of (dynamic_mask != 0), level 0; empty = no mask
   bool mask_active_ = false;
   cv::Mat strength_;                       // FAST strength of the current level
