@@ -58,6 +58,32 @@ TEST(System, KittiExcerptTracksEveryFrameAccurately) {
   EXPECT_GE(slam.map().keyframe_count(), 3u);
 }
 
+TEST(System, KittiExcerptWithTheMappingThread) {
+  // The same with local mapping in its own thread (as on the vehicle; the order of events varies from run to run).
+  AGVSLAM_REQUIRE_SHARED(root, "data/kitti06_f000-050");
+  const auto d = io::open_dataset(root);
+  SystemConfig c = inline_config(*d);
+  c.threaded_mapping = true;
+  const features::FeaturesConfig f = features::load_features_config(AGVSLAM_SOURCE_DIR "/params/features_kitti.yaml");
+  c.orb = f.orb;
+  c.stereo = f.stereo_matching;
+  System slam(d->calibration(), c);
+  std::size_t max_queue = 0;
+  for (std::size_t i = 0; i < d->size(); ++i) {
+    const StereoFrame fr = d->frame(i);
+    const TrackResult r = slam.track_stereo(fr.t_ns, fr.left, fr.right, {});
+    EXPECT_EQ(r.state, TrackingState::kOk) << "frame " << i;
+    max_queue = std::max(max_queue, r.mapping_queue);
+  }
+  slam.wait_for_mapping();
+  EXPECT_LE(max_queue, static_cast<std::size_t>(c.slam.mapping.queue_capacity));
+  const double ate = ate_rmse(*d, slam.trajectory());
+  EXPECT_GE(ate, 0);
+  EXPECT_LT(ate, 0.054);
+  EXPECT_GT(slam.mapping_stats().keyframes_processed, 3u);
+  slam.shutdown();
+}
+
 TEST(System, EurocStillCameraDoesNotDrift) {
   AGVSLAM_REQUIRE_SHARED(root, "data/euroc_v101_f000-094");
   const auto d = io::open_dataset(root);
