@@ -227,7 +227,10 @@ void OrbExtractor::detect_level(int level) {
 
   // Strength where corners may lie ([min_b + 3, max_b - 3), as cv::FAST on ORB-SLAM2's area) and one pixel
   // around them (their neighbours in the suppression).
-  strength_.create(img.rows, img.cols, CV_8UC1);
+  // One buffer for all levels (sized by the largest), viewed at this level's size: no reallocation per level.
+  const std::size_t needed = img.total();
+  if (strength_buffer_.size() < needed) strength_buffer_.resize(needed);
+  strength_ = cv::Mat(img.rows, img.cols, CV_8UC1, strength_buffer_.data());
   const int sx0 = min_b + 2, sx1 = max_bx - 2, sy0 = min_b + 2, sy1 = max_by - 2;
   for (int y = sy0; y < sy1; ++y) {
     detail::fast_strength_row(img.ptr<uint8_t>(y) + sx0, static_cast<int>(img.step), sx1 - sx0,

@@ -130,7 +130,8 @@ class OrbExtractor {
   cv::Mat mask_binary_;                    // dynamic_mask as 0 / 255
   cv::Mat mask_integral_;                  // integral image of (dynamic_mask != 0), level 0; empty = no mask
   bool mask_active_ = false;
-  cv::Mat strength_;                       // FAST strength of the current level
+  cv::Mat strength_;                       // FAST strength of the current level (a view of strength_buffer_)
+  std::vector<uint8_t> strength_buffer_;
   std::vector<int> maxima_;                // columns of the local maxima of one strength row
   std::vector<Candidate> candidates_;      // corners of the current level
   std::vector<int> cell_counts_;
