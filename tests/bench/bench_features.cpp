@@ -179,7 +179,13 @@ void BM_FeaturesStereoMatch(benchmark::State& state) {
   state.counters["match_ms"] = match / n;
   state.SetLabel(std::string(pair_name(static_cast<int>(state.range(0)))) + " " + to_string(config.method));
 }
-BENCHMARK(BM_FeaturesStereoMatch)->Args({0, 0})->Args({1, 0})->Args({0, 1})->Unit(benchmark::kMillisecond);
+BENCHMARK(BM_FeaturesStereoMatch)
+    ->Args({0, 0})
+    ->Args({1, 0})
+    ->Args({2, 0})
+    ->Args({0, 1})
+    ->Args({2, 1})
+    ->Unit(benchmark::kMillisecond);
 
 // The tracking thread's feature stage per frame: extraction + stereo depth (block matching).
 void BM_FeaturesExtractAndStereo(benchmark::State& state) {
