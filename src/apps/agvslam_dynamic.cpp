@@ -137,6 +137,25 @@ cv::Mat points_panel(const cv::Mat& left, const dyn::DetectorResult& r) {
 cv::Mat superpixel_panel(const cv::Mat& left, const dyn::DetectorResult& r) {
   cv::Mat panel = grey_to_bgr(left);
   for (const auto& roi : r.rois) {
+    if (roi.labels.empty() && !roi.outline.empty()) {
+      // mask_mode disparity: the ROI's disparity (grey: none) with the object's outline in red.
+      const cv::Rect area = roi.roi & cv::Rect(cv::Point(0, 0), panel.size());
+      cv::Mat disp = disparity_panel(roi.disparity_px, std::max(8.0, 2.0 * roi.mean_disparity_px));
+      disp.setTo(cv::Scalar(90, 90, 90), roi.disparity_px <= 0);
+      cv::addWeighted(panel(area), 0.4, disp(cv::Rect(area.tl() - roi.roi.tl(), area.size())), 0.6, 0, panel(area));
+      // Red: a dynamic region; orange: an outline the checks dropped (its verdict is written above the ROI).
+      const bool kept = roi.outline_verdict == dyn::OutlineVerdict::kKept;
+      std::vector<std::vector<cv::Point>> contours;
+      cv::findContours(roi.outline.clone(), contours, cv::RETR_LIST, cv::CHAIN_APPROX_NONE, roi.roi.tl());
+      cv::drawContours(panel, contours, -1, kept ? cv::Scalar(0, 0, 255) : cv::Scalar(0, 140, 255), 1);
+      if (!kept) {
+        cv::putText(panel, dyn::to_string(roi.outline_verdict), roi.roi.tl() + cv::Point(2, -4), cv::FONT_HERSHEY_SIMPLEX,
+                    0.4, cv::Scalar(0, 140, 255), 1, cv::LINE_AA);
+      }
+      for (int k : roi.points) cv::circle(panel, r.points[static_cast<std::size_t>(k)].cur_px, 2, cv::Scalar(255, 255, 255), cv::FILLED);
+      cv::rectangle(panel, roi.roi, cv::Scalar(0, 220, 255), 1);
+      continue;
+    }
     if (roi.labels.empty()) continue;
     std::map<std::pair<int, int>, dyn::BoundaryType> types;
     for (const auto& b : roi.boundaries) types[{b.i, b.j}] = b.type;
@@ -209,7 +228,9 @@ cv::Mat compose_overlay(const cv::Mat& left, const cv::Mat& right, const dyn::De
   cv::Mat d = regions_panel(left, r, gt_mask);
   label(a, "(a) SGBM disparity (whole frame, for display)");
   label(b, "(b) tracks: green static, red dynamic; yellow: dynamic ROIs");
-  label(c, "(c) red occlusion, blue hinge; tint: green static, magenta moved");
+  label(c, r.rois.empty() || !r.rois.front().labels.empty()
+               ? "(c) red occlusion, blue hinge; tint: green static, magenta moved"
+               : "(c) ROI disparity; outline: red region, orange dropped");
   label(d, gt_mask.empty() ? "(d) dynamic mask and regions (red)"
                            : "(d) mask: green correct, red false, blue missed");
   cv::Mat top, bottom, all;
@@ -236,10 +257,82 @@ struct StageSeries {
 
 std::vector<std::pair<std::string, double>> stage_values(const dyn::StageTimings& t) {
   return {{"pyramid", t.pyramid_ms},       {"tracking", t.tracking_ms},     {"point_disparity", t.point_disparity_ms},
-          {"epipolar", t.epipolar_ms},     {"depth_test", t.depth_test_ms}, {"densify", t.densify_ms},
+          {"epipolar", t.epipolar_ms},     {"depth_test", t.depth_test_ms}, {"multiframe", t.multiframe_ms}, {"densify", t.densify_ms},
           {"grouping", t.grouping_ms},     {"roi_disparity", t.roi_disparity_ms}, {"slic", t.slic_ms},
           {"planes", t.planes_ms},         {"boundaries", t.boundaries_ms}, {"regions", t.regions_ms},
           {"features", t.features_ms},     {"total", t.total_ms}};
+}
+
+// Per ground-truth object of a frame (moving or not): its visible moving pixels, the tracked and dynamic points on
+// it, how much of it the ROIs and the mask cover, and the IoU of the detection matched to it (0 = missed). This
+// tells at which stage an object was lost (no dynamic points, no ROI, or a poor outline).
+nlohmann::json object_diagnostics(const std::vector<agvslam::io::SceneObject>* objects, const cv::Mat& gt_mask,
+                                  const dyn::DetectorResult& r, const eval::FrameDetectionScore& f) {
+  nlohmann::json out = nlohmann::json::array();
+  if (objects == nullptr) return out;
+  const cv::Rect frame_rect(cv::Point(0, 0), gt_mask.size());
+  for (const auto& obj : *objects) {
+    const cv::Rect box = obj.box & frame_rect;
+    int pixels = 0, in_mask = 0, in_roi = 0, tracked = 0, dynamic = 0;
+    for (int y = box.y; y < box.br().y; ++y) {
+      const uint8_t* g = gt_mask.ptr<uint8_t>(y);
+      const uint8_t* d = r.mask.image.ptr<uint8_t>(y);
+      for (int x = box.x; x < box.br().x; ++x) {
+        if (!g[x]) continue;
+        ++pixels;
+        in_mask += d[x] ? 1 : 0;
+        for (const auto& roi : r.rois) {
+          if (roi.roi.contains(cv::Point(x, y))) {
+            ++in_roi;
+            break;
+          }
+        }
+      }
+    }
+    for (const auto& p : r.points) {
+      if (!p.tracked) continue;
+      const cv::Point q(cvRound(p.cur_px.x), cvRound(p.cur_px.y));
+      if (!box.contains(q) || (obj.moving && !gt_mask.at<uint8_t>(q))) continue;
+      ++tracked;
+      dynamic += p.dynamic ? 1 : 0;
+    }
+    double iou = 0;
+    for (const auto& d : f.detections) {
+      if (d.matched_object_id == obj.id) iou = d.iou;
+    }
+    out.push_back({{"id", obj.id}, {"class", obj.object_class}, {"moving", obj.moving}, {"pixels", pixels},
+                   {"in_mask", in_mask}, {"in_roi", in_roi}, {"tracked_points", tracked}, {"dynamic_points", dynamic},
+                   {"iou", iou}});
+  }
+  return out;
+}
+
+// Per detected object: its box and size, the object it matched (-1 none) and how many of its pixels lie on
+// moving ground truth (a false positive on a moving object is a split or merged outline, elsewhere a false alarm).
+nlohmann::json detection_diagnostics(const eval::FrameDetectionScore& f, const cv::Mat& instances, const cv::Mat& gt_mask) {
+  nlohmann::json out = nlohmann::json::array();
+  for (const auto& d : f.detections) {
+    // Instances are numbered in the order score_detection_instances lists them (increasing label), so the
+    // detection's label is the one most of its box's instance pixels carry.
+    std::map<int, int> count;
+    for (int y = d.box.y; y < d.box.br().y; ++y)
+      for (int x = d.box.x; x < d.box.br().x; ++x)
+        if (const int k = instances.at<uint8_t>(y, x)) ++count[k];
+    int label = 0, best = -1;
+    for (const auto& [k, c] : count) {
+      if (c > best) {
+        best = c;
+        label = k;
+      }
+    }
+    int on_moving = 0;
+    for (int y = d.box.y; y < d.box.br().y; ++y)
+      for (int x = d.box.x; x < d.box.br().x; ++x)
+        on_moving += instances.at<uint8_t>(y, x) == label && gt_mask.at<uint8_t>(y, x) ? 1 : 0;
+    out.push_back({{"box", {d.box.x, d.box.y, d.box.width, d.box.height}}, {"pixels", d.pixels},
+                   {"matched", d.matched_object_id}, {"iou", d.iou}, {"ignored", d.ignored}, {"on_moving", on_moving}});
+  }
+  return out;
 }
 
 std::string fmt(double v, const char* format = "%.4f") {
@@ -308,10 +401,39 @@ int run(const Options& o) {
       frames_with_regions += n_regions > 0 ? 1 : 0;
       jf["regions"] = n_regions;
       jf["dynamic_points"] = result.dynamic_point_count();
+      {
+        int tracked = 0, epi = 0, depth = 0, multi = 0;
+        for (const auto& p : result.points) {
+          tracked += p.tracked ? 1 : 0;
+          epi += p.dynamic_epipolar ? 1 : 0;
+          depth += p.dynamic_depth ? 1 : 0;
+          multi += p.dynamic_multiframe ? 1 : 0;
+        }
+        jf["points"] = {{"tracked", tracked}, {"epipolar", epi}, {"depth", depth}, {"multiframe", multi}};
+        jf["multiframe"] = {{"valid", result.multiframe.valid}, {"frames_back", result.multiframe.frames_back},
+                            {"translation_m", result.multiframe.translation_m}, {"candidates", result.multiframe.candidates}, {"flagged", result.multiframe.flagged}, {"confirmed", result.multiframe.confirmed},
+                            {"a_reproj_px", result.multiframe.test.a_reproj_used_px},
+                            {"a_disp_px", result.multiframe.test.a_disp_used_px}};
+      }
       jf["mask_pixels"] = result.mask.pixel_count();
       jf["total_ms"] = result.timings.total_ms;
       if (result.ground_plane.valid) {
         jf["ground_plane"] = {result.ground_plane.a, result.ground_plane.b, result.ground_plane.c};
+      }
+      {
+        nlohmann::json jr = nlohmann::json::array();
+        for (const auto& roi : result.rois) {
+          if (roi.outline.empty()) continue;
+          const int px = cv::countNonZero(roi.outline);
+          const int on_gt = gt_mask.empty() ? -1 : cv::countNonZero(roi.outline & gt_mask(roi.roi));
+          jr.push_back({{"roi", {roi.roi.x, roi.roi.y, roi.roi.width, roi.roi.height}}, {"pixels", px}, {"on_gt", on_gt},
+                        {"points", roi.points.size()}, {"tracked_inside", roi.outline_stats.tracked_inside},
+                        {"dynamic_inside", roi.outline_stats.dynamic_inside}, {"d", roi.mean_disparity_px},
+                        {"motion", roi.outline_motion.apparent_motion_px},
+                        {"motion_multiframe", roi.outline_motion_multiframe.apparent_motion_px},
+                        {"verdict", dyn::to_string(roi.outline_verdict)}});
+        }
+        jf["rois"] = jr;
       }
       if (!gt_mask.empty()) {
         std::vector<eval::GroundTruthObject> gt_objects;
@@ -327,6 +449,8 @@ int run(const Options& o) {
         jf["fp"] = f.false_positives;
         jf["fn"] = f.false_negatives;
         jf["iou"] = f.matched_iou;
+        jf["objects"] = object_diagnostics(it == objects.end() ? nullptr : &it->second, gt_mask, result, f);
+        jf["detections"] = detection_diagnostics(f, result.mask.instances, gt_mask);
       }
     }
     per_frame.push_back(jf);

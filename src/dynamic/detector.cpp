@@ -32,6 +32,7 @@ void DetectorOptions::validate(const std::string& source) const {
   require(densify_max_points >= 0 && densify_max_points <= 1000, "densify_max_points", "expected an integer in [0, 1000]");
   require(densify_min_distance_px >= 0 && densify_min_distance_px <= 100, "densify_min_distance_px",
           "expected a number in [0, 100] px");
+  require(extend_to_height_m >= 0 && extend_to_height_m <= 20, "extend_to_height_m", "expected a number in [0, 20] m");
   require(roi_disparity_margin_px >= 0 && roi_disparity_margin_px <= 1024, "roi_disparity_margin_px",
           "expected a number in [0, 1024] px (a large value searches the whole configured range)");
 }
@@ -42,14 +43,15 @@ std::string DetectorOptions::describe() const {
     std::snprintf(densify_text, sizeof(densify_text), "<= %d points within %.0f + %.2f d px, %.0f px apart",
                   densify_max_points, densify_radius_px, densify_radius_disparity_factor, densify_min_distance_px);
   }
-  char buf[420];
+  char buf[480];
   std::snprintf(buf, sizeof(buf),
                 "detector: epipolar test %s, depth test %s, disparity %s, <= %d ROIs searched up to max point "
-                "disparity + %.1f px at scale %.1f, ROIs extended to the floor %s, side-by-side pieces split %s, mask "
-                "dilation %d px, densification %s",
+                "disparity + %.1f px at scale %.1f, ROIs extended to the floor %s and %.2f m above it, side-by-side "
+                "pieces split %s, mask dilation %d px, densification %s",
                 use_epipolar_test ? "on" : "off", use_depth_test ? "on" : "off",
                 full_frame_disparity ? "whole frame (debug)" : "points + ROIs", max_rois, roi_disparity_margin_px,
-                roi_scale, extend_to_floor ? "on" : "off", split_side_by_side ? "on" : "off", mask_dilation_px, densify_text);
+                roi_scale, extend_to_floor ? "on" : "off", extend_to_height_m, split_side_by_side ? "on" : "off",
+                mask_dilation_px, densify_text);
   return buf;
 }
 
@@ -58,30 +60,43 @@ void DynamicDetectorConfig::validate(const std::string& source) const {
   tracking.validate(source);
   epipolar.validate(source);
   depth_test.validate(source);
+  multiframe.validate(source);
   grouping.validate(source);
   slic.validate(source);
   planes.validate(source);
   boundaries.validate(source);
   regions.validate(source);
+  outline.validate(source);
   photometric.validate(source);
   detector.validate(source);
 }
 
 std::vector<std::string> DynamicDetectorConfig::describe() const {
-  return {features.describe(), tracking.describe(),   epipolar.describe(), depth_test.describe(),
+  return {features.describe(), tracking.describe(),   epipolar.describe(), depth_test.describe(), multiframe.describe(),
           grouping.describe(), slic.describe(),       planes.describe(),   boundaries.describe(),
-          regions.describe(),  photometric.describe(), detector.describe()};
+          regions.describe(),  outline.describe(),     photometric.describe(), detector.describe()};
 }
 
 std::string StageTimings::describe() const {
   char buf[400];
   std::snprintf(buf, sizeof(buf),
                 "total %.2f ms: pyramid %.2f, tracking %.2f, point disparity %.2f, epipolar %.2f, depth test %.2f, "
-                "densify %.2f, grouping %.2f, ROI disparity %.2f, SLIC %.2f, planes %.2f, boundaries %.2f, regions %.2f, "
+                "multi-frame %.2f, densify %.2f, grouping %.2f, ROI disparity %.2f, SLIC %.2f, planes %.2f, boundaries %.2f, regions %.2f, "
                 "features %.2f",
-                total_ms, pyramid_ms, tracking_ms, point_disparity_ms, epipolar_ms, depth_test_ms, densify_ms, grouping_ms,
+                total_ms, pyramid_ms, tracking_ms, point_disparity_ms, epipolar_ms, depth_test_ms, multiframe_ms, densify_ms, grouping_ms,
                 roi_disparity_ms, slic_ms, planes_ms, boundaries_ms, regions_ms, features_ms);
   return buf;
+}
+
+std::string to_string(OutlineVerdict verdict) {
+  switch (verdict) {
+    case OutlineVerdict::kKept: return "kept";
+    case OutlineVerdict::kNoSeed: return "no seed";
+    case OutlineVerdict::kTooSmall: return "too small";
+    case OutlineVerdict::kMostlyStaticTracks: return "mostly static tracks";
+    case OutlineVerdict::kMovesWithBackground: return "moves with the background";
+  }
+  return "unknown";
 }
 
 int DetectorResult::dynamic_point_count() const {
@@ -99,6 +114,8 @@ DynamicDetector::DynamicDetector(const StereoCalibration& calibration, const Dyn
       tracker_(config.tracking),
       epipolar_(config.epipolar),
       depth_test_(config.depth_test),
+      multiframe_(config.multiframe),
+      history_(config.multiframe.max_frames + 1),
       slic_(config.slic),
       slic_half_([&] {
         SlicConfig half = config.slic;
@@ -106,7 +123,8 @@ DynamicDetector::DynamicDetector(const StereoCalibration& calibration, const Dyn
         return half;
       }()),
       sgbm_(stereo_config.sgbm),
-      sparse_(stereo_config.sparse) {
+      sparse_(stereo_config.sparse),
+      outliner_(config.outline) {
   config_.validate("DynamicDetectorConfig");
   stereo_config_.validate("StereoConfig");
   if (config_.detector.use_depth_test && !(calibration_.bf() > 0)) {
@@ -120,6 +138,8 @@ void DynamicDetector::reset() {
   prev_right_.release();
   prev_pts_.clear();
   prev_disparity_px_.clear();
+  history_.clear();
+  multiframe_.reset();
 }
 
 DetectorResult DynamicDetector::detect(const StereoFrame& frame) {
@@ -165,6 +185,9 @@ void DynamicDetector::detect(const StereoFrame& frame, DetectorResult& result) {
   result.ground_plane = DisparityPlane{};
   result.epipolar = EpipolarResult{};
   result.depth = DepthTestResult{};
+  result.multiframe.valid = false;
+  result.multiframe.frames_back = 0;
+  result.multiframe.test.dynamic.clear();
   result.timings = StageTimings{};
   StageTimings& tm = result.timings;
 
@@ -201,6 +224,46 @@ void DynamicDetector::detect(const StereoFrame& frame, DetectorResult& result) {
                       tracked_, result.depth);
     }
     tm.depth_test_ms = ms_since(t);
+    // The tracks' histories move to this frame; the multi-frame test compares them with an earlier frame.
+    t = Clock::now();
+    consistent_.assign(prev_pts_.size(), 0);
+    if (result.depth.valid) {
+      for (std::size_t i = 0; i < consistent_.size(); ++i) {
+        consistent_[i] = tracked_[i] && result.depth.reprojection_px[i] >= 0 && result.depth.disparity_residual_px[i] >= 0 &&
+                         !result.depth.dynamic[i];
+      }
+    }
+    history_.next_frame(cur_pts_, cur_disparity_px_, consistent_);
+    multiframe_.add_frame(result.depth.T_cur_prev, opt.use_depth_test && result.depth.valid, frame.left);
+    if (opt.use_depth_test) {
+      multiframe_.run(calibration_.left, calibration_.bf(), history_, tracked_, cur_pyramid_, config_.tracking,
+                      result.multiframe);
+    } else {
+      result.multiframe = MultiFrameResult{};
+    }
+    // Depth-edge check of the tracks only the multi-frame test flags.
+    const MultiFrameTestConfig& mf = config_.multiframe;
+    if (result.multiframe.valid && mf.edge_check_px > 0) {
+      const auto r = static_cast<float>(mf.edge_check_px);
+      const cv::Point2f offsets[4] = {{-r, 0}, {r, 0}, {0, -r}, {0, r}};
+      for (std::size_t i = 0; i < result.multiframe.test.dynamic.size(); ++i) {
+        if (!result.multiframe.test.dynamic[i] || result.depth.dynamic.empty() || result.depth.dynamic[i] ||
+            (!result.epipolar.dynamic.empty() && result.epipolar.dynamic[i])) {
+          continue;
+        }
+        const float d = cur_disparity_px_[i];
+        const double tol = mf.edge_tolerance_px + mf.edge_tolerance_rel * d;
+        bool edge = !(d > 0);
+        for (int k = 0; k < 4 && !edge; ++k) {
+          const cv::Point2f q = cur_pts_[i] + offsets[k];
+          if (q.x < 0 || q.y < 0 || q.x > static_cast<float>(size.width - 1) || q.y > static_cast<float>(size.height - 1)) continue;
+          const float dq = sparse_.match(frame.left, frame.right, q);
+          edge = dq > 0 && std::abs(dq - d) > tol;
+        }
+        if (edge) result.multiframe.test.dynamic[i] = 0;
+      }
+    }
+    tm.multiframe_ms = ms_since(t);
 
     const std::size_t n = prev_pts_.size();
     result.points.resize(n);
@@ -215,6 +278,7 @@ void DynamicDetector::detect(const StereoFrame& frame, DetectorResult& result) {
       p.prev_disparity_px = prev_disparity_px_[i];
       p.cur_disparity_px = cur_disparity_px_[i];
       p.tracked = tracked_[i] != 0;
+      p.age = history_.age(i);
       if (!p.tracked) continue;
       if (result.epipolar.valid) {
         p.d_epi_px = result.epipolar.d_epi_px[i];
@@ -226,7 +290,13 @@ void DynamicDetector::detect(const StereoFrame& frame, DetectorResult& result) {
         p.disparity_residual_px = result.depth.disparity_residual_px[i];
         p.dynamic_depth = result.depth.dynamic[i] != 0;
       }
-      p.dynamic = (opt.use_epipolar_test && p.dynamic_epipolar) || (opt.use_depth_test && p.dynamic_depth);
+      if (result.multiframe.valid) {
+        p.multiframe_px = result.multiframe.test.reprojection_px[i];
+        p.multiframe_disparity_residual_px = result.multiframe.test.disparity_residual_px[i];
+        p.dynamic_multiframe = result.multiframe.test.dynamic[i] != 0;
+      }
+      p.dynamic = (opt.use_epipolar_test && p.dynamic_epipolar) ||
+                  (opt.use_depth_test && (p.dynamic_depth || p.dynamic_multiframe));
       if (p.dynamic) {
         dyn_pts_.push_back(p.cur_px);
         dyn_disp_.push_back(p.cur_disparity_px);
@@ -273,6 +343,15 @@ void DynamicDetector::detect(const StereoFrame& frame, DetectorResult& result) {
         const int margin = config_.grouping.margin_px;
         const int bottom = std::min(size.height, static_cast<int>(std::ceil(y_floor)) + margin);
         if (bottom > seg.roi.br().y && y_floor > seg.roi.y) seg.roi.height = bottom - seg.roi.y;
+        // ... and up to the top of an object of extend_to_height_m standing there (h * d / B px above the floor).
+        if (opt.extend_to_height_m > 0 && y_floor > seg.roi.y) {
+          const double baseline_m = calibration_.bf() / calibration_.left.fx;
+          const int top = std::max(0, static_cast<int>(std::floor(y_floor - opt.extend_to_height_m * group.mean_disparity_px / baseline_m)));
+          if (top < seg.roi.y) {
+            seg.roi.height += seg.roi.y - top;
+            seg.roi.y = top;
+          }
+        }
       }
       seg.points.clear();
       group_pts_.clear();
@@ -296,6 +375,14 @@ void DynamicDetector::detect(const StereoFrame& frame, DetectorResult& result) {
                           static_cast<int>(std::ceil(max_d + opt.roi_disparity_margin_px)), opt.roi_scale);
       }
       tm.roi_disparity_ms += ms_since(t);
+
+      if (config_.regions.mask_mode == MaskMode::kDisparity) {
+        // The outline from the ROI's disparity (no SLIC, planes or boundaries).
+        t = Clock::now();
+        outline_region(frame, result, seg, next_instance);
+        tm.regions_ms += ms_since(t);
+        continue;
+      }
 
       t = Clock::now();
       if (opt.roi_scale == 1.0) {
@@ -358,17 +445,52 @@ void DynamicDetector::detect(const StereoFrame& frame, DetectorResult& result) {
     cv::compare(result.mask.instances, 0, result.mask.image, cv::CMP_GT);
   }
 
-  // Corners of this frame, tracked by the next call.
+  // The tracks that held continue into the next call (tracking.persistent); this frame's quadtree corners fill
+  // the places no track covers.
   t = Clock::now();
+  const LkTrackerConfig& trk = config_.tracking;
+  prev_pts_.clear();
+  prev_disparity_px_.clear();
+  if (result.has_previous && trk.persistent) {
+    keep_.assign(history_.size(), 0);
+    const std::size_t n = tracked_.size();
+    for (std::size_t i = 0; i < history_.size(); ++i) {
+      keep_[i] = i < n ? tracked_[i] : 1;  // beyond n: densified tracks (all tracked)
+      if (!keep_[i]) continue;
+      cv::Point2f p;
+      float d = 0;
+      history_.observation(i, 0, p, d);
+      prev_pts_.push_back(p);
+      prev_disparity_px_.push_back(opt.use_depth_test ? d : 0.0f);
+    }
+    history_.retain(keep_);
+  } else {
+    history_.clear();
+  }
+  if (!result.has_previous) multiframe_.add_frame(SE3d::Identity(), false, frame.left);
   features_.detect(frame.left, corners_);
-  prev_pts_.resize(corners_.size());
-  for (std::size_t i = 0; i < corners_.size(); ++i) prev_pts_[i] = corners_[i].pt;
+  new_pts_.clear();
+  const float min_d2 = static_cast<float>(trk.min_track_distance_px * trk.min_track_distance_px);
+  for (const Corner& c : corners_) {
+    if (static_cast<int>(prev_pts_.size() + new_pts_.size()) >= trk.max_tracks) break;
+    bool near = false;
+    for (std::size_t k = 0; k < prev_pts_.size() && !near; ++k) {
+      const cv::Point2f e = prev_pts_[k] - c.pt;
+      near = e.dot(e) < min_d2;
+    }
+    if (!near) new_pts_.push_back(c.pt);
+  }
   tm.features_ms = ms_since(t);
   t = Clock::now();
   if (opt.use_depth_test) {
-    measure_point_disparities(frame, prev_pts_, prev_disparity_px_, result.full_disparity_px);
+    measure_point_disparities(frame, new_pts_, new_disp_, result.full_disparity_px);
   } else {
-    prev_disparity_px_.assign(prev_pts_.size(), 0.0f);
+    new_disp_.assign(new_pts_.size(), 0.0f);
+  }
+  for (std::size_t i = 0; i < new_pts_.size(); ++i) {
+    prev_pts_.push_back(new_pts_[i]);
+    prev_disparity_px_.push_back(new_disp_[i]);
+    history_.add(new_pts_[i], new_disp_[i]);
   }
   tm.point_disparity_ms += ms_since(t);
 
@@ -381,6 +503,78 @@ void DynamicDetector::detect(const StereoFrame& frame, DetectorResult& result) {
   tm.total_ms = ms_since(t_start);
 }
 
+void DynamicDetector::outline_region(const StereoFrame& frame, DetectorResult& result, RoiSegmentation& seg,
+                                     int& next_instance) {
+  // Competing static seeds (outline.static_competition): confirmed static points only, those that passed the
+  // multi-frame test where it ran (its longer baseline sees the slow movers that pass the per-frame tests).
+  static_pts_.clear();
+  static_disp_.clear();
+  if (config_.outline.static_competition) {
+    for (const TrackedPoint& p : result.points) {
+      if (!p.tracked || p.dynamic || !(p.cur_disparity_px > 0)) continue;
+      if (result.multiframe.valid ? p.multiframe_px < 0 : p.reprojection_px < 0) continue;
+      if (!seg.roi.contains(cv::Point(cvRound(p.cur_px.x), cvRound(p.cur_px.y)))) continue;
+      static_pts_.push_back(p.cur_px);
+      static_disp_.push_back(p.cur_disparity_px);
+    }
+  }
+  seg.outline_stats = outliner_.outline(seg.disparity_px, seg.roi.tl(), group_pts_, group_disp_, static_pts_,
+                                        static_disp_, result.ground_plane.valid ? &result.ground_plane : nullptr,
+                                        calibration_.bf(), seg.outline);
+  seg.labels.release();
+  seg.superpixels = 0;
+  seg.planes.clear();
+  seg.boundaries.clear();
+  seg.motion.clear();
+  seg.region = DynamicRegion{};
+  seg.outline_motion = SuperpixelMotion{};
+  seg.outline_motion_multiframe = SuperpixelMotion{};
+  for (const TrackedPoint& p : result.points) {
+    if (!p.tracked) continue;
+    const cv::Point q(cvRound(p.cur_px.x) - seg.roi.x, cvRound(p.cur_px.y) - seg.roi.y);
+    if (q.x < 0 || q.y < 0 || q.x >= seg.outline.cols || q.y >= seg.outline.rows || !seg.outline.at<uint8_t>(q)) continue;
+    ++seg.outline_stats.tracked_inside;
+    seg.outline_stats.dynamic_inside += p.dynamic ? 1 : 0;
+  }
+  const OutlineStats& st = seg.outline_stats;
+  const OutlineConfig& oc = config_.outline;
+  if (st.object_pixels == 0) {
+    seg.outline_verdict = OutlineVerdict::kNoSeed;
+  } else if (st.object_pixels < oc.min_pixels) {
+    seg.outline_verdict = OutlineVerdict::kTooSmall;
+  } else if (st.tracked_inside >= oc.min_tracked_for_fraction &&
+             st.dynamic_inside < oc.min_dynamic_fraction * st.tracked_inside) {
+    seg.outline_verdict = OutlineVerdict::kMostlyStaticTracks;
+  } else {
+    seg.outline_verdict = OutlineVerdict::kKept;
+  }
+  // Photometric confirmation: an outline whose content moved as a static surface would, frame to frame and against
+  // the multi-frame reference (where there is one), is dropped.
+  const PhotometricCheckConfig& pc = config_.photometric;
+  if (seg.outline_verdict == OutlineVerdict::kKept && pc.enabled && result.depth.valid && !prev_left_.empty()) {
+    seg.outline_motion = region_motion(frame.left, prev_left_, calibration_.left, calibration_.bf(), result.depth.T_cur_prev,
+                                       seg.outline, seg.disparity_px, seg.roi.tl(), pc, pc.max_motion_px);
+    bool moves_with_background = seg.outline_motion.apparent_motion_px >= 0 && seg.outline_motion.moves_with_background;
+    if (moves_with_background && result.multiframe.valid) {
+      seg.outline_motion_multiframe =
+          region_motion(frame.left, result.multiframe.reference_left, calibration_.left, calibration_.bf(),
+                        result.multiframe.T_cur_ref, seg.outline, seg.disparity_px, seg.roi.tl(), pc,
+                        pc.multiframe_max_motion_px);
+      moves_with_background = seg.outline_motion_multiframe.apparent_motion_px >= 0 &&
+                              seg.outline_motion_multiframe.moves_with_background;
+    }
+    if (moves_with_background) seg.outline_verdict = OutlineVerdict::kMovesWithBackground;
+  }
+  if (seg.outline_verdict != OutlineVerdict::kKept) return;
+  const cv::Rect local = cv::boundingRect(seg.outline);
+  seg.region.rectangle = cv::Rect(local.tl() + seg.roi.tl(), local.size());
+  seg.region.started_points = st.object_seeds;
+  const cv::Rect rect = seg.region.rectangle & cv::Rect(cv::Point(0, 0), frame.left.size());
+  result.mask.regions.push_back(rect);
+  next_instance = label_region_objects(seg.outline(cv::Rect(rect.tl() - seg.roi.tl(), rect.size())),
+                                       config_.detector.split_side_by_side, next_instance, result.mask.instances(rect));
+}
+
 void DynamicDetector::densify(const StereoFrame& frame, DetectorResult& result) {
   const DetectorOptions& opt = config_.detector;
   // Seeds: dynamic points with strong evidence. When both tests ran, a point both flag (a track that slid
@@ -391,7 +585,7 @@ void DynamicDetector::densify(const StereoFrame& frame, DetectorResult& result) 
   seed_index_.clear();
   for (std::size_t k = 0; k < dyn_index_.size(); ++k) {
     const TrackedPoint& p = result.points[static_cast<std::size_t>(dyn_index_[k])];
-    if (both && !(p.dynamic_epipolar && p.dynamic_depth)) continue;
+    if (both && !(p.dynamic_epipolar && p.dynamic_depth) && !p.dynamic_multiframe) continue;
     seed_pts_.push_back(dyn_pts_[k]);
     seed_disp_.push_back(dyn_disp_[k]);
     seed_index_.push_back(dyn_index_[k]);
@@ -439,6 +633,7 @@ void DynamicDetector::densify(const StereoFrame& frame, DetectorResult& result) 
     const std::size_t first_new = extra_prev_.size();
     for (const cv::KeyPoint& kp : keypoints_) {
       if (static_cast<int>(extra_prev_.size() - first_new) >= opt.densify_max_points) break;
+      if (static_cast<int>(prev_pts_.size() + extra_prev_.size()) >= config_.tracking.max_tracks) break;
       const cv::Point2f p(kp.pt.x + static_cast<float>(window.x), kp.pt.y + static_cast<float>(window.y));
       bool near = false;
       for (const cv::Point2f& q : prev_pts_) {
@@ -474,6 +669,7 @@ void DynamicDetector::densify(const StereoFrame& frame, DetectorResult& result) 
     p.cur_disparity_px = extra_cur_disp_[i];
     p.tracked = true;
     p.densified = true;
+    p.age = 1;
     p.dynamic_epipolar = epipolar_.test_track(result.epipolar, p.prev_px, p.cur_px, p.cur_disparity_px, &p.d_epi_px, &p.t_epi_px);
     if (opt.use_depth_test && result.depth.valid) {
       DepthConsistencyTest::residuals(calibration_.left, calibration_.bf(), result.depth.T_cur_prev, p.prev_px,
@@ -484,6 +680,8 @@ void DynamicDetector::densify(const StereoFrame& frame, DetectorResult& result) 
     }
     p.dynamic = (opt.use_epipolar_test && p.dynamic_epipolar) || (opt.use_depth_test && p.dynamic_depth);
     result.points.push_back(p);
+    history_.add(p.cur_px, p.cur_disparity_px);
+    history_.add_earlier(1, p.prev_px, p.prev_disparity_px);
     if (p.dynamic) {
       dyn_pts_.push_back(p.cur_px);
       dyn_disp_.push_back(p.cur_disparity_px);

@@ -7,8 +7,8 @@ namespace agvslam::dynamic {
 
 DynamicDetectorConfig load_dynamic_config(const std::string& path) {
   const stereo::ParamsReader in(path);
-  in.check_sections({"features", "tracking", "epipolar", "depth_test", "grouping", "slic", "planes", "boundaries",
-                     "regions", "photometric", "detector"});
+  in.check_sections({"features", "tracking", "epipolar", "depth_test", "multiframe", "grouping", "slic", "planes", "boundaries",
+                     "regions", "outline", "photometric", "detector"});
   DynamicDetectorConfig c;
   const char* px = "a number (px)";
   const char* num = "a number";
@@ -22,13 +22,17 @@ DynamicDetectorConfig load_dynamic_config(const std::string& path) {
   in.read("features", "min_threshold", c.features.min_threshold, "an integer (grey levels)");
   in.read("features", "border_px", c.features.border_px, "an integer (px)");
 
-  in.check_keys("tracking", {"window_px", "levels", "max_iterations", "epsilon", "fb_max_error_px", "min_eigen_threshold"});
+  in.check_keys("tracking", {"window_px", "levels", "max_iterations", "epsilon", "fb_max_error_px", "min_eigen_threshold",
+                             "persistent", "min_track_distance_px", "max_tracks"});
   in.read("tracking", "window_px", c.tracking.window_px, "an integer (px)");
   in.read("tracking", "levels", c.tracking.levels, integer);
   in.read("tracking", "max_iterations", c.tracking.max_iterations, integer);
   in.read("tracking", "epsilon", c.tracking.epsilon, px);
   in.read("tracking", "fb_max_error_px", c.tracking.fb_max_error_px, px);
   in.read("tracking", "min_eigen_threshold", c.tracking.min_eigen_threshold, num);
+  in.read("tracking", "persistent", c.tracking.persistent, flag);
+  in.read("tracking", "min_track_distance_px", c.tracking.min_track_distance_px, px);
+  in.read("tracking", "max_tracks", c.tracking.max_tracks, integer);
 
   in.check_keys("epipolar", {"a_epi_px", "b_epi", "ransac_threshold_px", "ransac_confidence", "ransac_max_iterations",
                              "min_tracks", "min_parallax_px", "adaptive", "adaptive_k", "a_epi_max_px"});
@@ -59,6 +63,32 @@ DynamicDetectorConfig load_dynamic_config(const std::string& path) {
   in.read("depth_test", "adaptive", d.adaptive, flag);
   in.read("depth_test", "adaptive_k", d.adaptive_k, num);
   in.read("depth_test", "max_scale", d.max_scale, num);
+
+  in.check_keys("multiframe", {"enabled", "max_frames", "min_frames", "min_translation_m", "max_rotation_deg",
+                               "min_points", "min_disparity_px", "ransac_reprojection_px", "a_reproj_px", "b_reproj",
+                               "a_disp_px", "b_disp", "adaptive_k", "max_scale", "verify_levels", "verify_fb_px",
+                               "verify_max_shift_px", "edge_check_px", "edge_tolerance_px", "edge_tolerance_rel"});
+  MultiFrameTestConfig& m = c.multiframe;
+  in.read("multiframe", "enabled", m.enabled, flag);
+  in.read("multiframe", "max_frames", m.max_frames, integer);
+  in.read("multiframe", "min_frames", m.min_frames, integer);
+  in.read("multiframe", "min_translation_m", m.min_translation_m, "a number (m)");
+  in.read("multiframe", "max_rotation_deg", m.max_rotation_deg, "a number (deg)");
+  in.read("multiframe", "min_points", m.min_points, integer);
+  in.read("multiframe", "min_disparity_px", m.min_disparity_px, px);
+  in.read("multiframe", "ransac_reprojection_px", m.ransac_reprojection_px, px);
+  in.read("multiframe", "a_reproj_px", m.a_reproj_px, px);
+  in.read("multiframe", "b_reproj", m.b_reproj, num);
+  in.read("multiframe", "a_disp_px", m.a_disp_px, px);
+  in.read("multiframe", "b_disp", m.b_disp, num);
+  in.read("multiframe", "adaptive_k", m.adaptive_k, num);
+  in.read("multiframe", "max_scale", m.max_scale, num);
+  in.read("multiframe", "verify_levels", m.verify_levels, integer);
+  in.read("multiframe", "verify_fb_px", m.verify_fb_px, px);
+  in.read("multiframe", "verify_max_shift_px", m.verify_max_shift_px, px);
+  in.read("multiframe", "edge_check_px", m.edge_check_px, "an integer (px)");
+  in.read("multiframe", "edge_tolerance_px", m.edge_tolerance_px, px);
+  in.read("multiframe", "edge_tolerance_rel", m.edge_tolerance_rel, num);
 
   in.check_keys("grouping", {"a_s_px", "b_s", "t_disp_px", "t_disp_rel", "min_points", "margin_px",
                              "margin_disparity_factor", "merge_overlapping"});
@@ -118,18 +148,44 @@ DynamicDetectorConfig load_dynamic_config(const std::string& path) {
   in.read("regions", "ground_slope_tolerance", c.regions.ground_slope_tolerance, num);
   in.read("regions", "enclosed_unknown_only", c.regions.enclosed_unknown_only, flag);
   std::string mode = to_string(c.regions.mask_mode);
-  in.read("regions", "mask_mode", mode, "rectangle or superpixels");
-  if (!parse_mask_mode(mode, c.regions.mask_mode)) throw InputError(path, "regions.mask_mode", "expected rectangle or superpixels");
+  in.read("regions", "mask_mode", mode, "rectangle, superpixels or disparity");
+  if (!parse_mask_mode(mode, c.regions.mask_mode)) {
+    throw InputError(path, "regions.mask_mode", "expected rectangle, superpixels or disparity");
+  }
 
-  in.check_keys("photometric", {"enabled", "max_motion_px", "min_gradient", "sample_step_px", "min_samples"});
+  in.check_keys("outline", {"seed_radius_px", "seed_tolerance_px", "seed_tolerance_rel", "step_tolerance_px",
+                            "step_tolerance_rel", "depth_band_m", "ground_tolerance_px", "ground_tolerance_rel",
+                            "static_competition", "max_hole_invalid_fraction", "min_hole_fill_px", "erode_px", "min_pixels",
+                            "min_dynamic_fraction", "min_tracked_for_fraction"});
+  OutlineConfig& o = c.outline;
+  in.read("outline", "seed_radius_px", o.seed_radius_px, "an integer (px)");
+  in.read("outline", "seed_tolerance_px", o.seed_tolerance_px, px);
+  in.read("outline", "seed_tolerance_rel", o.seed_tolerance_rel, num);
+  in.read("outline", "step_tolerance_px", o.step_tolerance_px, px);
+  in.read("outline", "step_tolerance_rel", o.step_tolerance_rel, num);
+  in.read("outline", "depth_band_m", o.depth_band_m, "a number (m)");
+  in.read("outline", "ground_tolerance_px", o.ground_tolerance_px, px);
+  in.read("outline", "ground_tolerance_rel", o.ground_tolerance_rel, num);
+  in.read("outline", "static_competition", o.static_competition, flag);
+  in.read("outline", "max_hole_invalid_fraction", o.max_hole_invalid_fraction, num);
+  in.read("outline", "min_hole_fill_px", o.min_hole_fill_px, integer);
+  in.read("outline", "erode_px", o.erode_px, "an integer (px)");
+  in.read("outline", "min_pixels", o.min_pixels, "an integer (px)");
+  in.read("outline", "min_dynamic_fraction", o.min_dynamic_fraction, num);
+  in.read("outline", "min_tracked_for_fraction", o.min_tracked_for_fraction, integer);
+
+  in.check_keys("photometric", {"enabled", "max_motion_px", "min_gradient", "sample_step_px", "min_samples",
+                                "multiframe_max_motion_px", "region_inset_px"});
   in.read("photometric", "enabled", c.photometric.enabled, flag);
   in.read("photometric", "max_motion_px", c.photometric.max_motion_px, px);
   in.read("photometric", "min_gradient", c.photometric.min_gradient, "a number (grey levels per px)");
   in.read("photometric", "sample_step_px", c.photometric.sample_step_px, "an integer (px)");
   in.read("photometric", "min_samples", c.photometric.min_samples, "an integer");
+  in.read("photometric", "multiframe_max_motion_px", c.photometric.multiframe_max_motion_px, px);
+  in.read("photometric", "region_inset_px", c.photometric.region_inset_px, "an integer (px)");
 
   in.check_keys("detector", {"use_epipolar_test", "use_depth_test", "full_frame_disparity", "max_rois",
-                             "roi_disparity_margin_px", "roi_scale", "extend_to_floor", "split_side_by_side", "mask_dilation_px", "densify",
+                             "roi_disparity_margin_px", "roi_scale", "extend_to_floor", "extend_to_height_m", "split_side_by_side", "mask_dilation_px", "densify",
                              "densify_radius_px",
                              "densify_radius_disparity_factor", "densify_max_points", "densify_min_distance_px"});
   in.read("detector", "use_epipolar_test", c.detector.use_epipolar_test, flag);
@@ -139,6 +195,7 @@ DynamicDetectorConfig load_dynamic_config(const std::string& path) {
   in.read("detector", "roi_disparity_margin_px", c.detector.roi_disparity_margin_px, px);
   in.read("detector", "roi_scale", c.detector.roi_scale, "1 or 0.5");
   in.read("detector", "extend_to_floor", c.detector.extend_to_floor, flag);
+  in.read("detector", "extend_to_height_m", c.detector.extend_to_height_m, "a number (m)");
   in.read("detector", "split_side_by_side", c.detector.split_side_by_side, flag);
   in.read("detector", "mask_dilation_px", c.detector.mask_dilation_px, "an integer (px)");
   in.read("detector", "densify", c.detector.densify, flag);

@@ -20,13 +20,21 @@ void LkTrackerConfig::validate(const std::string& source) const {
   require(epsilon > 0 && epsilon <= 1, "epsilon", "expected a number in (0, 1] px");
   require(fb_max_error_px > 0 && fb_max_error_px <= 20, "fb_max_error_px", "expected a number in (0, 20] px");
   require(min_eigen_threshold >= 0 && min_eigen_threshold <= 1, "min_eigen_threshold", "expected a number in [0, 1]");
+  require(min_track_distance_px >= 0 && min_track_distance_px <= 200, "min_track_distance_px",
+          "expected a number in [0, 200] px");
+  require(max_tracks >= 1 && max_tracks <= 100000, "max_tracks", "expected an integer in [1, 100000]");
 }
 
 std::string LkTrackerConfig::describe() const {
-  char buf[200];
+  char buf[320];
+  char persistence[120] = "tracks end after one frame";
+  if (persistent) {
+    std::snprintf(persistence, sizeof(persistence), "tracks persist, new corners >= %.1f px from them, <= %d tracks",
+                  min_track_distance_px, max_tracks);
+  }
   std::snprintf(buf, sizeof(buf),
-                "tracking: pyramidal LK %dx%d, %d levels, %d iterations / %.3f px, forward-backward <= %.2f px",
-                window_px, window_px, levels, max_iterations, epsilon, fb_max_error_px);
+                "tracking: pyramidal LK %dx%d, %d levels, %d iterations / %.3f px, forward-backward <= %.2f px, %s",
+                window_px, window_px, levels, max_iterations, epsilon, fb_max_error_px, persistence);
   return buf;
 }
 

@@ -15,14 +15,18 @@ void PhotometricCheckConfig::validate(const std::string& source) const {
   require(min_gradient >= 0 && min_gradient <= 255, "min_gradient", "expected a number in [0, 255] grey levels/px");
   require(sample_step_px >= 1 && sample_step_px <= 16, "sample_step_px", "expected an integer in [1, 16]");
   require(min_samples >= 3 && min_samples <= 100000, "min_samples", "expected an integer in [3, 100000]");
+  require(multiframe_max_motion_px > 0 && multiframe_max_motion_px <= 20, "multiframe_max_motion_px",
+          "expected a number in (0, 20] px");
+  require(region_inset_px >= 0 && region_inset_px <= 20, "region_inset_px", "expected an integer in [0, 20] px");
 }
 
 std::string PhotometricCheckConfig::describe() const {
-  char buf[240];
+  char buf[360];
   std::snprintf(buf, sizeof(buf),
-                "photometric: %s, static when apparent motion <= %.2f px with gradient >= %.1f /px, every %d px, "
-                ">= %d samples",
-                enabled ? "on" : "off", max_motion_px, min_gradient, sample_step_px, min_samples);
+                "photometric: %s, static when apparent motion <= %.2f px (multi-frame reference %.2f px) with gradient "
+                ">= %.1f /px, every %d px, >= %d samples, regions sampled %d px inside",
+                enabled ? "on" : "off", max_motion_px, multiframe_max_motion_px, min_gradient, sample_step_px,
+                min_samples, region_inset_px);
   return buf;
 }
 
@@ -92,6 +96,57 @@ void check_superpixel_motion(const cv::Mat& cur_left, const cv::Mat& prev_left, 
     m.apparent_motion_px = spread / m.mean_gradient;
     m.moves_with_background = m.apparent_motion_px <= config.max_motion_px;
   }
+}
+
+SuperpixelMotion region_motion(const cv::Mat& cur_left, const cv::Mat& ref_left, const PinholeCamera& camera,
+                               double bf_px_m, const SE3d& T_cur_ref, const cv::Mat& mask, const cv::Mat& disparity_px,
+                               cv::Point origin, const PhotometricCheckConfig& config, double max_motion_px) {
+  CV_Assert(cur_left.type() == CV_8UC1 && ref_left.type() == CV_8UC1 && cur_left.size() == ref_left.size());
+  CV_Assert(mask.type() == CV_8UC1 && disparity_px.type() == CV_32FC1 && mask.size() == disparity_px.size());
+  SuperpixelMotion m;
+  const SE3d T_ref_cur = T_cur_ref.inverse();
+  const Eigen::Matrix3d R = T_ref_cur.linear();
+  const Eigen::Vector3d t = T_ref_cur.translation();
+  const int w = cur_left.cols, h = cur_left.rows, step = config.sample_step_px, inset = config.region_inset_px;
+  double sum = 0, sum_sq = 0, sum_grad = 0;
+  for (int ly = inset; ly < mask.rows - inset; ly += step) {
+    const int y = ly + origin.y;
+    if (y < 1 || y >= h - 1) continue;
+    const uint8_t* m_above = mask.ptr<uint8_t>(ly - inset);
+    const uint8_t* m_row = mask.ptr<uint8_t>(ly);
+    const uint8_t* m_below = mask.ptr<uint8_t>(ly + inset);
+    const float* d_row = disparity_px.ptr<float>(ly);
+    const uint8_t* c0 = cur_left.ptr<uint8_t>(y);
+    const uint8_t* cm = cur_left.ptr<uint8_t>(y - 1);
+    const uint8_t* cp = cur_left.ptr<uint8_t>(y + 1);
+    for (int lx = inset; lx < mask.cols - inset; lx += step) {
+      if (!m_row[lx] || !m_row[lx - inset] || !m_row[lx + inset] || !m_above[lx] || !m_below[lx]) continue;
+      const double d = d_row[lx];
+      if (!(d > 0.5)) continue;
+      const int x = lx + origin.x;
+      if (x < 1 || x >= w - 1) continue;
+      const double gx = 0.5 * (c0[x + 1] - c0[x - 1]), gy = 0.5 * (cp[x] - cm[x]);
+      const double grad = std::sqrt(gx * gx + gy * gy);
+      if (grad < config.min_gradient) continue;
+      const double z = bf_px_m / d;
+      const Eigen::Vector3d X_ref = R * Eigen::Vector3d((x - camera.cx) / camera.fx * z, (y - camera.cy) / camera.fy * z, z) + t;
+      if (X_ref.z() < 0.1) continue;
+      const double u = camera.fx * X_ref.x() / X_ref.z() + camera.cx;
+      const double v = camera.fy * X_ref.y() / X_ref.z() + camera.cy;
+      if (!(u >= 0 && v >= 0 && u < w - 1 && v < h - 1)) continue;
+      const double diff = c0[x] - bilinear(ref_left, u, v);
+      sum += diff;
+      sum_sq += diff * diff;
+      sum_grad += grad;
+      ++m.samples;
+    }
+  }
+  if (m.samples < config.min_samples) return m;
+  const double mean = sum / m.samples;
+  m.mean_gradient = sum_grad / m.samples;
+  m.apparent_motion_px = std::sqrt(std::max(0.0, sum_sq / m.samples - mean * mean)) / m.mean_gradient;
+  m.moves_with_background = m.apparent_motion_px <= max_motion_px;
+  return m;
 }
 
 }  // namespace agvslam::dynamic

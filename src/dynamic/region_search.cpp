@@ -9,7 +9,14 @@
 
 namespace agvslam::dynamic {
 
-std::string to_string(MaskMode mode) { return mode == MaskMode::kRectangle ? "rectangle" : "superpixels"; }
+std::string to_string(MaskMode mode) {
+  switch (mode) {
+    case MaskMode::kRectangle: return "rectangle";
+    case MaskMode::kSuperpixels: return "superpixels";
+    case MaskMode::kDisparity: return "disparity";
+  }
+  return "unknown";
+}
 
 bool parse_mask_mode(const std::string& text, MaskMode& mode) {
   if (text == "rectangle") {
@@ -18,6 +25,10 @@ bool parse_mask_mode(const std::string& text, MaskMode& mode) {
   }
   if (text == "superpixels") {
     mode = MaskMode::kSuperpixels;
+    return true;
+  }
+  if (text == "disparity") {
+    mode = MaskMode::kDisparity;
     return true;
   }
   return false;

@@ -306,6 +306,7 @@ void run_detector(benchmark::State& state, const std::vector<agvslam::StereoFram
     sum.point_disparity_ms += t.point_disparity_ms;
     sum.epipolar_ms += t.epipolar_ms;
     sum.depth_test_ms += t.depth_test_ms;
+    sum.multiframe_ms += t.multiframe_ms;
     sum.densify_ms += t.densify_ms;
     sum.grouping_ms += t.grouping_ms;
     sum.roi_disparity_ms += t.roi_disparity_ms;
@@ -327,6 +328,7 @@ void run_detector(benchmark::State& state, const std::vector<agvslam::StereoFram
   state.counters["point_disp_ms"] = sum.point_disparity_ms / n;
   state.counters["epipolar_ms"] = sum.epipolar_ms / n;
   state.counters["depth_ms"] = sum.depth_test_ms / n;
+  state.counters["multiframe_ms"] = sum.multiframe_ms / n;
   state.counters["densify_ms"] = sum.densify_ms / n;
   state.counters["grouping_ms"] = sum.grouping_ms / n;
   state.counters["roi_disp_ms"] = sum.roi_disparity_ms / n;

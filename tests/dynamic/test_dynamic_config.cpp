@@ -51,7 +51,7 @@ TEST(DynamicConfig, ShippedParamsFileEqualsTheDefaults) {
   EXPECT_EQ(c.slic.incremental, d.slic.incremental);
   EXPECT_EQ(c.regions.mask_mode, d.regions.mask_mode);
   EXPECT_EQ(c.planes.seed, d.planes.seed);
-  EXPECT_EQ(c.describe().size(), 11u);
+  EXPECT_EQ(c.describe().size(), 13u);
 }
 
 TEST(DynamicConfig, OverridesOnlyTheGivenKeys) {

@@ -1,17 +1,24 @@
 #pragma once
 // The dynamic-region detector of paper 004 (III.A-B) on consecutive rectified stereo frames:
 //
-//   previous frame: quadtree FAST corners (+ their disparity), LK pyramid
+//   previous frame: the tracks (quadtree FAST corners, kept over frames) with their disparity, LK pyramid
 //   current frame:  LK pyramid -> LK tracks (forward-backward checked) -> disparity at the tracked points
 //                   -> epipolar test (F by RANSAC, T_epi = a + b d, adaptive a)  \  a point is dynamic if
-//                   -> depth-consistency test (PnP ego-motion, reprojection and   /  either test says so
-//                      disparity residuals)
+//                   -> depth-consistency test (PnP ego-motion, reprojection and   |  any test says so
+//                      disparity residuals)                                      |
+//                   -> multi-frame test (each track against its own observation  /
+//                      0.15-0.6 s back, verified by LK into that image, not at depth edges: motion along the
+//                      optical axis at about the vehicle's speed)
 //                   -> [densification around small groups of dynamic points]
 //                   -> groups of dynamic points -> dynamic ROIs (> 4 points)
-//                   -> per ROI: SGBM on the ROI crop, SLIC, disparity planes, boundary types, search to the
-//                      occlusion boundaries (+ disparity band, static veto) -> dynamic region (rectangle, or
-//                      superpixel outline inside it)
-//                   -> DynamicMask; then quadtree FAST on the current frame for the next call.
+//                   -> per ROI: SGBM on the ROI crop, then (regions.mask_mode)
+//                      disparity (default): the object's pixels connected to its points through smooth disparity,
+//                        not floor (object_outline.h), kept when its tracks are not mostly static and its
+//                        content does not move with the background (photometric check) -> dynamic region;
+//                      superpixels / rectangle (the paper): SLIC, disparity planes, boundary types, search to the
+//                        occlusion boundaries (+ disparity band, static veto) -> rectangle or superpixel outline
+//                   -> DynamicMask; then the tracks that held continue, and quadtree FAST corners of the current
+//                      frame fill the places no track covers.
 //
 // Disparity is computed only where it is used: a block matcher at the points, SGBM inside the ROIs (a
 // whole-frame SGBM is available for debugging with detector.full_frame_disparity). The first frame, and any
@@ -28,6 +35,8 @@
 #include "agvslam/dynamic/depth_test.h"
 #include "agvslam/dynamic/disparity_plane.h"
 #include "agvslam/dynamic/epipolar.h"
+#include "agvslam/dynamic/multiframe_test.h"
+#include "agvslam/dynamic/object_outline.h"
 #include "agvslam/dynamic/photometric_check.h"
 #include "agvslam/dynamic/quadtree_fast.h"
 #include "agvslam/dynamic/region_search.h"
@@ -46,12 +55,14 @@ struct DetectorOptions {
   bool full_frame_disparity = false;  // debugging: whole-frame SGBM instead of points + ROIs
   int max_rois = 8;                   // at most this many ROIs per frame (the largest groups)
   double roi_disparity_margin_px = 8; // ROI SGBM searches [0, max point disparity + margin] (<= configured range)
-  double roi_scale = 0.5;             // 1 or 0.5: SGBM and SLIC of the ROIs at this resolution (planes, boundaries
+  double roi_scale = 1.0;             // 1 or 0.5: SGBM and SLIC of the ROIs at this resolution (planes, boundaries
                                       // and regions stay at full resolution)
   int mask_dilation_px = 0;           // grow the final mask by this many pixels
   // Beyond the paper: objects stand on the floor. A ROI whose lowest point lies above the floor row at the
   // group's disparity (from the frame's ground plane; legs often have no corners) is extended down to it.
   bool extend_to_floor = true;
+  // ... and up to this height above the floor row (m; 0 = not): corners seldom reach the head of a person.
+  double extend_to_height_m = 0.0;
   // Beyond the paper: a region whose outline falls into pieces side by side (columns not overlapping, e.g. two
   // people walking apart inside one ROI) gives one object per piece in DynamicMask::instances.
   bool split_side_by_side = true;
@@ -77,11 +88,13 @@ struct DynamicDetectorConfig {
   LkTrackerConfig tracking;
   EpipolarTestConfig epipolar;
   DepthTestConfig depth_test;
+  MultiFrameTestConfig multiframe;
   RoiGroupingConfig grouping;
   SlicConfig slic;
   PlaneFitConfig planes;
   BoundaryConfig boundaries;
   RegionSearchConfig regions;
+  OutlineConfig outline;
   PhotometricCheckConfig photometric;
   DetectorOptions detector;
 
@@ -101,12 +114,25 @@ struct TrackedPoint {
   float prev_disparity_px = 0, cur_disparity_px = 0;  // 0 = unknown
   bool tracked = false;          // LK converged and passed the forward-backward check
   bool densified = false;        // added around a small group of dynamic points (not a quadtree corner)
+  int age = 0;                   // frames the track has been followed before this one (1 = born in the previous)
   double d_epi_px = 0, t_epi_px = 0;
   double reprojection_px = -1, disparity_residual_px = -1;  // depth test, -1 = not tested
-  bool dynamic_epipolar = false, dynamic_depth = false;
+  double multiframe_px = -1;     // multi-frame test: offset from the prediction, -1 = not tested
+  double multiframe_disparity_residual_px = -1;
+  bool dynamic_epipolar = false, dynamic_depth = false, dynamic_multiframe = false;
   bool dynamic = false;          // the union of the enabled tests
   int group = -1;                // index into DetectorResult::rois, -1 = none
 };
+
+// What became of an outline (mask_mode disparity): a dynamic region, or why not.
+enum class OutlineVerdict {
+  kKept,
+  kNoSeed,              // no point found a pixel of agreeing disparity
+  kTooSmall,            // fewer than outline.min_pixels
+  kMostlyStaticTracks,  // the tracks inside it are mostly static (outline.min_dynamic_fraction)
+  kMovesWithBackground  // the photometric check found it static (photometric)
+};
+std::string to_string(OutlineVerdict verdict);
 
 // The segmentation of one dynamic ROI (debugging output; coordinates of `labels` are ROI-local).
 struct RoiSegmentation {
@@ -120,6 +146,10 @@ struct RoiSegmentation {
   std::vector<DisparityPlane> planes;      // per superpixel
   std::vector<SuperpixelBoundary> boundaries;
   std::vector<SuperpixelMotion> motion;    // photometric check per superpixel (when enabled)
+  cv::Mat outline;                         // CV_8UC1, ROI size: the object's pixels (mask_mode disparity)
+  OutlineStats outline_stats;
+  SuperpixelMotion outline_motion, outline_motion_multiframe;  // photometric check of the outline (when run)
+  OutlineVerdict outline_verdict = OutlineVerdict::kNoSeed;   // kKept: the outline is a dynamic region
   DynamicRegion region;
 };
 
@@ -132,7 +162,7 @@ struct DynamicMask {
 };
 
 struct StageTimings {
-  double pyramid_ms = 0, tracking_ms = 0, point_disparity_ms = 0, epipolar_ms = 0, depth_test_ms = 0,
+  double pyramid_ms = 0, tracking_ms = 0, point_disparity_ms = 0, epipolar_ms = 0, depth_test_ms = 0, multiframe_ms = 0,
          densify_ms = 0, grouping_ms = 0, roi_disparity_ms = 0, slic_ms = 0, planes_ms = 0, boundaries_ms = 0, regions_ms = 0,
          features_ms = 0, total_ms = 0;
   std::string describe() const;
@@ -147,6 +177,7 @@ struct DetectorResult {
   std::vector<RoiSegmentation> rois;
   EpipolarResult epipolar;
   DepthTestResult depth;
+  MultiFrameResult multiframe;
   DisparityPlane ground_plane;   // d = a x + b y + c of the floor from the static points (ground veto); may be invalid
   cv::Mat full_disparity_px;     // only with detector.full_frame_disparity
   StageTimings timings;
@@ -175,6 +206,7 @@ class DynamicDetector {
 
  private:
   void densify(const StereoFrame& frame, DetectorResult& result);
+  void outline_region(const StereoFrame& frame, DetectorResult& result, RoiSegmentation& seg, int& next_instance);
   void measure_point_disparities(const StereoFrame& frame, const std::vector<cv::Point2f>& pts, std::vector<float>& out,
                                  const cv::Mat& full_disparity_px);
 
@@ -185,11 +217,14 @@ class DynamicDetector {
   LkTracker tracker_;
   EpipolarTest epipolar_;
   DepthConsistencyTest depth_test_;
+  MultiFrameTest multiframe_;
+  TrackHistory history_;  // the tracks' last observations; row i = prev_pts_[i] (then result.points[i])
   Slic slic_;
   Slic slic_half_;  // superpixel size halved, for roi_scale 0.5
   stereo::StereoSgbm sgbm_;
   stereo::SparseStereoMatcher sparse_;
   SuperpixelGraph graph_;
+  ObjectOutliner outliner_;
 
   bool has_previous_ = false;
   std::vector<cv::Mat> prev_pyramid_, cur_pyramid_;
@@ -199,7 +234,9 @@ class DynamicDetector {
   std::vector<cv::Point2f> cur_pts_;
   std::vector<uint8_t> tracked_;
   std::vector<float> cur_disparity_px_;
-  std::vector<uint8_t> usable_;
+  std::vector<uint8_t> usable_, keep_, consistent_;
+  std::vector<cv::Point2f> new_pts_;
+  std::vector<float> new_disp_;
   std::vector<cv::Point2f> dyn_pts_;
   std::vector<float> dyn_disp_;
   std::vector<int> dyn_index_;

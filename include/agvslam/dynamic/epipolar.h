@@ -24,6 +24,12 @@ struct LkTrackerConfig {
   double epsilon = 0.03;          // LK stop criterion (px)
   double fb_max_error_px = 1.0;   // forward-backward round trip error allowed
   double min_eigen_threshold = 1e-3;
+  // Beyond the paper: tracks continue over frames (the multi-frame test needs their history); each frame's
+  // quadtree corners are added only farther than min_track_distance_px from every track, up to max_tracks.
+  // false: every frame tracks only the previous frame's new corners (as the paper).
+  bool persistent = true;
+  double min_track_distance_px = 12.0;
+  int max_tracks = 600;
 
   void validate(const std::string& source) const;
   std::string describe() const;

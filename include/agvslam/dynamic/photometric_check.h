@@ -7,6 +7,10 @@
 // would be: ~0.2-0.4 px for a static textured surface (noise, disparity error), more for an object that moved.
 // A textured superpixel whose apparent motion is small "moves with the background"; the region search then keeps
 // it out of the dynamic outline (a shelf beside a person at the same depth, which no occlusion boundary separates).
+//
+// The same measure on a whole outlined region (mask_mode disparity) with its per-pixel SGBM disparity confirms it:
+// a region whose content moved as a static surface would, both frame to frame and against the multi-frame
+// reference (where one is available), is not dynamic (a few tracks at a depth edge or on repetitive racking made it).
 
 #include <opencv2/core.hpp>
 #include <string>
@@ -25,6 +29,12 @@ struct PhotometricCheckConfig {
   double min_gradient = 6.0;    // grey levels per px: weaker texture cannot tell (undecided, not vetoed)
   int sample_step_px = 2;       // every 2nd pixel in x and y
   int min_samples = 12;         // fewer usable samples: undecided
+  // Region check (mask_mode disparity): a region is static when its apparent motion is at most max_motion_px
+  // against the previous frame and at most multiframe_max_motion_px against the multi-frame reference (larger:
+  // the depth error of the warp grows with the baseline), sampling its pixels at least region_inset_px inside its
+  // outline (SGBM's disparity is unreliable at the edge).
+  double multiframe_max_motion_px = 1.2;
+  int region_inset_px = 2;
 
   void validate(const std::string& source) const;
   std::string describe() const;
@@ -43,5 +53,13 @@ void check_superpixel_motion(const cv::Mat& cur_left, const cv::Mat& prev_left, 
                              double bf_px_m, const SE3d& T_cur_prev, const cv::Mat& labels, cv::Point origin,
                              const std::vector<DisparityPlane>& planes, const PhotometricCheckConfig& config,
                              std::vector<SuperpixelMotion>& motion);
+
+// The apparent motion of the pixels of `mask` (CV_8UC1, non-zero = region; ROI-local, origin = the ROI's top-left
+// in the full image) warped with their own disparity (disparity_px, CV_32FC1 of the ROI, 0 = none) into ref_left
+// by T_cur_ref. Sampled every sample_step_px; apparent_motion_px = -1 when fewer than min_samples pixels with
+// enough gradient; moves_with_background when <= max_motion_px (the caller's threshold).
+SuperpixelMotion region_motion(const cv::Mat& cur_left, const cv::Mat& ref_left, const PinholeCamera& camera,
+                               double bf_px_m, const SE3d& T_cur_ref, const cv::Mat& mask, const cv::Mat& disparity_px,
+                               cv::Point origin, const PhotometricCheckConfig& config, double max_motion_px);
 
 }  // namespace agvslam::dynamic

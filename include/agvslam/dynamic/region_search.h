@@ -26,7 +26,9 @@
 
 namespace agvslam::dynamic {
 
-enum class MaskMode { kRectangle, kSuperpixels };
+// kRectangle: the paper's rectangle; kSuperpixels: the flooded superpixels inside it; kDisparity: the object's
+// pixels in the ROI's disparity (object_outline.h; SLIC, planes and boundaries are then not computed).
+enum class MaskMode { kRectangle, kSuperpixels, kDisparity };
 std::string to_string(MaskMode mode);
 bool parse_mask_mode(const std::string& text, MaskMode& mode);
 
@@ -42,7 +44,7 @@ struct RegionSearchConfig {
   // With the band, a superpixel also joins the outline only when its plane agrees (band tolerance) with the
   // disparity of the group's nearest started point: one group may hold objects at different depths.
   bool local_band = true;
-  MaskMode mask_mode = MaskMode::kSuperpixels;
+  MaskMode mask_mode = MaskMode::kDisparity;
   // Static veto (beyond the paper): a superpixel that holds a tracked point which passed the motion tests,
   // with a disparity agreeing with the superpixel's plane (start tolerance), is static: the search stops on
   // entering it and the outline never includes it. Separates a person from a shelf at the same depth,

@@ -1,0 +1,94 @@
+#pragma once
+// Object outline from the ROI's disparity (beyond paper 004; regions.mask_mode = disparity).
+//
+// The paper outlines a dynamic object by searching from its dynamic points to the first occlusion boundary
+// between superpixels. Where the disparity inside the ROI is dense (SGBM), the object is more directly the set
+// of pixels connected to its dynamic points through smoothly varying disparity: an object in front of its
+// background is separated from it by a disparity jump (the occlusion boundary, at pixel level), and where it
+// touches the floor the floor is recognised by the frame's ground plane.
+//
+//   seeds:  per dynamic point, the nearest ROI pixel within seed_radius_px whose disparity agrees with the
+//           point's (seed_tolerance_px + seed_tolerance_rel * d); static points (tracked, passed the motion
+//           tests) seed a competing "static" label the same way;
+//   flood:  breadth-first from all seeds at once (a geodesic partition: where the object and a static
+//           surface at the same depth touch, e.g. a person beside a shelf, each pixel goes to the nearer
+//           seed); a 4-neighbour joins when its disparity is valid, differs from the current pixel's by at
+//           most step_tolerance_px + step_tolerance_rel * d (no occlusion jump), lies within depth_band_m of
+//           its seed's depth, and is not floor (|d - ground(x, y)| <= ground_tolerance_px + rel * d);
+//   holes:  parts of the ROI enclosed by the object (not reaching the ROI border) that are mostly without
+//           disparity (textureless clothing, the half-occluded strip between arm and body) join it; enclosed
+//           parts smaller than min_hole_fill_px join whatever they hold.
+// The result is a per-pixel mask of the ROI.
+
+#include <cstdint>
+#include <opencv2/core.hpp>
+#include <string>
+#include <vector>
+
+#include "agvslam/dynamic/disparity_plane.h"
+
+namespace agvslam::dynamic {
+
+// params/dynamic.yaml, section `outline`.
+struct OutlineConfig {
+  int seed_radius_px = 4;              // a point's seed pixel is searched this far from it
+  double seed_tolerance_px = 1.0;      // |d(seed pixel) - d(point)| <= this + rel * d
+  double seed_tolerance_rel = 0.08;
+  double step_tolerance_px = 0.75;     // neighbouring pixels of one surface differ by <= this + rel * d
+  double step_tolerance_rel = 0.04;
+  double depth_band_m = 0.8;           // and lie within this depth of their seed (a person's depth extent)
+  double ground_tolerance_px = 0.6;    // floor: |d - ground plane| <= this + rel * d
+  double ground_tolerance_rel = 0.03;
+  bool static_competition = false;     // static points claim their surfaces (see above)
+  double max_hole_invalid_fraction = 0.5;  // enclosed parts with at least this fraction without disparity join
+  int min_hole_fill_px = 64;           // enclosed parts smaller than this join regardless
+  // SGBM fattens a foreground object by about half its block (its cost window spills over the edge onto the
+  // background): the outline is eroded by this many px (0 = not).
+  int erode_px = 1;
+  // The detector drops an outline of fewer than min_pixels px, or one holding at least min_tracked_for_fraction
+  // tracked points of which fewer than min_dynamic_fraction are dynamic (a few tracks at a depth edge flooded a
+  // large static surface).
+  int min_pixels = 150;
+  double min_dynamic_fraction = 0.2;
+  int min_tracked_for_fraction = 10;
+
+  void validate(const std::string& source) const;
+  std::string describe() const;
+};
+
+struct OutlineStats {
+  int object_seeds = 0, static_seeds = 0;
+  int object_pixels = 0;
+  int tracked_inside = 0, dynamic_inside = 0;  // tracked points inside the outline, and the dynamic ones (detector)
+};
+
+// Reusable buffers (no allocation per call once sizes have settled).
+class ObjectOutliner {
+ public:
+  explicit ObjectOutliner(const OutlineConfig& config = {});
+  const OutlineConfig& config() const { return config_; }
+
+  // disparity_px: CV_32FC1 of the ROI (0 = none); origin: the ROI's top-left in the full image. points_px /
+  // point_disparity_px: the object's dynamic points (full image). static_px / static_disparity_px: static
+  // points (may be empty). ground: the frame's floor in disparity space (nullptr or invalid = none). bf_px_m:
+  // focal length x baseline. mask: CV_8UC1 of the ROI, 255 = object. Returns the statistics.
+  OutlineStats outline(const cv::Mat& disparity_px, cv::Point origin, const std::vector<cv::Point2f>& points_px,
+                       const std::vector<float>& point_disparity_px, const std::vector<cv::Point2f>& static_px,
+                       const std::vector<float>& static_disparity_px, const DisparityPlane* ground, double bf_px_m,
+                       cv::Mat& mask);
+
+ private:
+  struct Seed {
+    float lo = 0, hi = 0;  // the seed's depth band, in disparity
+  };
+  OutlineConfig config_;
+  std::vector<int> queue_;
+  std::vector<uint8_t> label_;     // 0 unvisited, 1 object, 2 static
+  std::vector<int32_t> seed_of_;   // per claimed pixel: its seed
+  std::vector<Seed> seeds_;
+  std::vector<uint8_t> fill_;
+  cv::Mat holes_, hole_labels_, hole_stats_, hole_centroids_, eroded_;
+  std::vector<int> invalid_count_;
+};
+
+}  // namespace agvslam::dynamic

@@ -1,0 +1,293 @@
+#include "agvslam/dynamic/multiframe_test.h"
+
+#include <algorithm>
+#include <cmath>
+#include <cstdio>
+#include <opencv2/video/tracking.hpp>
+
+#include "agvslam/core/error.h"
+
+namespace agvslam::dynamic {
+
+void MultiFrameTestConfig::validate(const std::string& source) const {
+  auto require = [&](bool ok, const char* field, const char* expected) {
+    if (!ok) throw InputError(source, std::string("multiframe.") + field, expected);
+  };
+  require(max_frames >= 2 && max_frames <= 120, "max_frames", "expected an integer in [2, 120]");
+  require(min_frames >= 1 && min_frames <= max_frames, "min_frames", "expected an integer in [1, max_frames]");
+  require(min_translation_m >= 0 && min_translation_m <= 10, "min_translation_m", "expected a number in [0, 10] m");
+  require(max_rotation_deg > 0 && max_rotation_deg <= 90, "max_rotation_deg", "expected a number in (0, 90] deg");
+  require(min_points >= 6 && min_points <= 10000, "min_points", "expected an integer in [6, 10000]");
+  require(min_disparity_px > 0 && min_disparity_px <= 100, "min_disparity_px", "expected a number in (0, 100] px");
+  require(ransac_reprojection_px > 0 && ransac_reprojection_px <= 20, "ransac_reprojection_px",
+          "expected a number in (0, 20] px");
+  require(a_reproj_px > 0 && a_reproj_px <= 50, "a_reproj_px", "expected a number in (0, 50] px");
+  require(b_reproj >= 0 && b_reproj <= 1, "b_reproj", "expected a number in [0, 1]");
+  require(a_disp_px > 0 && a_disp_px <= 50, "a_disp_px", "expected a number in (0, 50] px");
+  require(b_disp >= 0 && b_disp <= 1, "b_disp", "expected a number in [0, 1]");
+  require(adaptive_k > 0 && adaptive_k <= 20, "adaptive_k", "expected a number in (0, 20]");
+  require(max_scale >= 1 && max_scale <= 100, "max_scale", "expected a number in [1, 100]");
+  require(verify_levels >= 0 && verify_levels <= 6, "verify_levels", "expected an integer in [0, 6]");
+  require(verify_fb_px > 0 && verify_fb_px <= 20, "verify_fb_px", "expected a number in (0, 20] px");
+  require(verify_max_shift_px >= 0 && verify_max_shift_px <= 20, "verify_max_shift_px", "expected a number in [0, 20] px");
+  require(edge_check_px >= 0 && edge_check_px <= 50, "edge_check_px", "expected an integer in [0, 50] px");
+  require(edge_tolerance_px >= 0 && edge_tolerance_px <= 100, "edge_tolerance_px", "expected a number in [0, 100] px");
+  require(edge_tolerance_rel >= 0 && edge_tolerance_rel <= 10, "edge_tolerance_rel", "expected a number in [0, 10]");
+}
+
+std::string MultiFrameTestConfig::describe() const {
+  char buf[700];
+  std::snprintf(buf, sizeof(buf),
+                "multiframe: %s; reference %d..%d frames back, the newest >= %.2f m away, rotation <= %.1f deg, >= %d "
+                "tracks with d >= %.1f px in both; PnP %.2f px; dynamic if offset > %.2f + %.3f d px or disparity "
+                "residual > %.2f + %.3f d px (adaptive k %.1f, <= %.1fx); verified by LK into the reference (%d levels, "
+                "fb <= %.2f px, same point within %.2f px); not at depth edges (disparity %d px away within %.2f + "
+                "%.3f d px)",
+                enabled ? "on" : "off", min_frames, max_frames, min_translation_m, max_rotation_deg, min_points,
+                min_disparity_px, ransac_reprojection_px, a_reproj_px, b_reproj, a_disp_px, b_disp, adaptive_k, max_scale,
+                verify_levels, verify_fb_px, verify_max_shift_px, edge_check_px, edge_tolerance_px, edge_tolerance_rel);
+  return buf;
+}
+
+// ---- TrackHistory --------------------------------------------------------------------------------------------
+
+TrackHistory::TrackHistory(int depth) : depth_(std::max(1, depth)) {}
+
+void TrackHistory::clear() {
+  age_.clear();
+  run_.clear();
+  px_.clear();
+  d_.clear();
+}
+
+void TrackHistory::next_frame(const std::vector<cv::Point2f>& px, const std::vector<float>& d,
+                              const std::vector<uint8_t>& consistent) {
+  CV_Assert(px.size() == size() && d.size() == size() && consistent.size() == size());
+  ++frame_;
+  const auto depth = static_cast<std::size_t>(depth_);
+  const auto slot = static_cast<std::size_t>(frame_ % depth_);
+  for (std::size_t i = 0; i < size(); ++i) {
+    px_[i * depth + slot] = px[i];
+    d_[i * depth + slot] = d[i];
+    age_[i] = std::min(age_[i] + 1, depth_ - 1);
+    run_[i] = consistent[i] ? std::min(run_[i] + 1, depth_ - 1) : 0;
+  }
+}
+
+void TrackHistory::retain(const std::vector<uint8_t>& keep) {
+  CV_Assert(keep.size() == size());
+  const auto depth = static_cast<std::size_t>(depth_);
+  std::size_t out = 0;
+  for (std::size_t i = 0; i < size(); ++i) {
+    if (!keep[i]) continue;
+    if (out != i) {
+      std::copy_n(px_.begin() + static_cast<std::ptrdiff_t>(i * depth), depth, px_.begin() + static_cast<std::ptrdiff_t>(out * depth));
+      std::copy_n(d_.begin() + static_cast<std::ptrdiff_t>(i * depth), depth, d_.begin() + static_cast<std::ptrdiff_t>(out * depth));
+      age_[out] = age_[i];
+      run_[out] = run_[i];
+    }
+    ++out;
+  }
+  age_.resize(out);
+  run_.resize(out);
+  px_.resize(out * depth);
+  d_.resize(out * depth);
+}
+
+void TrackHistory::add(const cv::Point2f& px, float d) {
+  const auto depth = static_cast<std::size_t>(depth_);
+  const auto slot = static_cast<std::size_t>(frame_ % depth_);
+  const std::size_t row = age_.size();
+  px_.resize((row + 1) * depth, cv::Point2f(0, 0));
+  d_.resize((row + 1) * depth, 0.0f);
+  px_[row * depth + slot] = px;
+  d_[row * depth + slot] = d;
+  age_.push_back(0);
+  run_.push_back(0);
+}
+
+void TrackHistory::add_earlier(int back, const cv::Point2f& px, float d) {
+  CV_Assert(!age_.empty() && back >= 1);
+  if (back >= depth_) return;
+  const auto depth = static_cast<std::size_t>(depth_);
+  const std::size_t row = age_.size() - 1;
+  const auto slot = static_cast<std::size_t>(((frame_ - back) % depth_ + depth_) % depth_);
+  px_[row * depth + slot] = px;
+  d_[row * depth + slot] = d;
+  age_.back() = std::max(age_.back(), back);
+}
+
+bool TrackHistory::observation(std::size_t i, int back, cv::Point2f& px, float& d) const {
+  if (i >= size() || back < 0 || back > age_[i] || back >= depth_) return false;
+  const auto depth = static_cast<std::size_t>(depth_);
+  const auto slot = static_cast<std::size_t>(((frame_ - back) % depth_ + depth_) % depth_);
+  px = px_[i * depth + slot];
+  d = d_[i * depth + slot];
+  return true;
+}
+
+// ---- MultiFrameTest ------------------------------------------------------------------------------------------
+
+namespace {
+DepthTestConfig inner_test_config(const MultiFrameTestConfig& c) {
+  c.validate("MultiFrameTestConfig");
+  DepthTestConfig d;
+  d.min_points = c.min_points;
+  d.min_disparity_px = c.min_disparity_px;
+  d.ransac_reprojection_px = c.ransac_reprojection_px;
+  d.a_reproj_px = c.a_reproj_px;
+  d.b_reproj = c.b_reproj;
+  d.a_disp_px = c.a_disp_px;
+  d.b_disp = c.b_disp;
+  d.adaptive = true;
+  d.adaptive_k = c.adaptive_k;
+  d.max_scale = c.max_scale;
+  return d;
+}
+}  // namespace
+
+MultiFrameTest::MultiFrameTest(const MultiFrameTestConfig& config) : config_(config), test_(inner_test_config(config)) {}
+
+void MultiFrameTest::reset() {
+  for (Frame& f : frames_) spare_.push_back(std::move(f.left));
+  frames_.clear();
+}
+
+void MultiFrameTest::add_frame(const SE3d& T_cur_prev, bool valid, const cv::Mat& left) {
+  if (!valid || frames_.empty() || frames_.back().left.size() != left.size()) reset();
+  Frame f;
+  f.T_w_c = frames_.empty() ? SE3d::Identity() : frames_.back().T_w_c * T_cur_prev.inverse();
+  if (!spare_.empty()) {
+    f.left = std::move(spare_.back());
+    spare_.pop_back();
+  }
+  left.copyTo(f.left);
+  frames_.push_back(std::move(f));
+  while (static_cast<int>(frames_.size()) > config_.max_frames + 1) {
+    spare_.push_back(std::move(frames_.front().left));
+    frames_.pop_front();
+  }
+}
+
+void MultiFrameTest::run(const PinholeCamera& camera, double bf_px_m, const TrackHistory& history,
+                         const std::vector<uint8_t>& usable, const std::vector<cv::Mat>& cur_pyramid,
+                         const LkTrackerConfig& tracking, MultiFrameResult& result) {
+  const std::size_t n = history.size();
+  CV_Assert(usable.size() == n);
+  result.valid = false;
+  result.frames_back = 0;
+  result.translation_m = 0;
+  result.rotation_deg = 0;
+  result.candidates = 0;
+  result.flagged = 0;
+  result.confirmed = 0;
+  result.T_cur_ref = SE3d::Identity();
+  result.reference_left.release();
+  result.test = DepthTestResult{};
+  result.test.reprojection_px.assign(n, -1.0);
+  result.test.disparity_residual_px.assign(n, -1.0);
+  result.test.dynamic.assign(n, 0);
+  if (!config_.enabled || frames_.size() < 2) return;
+
+  // Candidate references, newest first: k frames back along the chain.
+  const int h = static_cast<int>(frames_.size());
+  const int max_back = std::min({h - 1, config_.max_frames, history.depth() - 1});
+  const double max_rotation_rad = config_.max_rotation_deg * M_PI / 180.0;
+  const SE3d& T_w_cur = frames_.back().T_w_c;
+  auto count_both = [&](int k) {
+    int count = 0;
+    cv::Point2f p;
+    float d = 0;
+    for (std::size_t i = 0; i < n; ++i) {
+      count += usable[i] && history.consistent_steps(i) >= k && history.observation(i, k, p, d) &&
+                       d >= config_.min_disparity_px ? 1 : 0;
+    }
+    return count;
+  };
+  int chosen = -1;
+  SE3d T_ref_cur = SE3d::Identity();
+  for (int k = config_.min_frames; k <= max_back; ++k) {
+    const SE3d T = frames_[static_cast<std::size_t>(h - 1 - k)].T_w_c.inverse() * T_w_cur;
+    if (rotation_angle_rad(T) > max_rotation_rad) break;  // older ones turned even more (on a turning vehicle)
+    if (count_both(k) < config_.min_points) break;        // older ones share even fewer tracks
+    chosen = k;
+    T_ref_cur = T;
+    if (T.translation().norm() >= config_.min_translation_m) break;
+  }
+  if (chosen < 0) return;
+  result.frames_back = chosen;
+  result.translation_m = T_ref_cur.translation().norm();
+  result.rotation_deg = rotation_angle_rad(T_ref_cur) * 180.0 / M_PI;
+
+  ref_px_.assign(n, cv::Point2f(0, 0));
+  cur_px_.assign(n, cv::Point2f(0, 0));
+  ref_d_.assign(n, 0.0f);
+  cur_d_.assign(n, 0.0f);
+  both_.assign(n, 0);
+  for (std::size_t i = 0; i < n; ++i) {
+    if (!usable[i] || history.consistent_steps(i) < chosen) continue;
+    if (!history.observation(i, chosen, ref_px_[i], ref_d_[i]) || !history.observation(i, 0, cur_px_[i], cur_d_[i])) continue;
+    both_[i] = 1;
+    result.candidates += ref_d_[i] >= config_.min_disparity_px ? 1 : 0;
+  }
+  // The reference plays the "previous" frame of the depth-consistency test: motion, residuals, decisions.
+  test_.run(camera, bf_px_m, ref_px_, ref_d_, cur_px_, cur_d_, both_, result.test);
+  if (!result.test.valid) return;
+  result.T_cur_ref = result.test.T_cur_prev;
+  result.reference_left = frames_[static_cast<std::size_t>(h - 1 - chosen)].left;
+  result.valid = true;
+
+  // Verification of the flagged tracks: LK of the current patch straight into the reference image, from the
+  // track's own reference position.
+  cand_cur_.clear();
+  cand_ref_.clear();
+  cand_index_.clear();
+  for (std::size_t i = 0; i < n; ++i) {
+    if (!result.test.dynamic[i]) continue;
+    cand_cur_.push_back(cur_px_[i]);
+    cand_ref_.push_back(ref_px_[i]);
+    cand_index_.push_back(static_cast<int>(i));
+  }
+  result.flagged = static_cast<int>(cand_index_.size());
+  if (cand_index_.empty()) return;
+  const cv::Size win(tracking.window_px, tracking.window_px);
+  const cv::TermCriteria crit(cv::TermCriteria::COUNT | cv::TermCriteria::EPS, tracking.max_iterations, tracking.epsilon);
+  const cv::Mat& ref_left = frames_[static_cast<std::size_t>(h - 1 - chosen)].left;
+  cv::buildOpticalFlowPyramid(ref_left, ref_pyramid_, win, config_.verify_levels, false);
+  cv::calcOpticalFlowPyrLK(cur_pyramid, ref_pyramid_, cand_cur_, cand_ref_, status_, errors_, win, config_.verify_levels,
+                           crit, cv::OPTFLOW_USE_INITIAL_FLOW, tracking.min_eigen_threshold);
+  cand_back_ = cand_cur_;
+  cv::calcOpticalFlowPyrLK(ref_pyramid_, cur_pyramid, cand_ref_, cand_back_, back_status_, errors_, win,
+                           config_.verify_levels, crit, cv::OPTFLOW_USE_INITIAL_FLOW, tracking.min_eigen_threshold);
+  const float fb2 = static_cast<float>(config_.verify_fb_px * config_.verify_fb_px);
+  const float shift2 = static_cast<float>(config_.verify_max_shift_px * config_.verify_max_shift_px);
+  const cv::Size size = ref_left.size();
+  for (std::size_t k = 0; k < cand_index_.size(); ++k) {
+    const auto i = static_cast<std::size_t>(cand_index_[k]);
+    result.test.dynamic[i] = 0;
+    const cv::Point2f found = cand_ref_[k];
+    const cv::Point2f fb = cand_back_[k] - cand_cur_[k];
+    if (!status_[k] || !back_status_[k] || fb.dot(fb) > fb2 || !(found.x >= 0 && found.y >= 0 && found.x < size.width &&
+                                                                   found.y < size.height)) {
+      result.test.reprojection_px[i] = -1;  // not verifiable: neither dynamic nor static
+      result.test.disparity_residual_px[i] = -1;
+      continue;
+    }
+    const cv::Point2f shift = found - ref_px_[i];
+    const bool same_point = shift.dot(shift) <= shift2;
+    // The found reference position with the reference disparity, moved into the current camera: how far from
+    // the current position?
+    double offset = -1, r_disp = -1;
+    DepthConsistencyTest::residuals(camera, bf_px_m, result.T_cur_ref, found, ref_d_[i], cur_px_[i], cur_d_[i], offset,
+                                    r_disp);
+    const double d = cur_d_[i] > 0 ? cur_d_[i] : ref_d_[i];
+    const bool off_2d = offset >= 0 && offset > result.test.a_reproj_used_px + config_.b_reproj * d;
+    const bool off_depth = same_point && r_disp >= 0 && r_disp > result.test.a_disp_used_px + config_.b_disp * d;
+    result.test.reprojection_px[i] = offset;
+    result.test.disparity_residual_px[i] = same_point ? r_disp : -1;
+    result.test.dynamic[i] = off_2d || off_depth ? 1 : 0;
+    result.confirmed += result.test.dynamic[i];
+  }
+}
+
+}  // namespace agvslam::dynamic

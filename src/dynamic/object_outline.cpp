@@ -1,0 +1,183 @@
+#include "agvslam/dynamic/object_outline.h"
+
+#include <algorithm>
+#include <cmath>
+#include <cstdio>
+#include <opencv2/imgproc.hpp>
+
+#include "agvslam/core/error.h"
+
+namespace agvslam::dynamic {
+
+void OutlineConfig::validate(const std::string& source) const {
+  auto require = [&](bool ok, const char* field, const char* expected) {
+    if (!ok) throw InputError(source, std::string("outline.") + field, expected);
+  };
+  require(seed_radius_px >= 0 && seed_radius_px <= 50, "seed_radius_px", "expected an integer in [0, 50] px");
+  require(seed_tolerance_px > 0 && seed_tolerance_px <= 100, "seed_tolerance_px", "expected a number in (0, 100] px");
+  require(seed_tolerance_rel >= 0 && seed_tolerance_rel <= 10, "seed_tolerance_rel", "expected a number in [0, 10]");
+  require(step_tolerance_px > 0 && step_tolerance_px <= 100, "step_tolerance_px", "expected a number in (0, 100] px");
+  require(step_tolerance_rel >= 0 && step_tolerance_rel <= 10, "step_tolerance_rel", "expected a number in [0, 10]");
+  require(depth_band_m > 0 && depth_band_m <= 100, "depth_band_m", "expected a number in (0, 100] m");
+  require(ground_tolerance_px >= 0 && ground_tolerance_px <= 100, "ground_tolerance_px", "expected a number in [0, 100] px");
+  require(ground_tolerance_rel >= 0 && ground_tolerance_rel <= 10, "ground_tolerance_rel", "expected a number in [0, 10]");
+  require(max_hole_invalid_fraction >= 0 && max_hole_invalid_fraction <= 1, "max_hole_invalid_fraction",
+          "expected a number in [0, 1]");
+  require(min_hole_fill_px >= 0 && min_hole_fill_px <= 1000000, "min_hole_fill_px", "expected an integer in [0, 1000000] px");
+  require(erode_px >= 0 && erode_px <= 10, "erode_px", "expected an integer in [0, 10] px");
+  require(min_pixels >= 0 && min_pixels <= 1000000, "min_pixels", "expected an integer in [0, 1000000] px");
+  require(min_dynamic_fraction >= 0 && min_dynamic_fraction <= 1, "min_dynamic_fraction", "expected a number in [0, 1]");
+  require(min_tracked_for_fraction >= 1 && min_tracked_for_fraction <= 100000, "min_tracked_for_fraction",
+          "expected an integer in [1, 100000]");
+}
+
+std::string OutlineConfig::describe() const {
+  char buf[560];
+  std::snprintf(buf, sizeof(buf),
+                "outline: seeds within %d px agreeing to %.2f + %.3f d px; flood steps <= %.2f + %.3f d px within "
+                "%.2f m of the seed's depth; floor within %.2f + %.3f d px of the ground plane; static competition %s; "
+                "enclosed parts join when >= %.0f %% without disparity or < %d px; eroded by %d px; kept when >= %d px "
+                "and (< %d tracks inside or >= %.0f %% of them dynamic)",
+                seed_radius_px, seed_tolerance_px, seed_tolerance_rel, step_tolerance_px, step_tolerance_rel, depth_band_m,
+                ground_tolerance_px, ground_tolerance_rel, static_competition ? "on" : "off",
+                100 * max_hole_invalid_fraction, min_hole_fill_px, erode_px, min_pixels, min_tracked_for_fraction,
+                100 * min_dynamic_fraction);
+  return buf;
+}
+
+ObjectOutliner::ObjectOutliner(const OutlineConfig& config) : config_(config) { config_.validate("OutlineConfig"); }
+
+OutlineStats ObjectOutliner::outline(const cv::Mat& disparity_px, cv::Point origin,
+                                     const std::vector<cv::Point2f>& points_px,
+                                     const std::vector<float>& point_disparity_px,
+                                     const std::vector<cv::Point2f>& static_px,
+                                     const std::vector<float>& static_disparity_px, const DisparityPlane* ground,
+                                     double bf_px_m, cv::Mat& mask) {
+  CV_Assert(disparity_px.type() == CV_32FC1);
+  CV_Assert(points_px.size() == point_disparity_px.size() && static_px.size() == static_disparity_px.size());
+  OutlineStats stats;
+  const int w = disparity_px.cols, h = disparity_px.rows;
+  mask.create(disparity_px.size(), CV_8UC1);
+  mask.setTo(0);
+  if (w == 0 || h == 0 || !(bf_px_m > 0)) return stats;
+  const std::size_t n = static_cast<std::size_t>(w) * static_cast<std::size_t>(h);
+  label_.assign(n, 0);
+  seeds_.clear();
+  seed_of_.assign(n, -1);
+  queue_.clear();
+  const bool use_ground = ground != nullptr && ground->valid;
+  const OutlineConfig& c = config_;
+
+  auto is_floor = [&](int x, int y, float d) {
+    if (!use_ground) return false;
+    const double dg = ground->disparity_at(x + origin.x, y + origin.y);
+    return dg > 0 && std::abs(d - dg) <= c.ground_tolerance_px + c.ground_tolerance_rel * dg;
+  };
+  auto add_seed = [&](const cv::Point2f& p, float d, uint8_t label) {
+    if (!(d > 0)) return false;
+    const int cx = static_cast<int>(std::lround(p.x)) - origin.x, cy = static_cast<int>(std::lround(p.y)) - origin.y;
+    const double tol = c.seed_tolerance_px + c.seed_tolerance_rel * d;
+    const int r = c.seed_radius_px;
+    int best = -1, best_d2 = 1 << 30;
+    for (int y = std::max(0, cy - r); y <= std::min(h - 1, cy + r); ++y) {
+      const float* row = disparity_px.ptr<float>(y);
+      for (int x = std::max(0, cx - r); x <= std::min(w - 1, cx + r); ++x) {
+        const int d2 = (x - cx) * (x - cx) + (y - cy) * (y - cy);
+        if (d2 > r * r || d2 >= best_d2) continue;
+        if (!(row[x] > 0) || std::abs(row[x] - d) > tol || is_floor(x, y, row[x])) continue;
+        best_d2 = d2;
+        best = y * w + x;
+      }
+    }
+    if (best < 0 || label_[static_cast<std::size_t>(best)] != 0) return false;
+    const float ref = disparity_px.ptr<float>(best / w)[best % w];
+    const double z = bf_px_m / ref;
+    Seed s;
+    s.lo = static_cast<float>(bf_px_m / (z + c.depth_band_m));
+    s.hi = z > c.depth_band_m ? static_cast<float>(bf_px_m / (z - c.depth_band_m)) : 1e9f;
+    seed_of_[static_cast<std::size_t>(best)] = static_cast<int32_t>(seeds_.size());
+    seeds_.push_back(s);
+    label_[static_cast<std::size_t>(best)] = label;
+    queue_.push_back(best);
+    return true;
+  };
+  for (std::size_t i = 0; i < points_px.size(); ++i) stats.object_seeds += add_seed(points_px[i], point_disparity_px[i], 1) ? 1 : 0;
+  if (stats.object_seeds == 0) return stats;
+  if (c.static_competition) {
+    for (std::size_t i = 0; i < static_px.size(); ++i) stats.static_seeds += add_seed(static_px[i], static_disparity_px[i], 2) ? 1 : 0;
+  }
+
+  // Breadth-first from all seeds at once.
+  for (std::size_t head = 0; head < queue_.size(); ++head) {
+    const int p = queue_[head];
+    const int px = p % w, py = p / w;
+    const float dp = disparity_px.ptr<float>(py)[px];
+    const Seed& s = seeds_[static_cast<std::size_t>(seed_of_[static_cast<std::size_t>(p)])];
+    const uint8_t lab = label_[static_cast<std::size_t>(p)];
+    const float step = static_cast<float>(c.step_tolerance_px + c.step_tolerance_rel * dp);
+    const int nx[4] = {px - 1, px + 1, px, px};
+    const int ny[4] = {py, py, py - 1, py + 1};
+    for (int k = 0; k < 4; ++k) {
+      if (nx[k] < 0 || ny[k] < 0 || nx[k] >= w || ny[k] >= h) continue;
+      const int q = ny[k] * w + nx[k];
+      if (label_[static_cast<std::size_t>(q)] != 0) continue;
+      const float dq = disparity_px.ptr<float>(ny[k])[nx[k]];
+      if (!(dq > 0) || std::abs(dq - dp) > step || dq < s.lo || dq > s.hi || is_floor(nx[k], ny[k], dq)) continue;
+      label_[static_cast<std::size_t>(q)] = lab;
+      seed_of_[static_cast<std::size_t>(q)] = seed_of_[static_cast<std::size_t>(p)];
+      queue_.push_back(q);
+    }
+  }
+  for (int y = 0; y < h; ++y) {
+    uint8_t* m = mask.ptr<uint8_t>(y);
+    const uint8_t* l = label_.data() + static_cast<std::size_t>(y) * static_cast<std::size_t>(w);
+    for (int x = 0; x < w; ++x) m[x] = l[x] == 1 ? 255 : 0;
+  }
+
+  // Enclosed parts: the complement's 4-connected components that do not reach the ROI border.
+  cv::bitwise_not(mask, holes_);
+  const int count = cv::connectedComponentsWithStats(holes_, hole_labels_, hole_stats_, hole_centroids_, 4, CV_32S);
+  if (count > 1) {
+    invalid_count_.assign(static_cast<std::size_t>(count), 0);
+    for (int y = 0; y < h; ++y) {
+      const int* l = hole_labels_.ptr<int>(y);
+      const float* d = disparity_px.ptr<float>(y);
+      for (int x = 0; x < w; ++x) {
+        if (l[x] > 0 && !(d[x] > 0)) ++invalid_count_[static_cast<std::size_t>(l[x])];
+      }
+    }
+    std::vector<uint8_t>& fill = fill_;
+    fill.assign(static_cast<std::size_t>(count), 0);
+    bool any = false;
+    for (int k = 1; k < count; ++k) {
+      const int x0 = hole_stats_.at<int>(k, cv::CC_STAT_LEFT), y0 = hole_stats_.at<int>(k, cv::CC_STAT_TOP);
+      const int x1 = x0 + hole_stats_.at<int>(k, cv::CC_STAT_WIDTH), y1 = y0 + hole_stats_.at<int>(k, cv::CC_STAT_HEIGHT);
+      if (x0 == 0 || y0 == 0 || x1 == w || y1 == h) continue;  // reaches the border: outside
+      const int area = hole_stats_.at<int>(k, cv::CC_STAT_AREA);
+      const bool mostly_invalid = invalid_count_[static_cast<std::size_t>(k)] >= c.max_hole_invalid_fraction * area;
+      if (mostly_invalid || area < c.min_hole_fill_px) {
+        fill[static_cast<std::size_t>(k)] = 1;
+        any = true;
+      }
+    }
+    if (any) {
+      for (int y = 0; y < h; ++y) {
+        const int* l = hole_labels_.ptr<int>(y);
+        uint8_t* m = mask.ptr<uint8_t>(y);
+        for (int x = 0; x < w; ++x) {
+          if (l[x] > 0 && fill[static_cast<std::size_t>(l[x])]) m[x] = 255;
+        }
+      }
+    }
+  }
+  if (c.erode_px > 0) {
+    const int k = 2 * c.erode_px + 1;
+    cv::erode(mask, eroded_, cv::getStructuringElement(cv::MORPH_RECT, cv::Size(k, k)), cv::Point(-1, -1), 1,
+              cv::BORDER_CONSTANT, cv::Scalar(255));
+    std::swap(mask, eroded_);
+  }
+  stats.object_pixels = cv::countNonZero(mask);
+  return stats;
+}
+
+}  // namespace agvslam::dynamic
