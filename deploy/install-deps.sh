@@ -6,10 +6,12 @@ set -euo pipefail
 packages=(
   build-essential cmake ninja-build pkg-config git
   libopencv-dev libeigen3-dev libceres-dev
+  libpng-dev zlib1g-dev  # simulator PNG writer (libpng, zlib strategy constants)
   libyaml-cpp-dev libspdlog-dev libfmt-dev libcli11-dev nlohmann-json3-dev
   libgtest-dev libgmock-dev libbenchmark-dev
   cyclonedds-dev cyclonedds-tools can-utils iproute2 util-linux  # pose outputs: DDS (idlc), CAN tools, netns tests
   libv4l-dev v4l-utils qemu-system-x86 busybox-static kmod cpio  # V4L2 camera (libv4l2); VM harness (tests/vm)
+  libsystemd-dev systemd  # agvslamd: sd_notify (READY/WATCHDOG/STATUS/STOPPING); systemd-analyze verify in the tests
 )
 
 missing=()

@@ -6,12 +6,12 @@
 #include <cstdio>
 #include <filesystem>
 #include <fstream>
-#include <opencv2/imgcodecs.hpp>
 #include <sstream>
 
 #include "agvslam/core/error.h"
 #include "agvslam/io/calibration_io.h"
 #include "agvslam/io/trajectory_io.h"
+#include "agvslam/sim/png_writer.h"
 #include "agvslam/sim/random.h"
 #include "agvslam/sim/texture.h"
 
@@ -277,26 +277,17 @@ void write_sequence(const Simulator& sim, const std::string& out_dir, const Writ
   io::write_tum((root / "odometry.txt").string(),
                 simulate_wheel_odometry(gt, WheelOdometryConfig{}, sim.scenario().seed));
 
-  // Run-length deflate: as small as the default strategy on these images and faster.
-  const std::vector<int> png_params = {cv::IMWRITE_PNG_COMPRESSION, sim.config().png_compression,
-                                       cv::IMWRITE_PNG_STRATEGY, cv::IMWRITE_PNG_STRATEGY_RLE};
+  // One fixed PNG row filter per image kind (see png_writer.h), zlib's run-length strategy.
+  PngWriter png(sim.config().png_compression);
   std::string objects = objects_header() + "\n";
   SimFrame frame;
   for (int k = 0; k < sim.frame_count(); ++k) {
     sim.render_frame(k, frame, options.threads);
     const std::string name = frame_name(k);
-    const std::pair<const char*, const cv::Mat*> images[] = {
-        {"image_0", &frame.left}, {"image_1", &frame.right}, {"disp_0", &frame.disparity_u16}, {"mask_0", &frame.mask}};
-    for (const auto& [sub, image] : images) {
-      const std::string path = (root / sub / name).string();
-      bool ok = false;
-      try {
-        ok = cv::imwrite(path, *image, png_params);
-      } catch (const cv::Exception& e) {
-        throw InputError("--out", path, std::string("could not write the image: ") + e.what());
-      }
-      if (!ok) throw InputError("--out", path, "could not write the image (disk full or not writable?)");
-    }
+    png.write((root / "image_0" / name).string(), frame.left, PngFilter::kSub);
+    png.write((root / "image_1" / name).string(), frame.right, PngFilter::kSub);
+    png.write((root / "disp_0" / name).string(), frame.disparity_u16, PngFilter::kPaeth);
+    png.write((root / "mask_0" / name).string(), frame.mask, PngFilter::kNone);
     objects += format_objects(k, frame.objects);
     if (options.progress) options.progress(k + 1, sim.frame_count());
   }
