@@ -1,0 +1,180 @@
+#pragma once
+// agvslamd's configuration: one YAML file (params/agvslamd.yaml) with these sections, every key optional unless
+// said otherwise (defaults below), relative paths relative to the folder of the file:
+//
+//   source       type v4l2 | dataset; dataset folder, playback rate, loop, frame range; wait for a camera
+//   camera       the V4L2 stereo camera (the keys of params/camera_v4l2.yaml's `camera` section)
+//   calibration  file: any format agvslam::io reads (KITTI calib.txt, ORB-SLAM YAML, Kalibr camchain)
+//   stages       the params files of the other stages: features, slam, dynamic, stereo ("" = built-in defaults)
+//   pipeline     dynamic detector | off, mapping thread | inline, queue size, SLAM frame rate, heartbeat
+//   base_link    camera-to-base_link extrinsic T_base_cam (x, y, z, roll, pitch, yaw of the camera)
+//   covariance   the documented heuristic for the pose and twist covariance (the tracker gives none)
+//   dds / can    the outputs (drivers::dds::DdsConfig / drivers::can::CanConfig keys plus `enabled`)
+//   trajectory   the published poses as a TUM file, and the keyframe-refined trajectory at stop
+//   log          log file (reopened on SIGHUP), level, per-sample JSON log, statistics period
+//   systemd      when READY=1 is sent
+// (The map file and mode, save/load and localise/map, are issue 5's: a `map` section will hold them.)
+//
+// load_daemon_config() reads the file and every file it names (stage params, calibration, the dataset's index)
+// and validates everything: a bad value is an InputError naming the file, the field ("source.rate") and what was
+// expected, before anything is opened or started.
+
+#include <cstdint>
+#include <optional>
+#include <string>
+#include <vector>
+
+#include "agvslam/core/camera.h"
+#include "agvslam/core/se3.h"
+#include "agvslam/drivers/can/can_config.h"
+#include "agvslam/drivers/dds/dds_config.h"
+#include "agvslam/drivers/v4l2/camera_config.h"
+#include "agvslam/dynamic/detector.h"
+#include "agvslam/slam/system.h"
+#include "agvslam/stereo/stereo_config.h"
+
+namespace agvslam::daemon {
+
+enum class SourceType { kV4l2, kDataset };
+const char* to_string(SourceType type);
+
+struct SourceConfig {
+  SourceType type = SourceType::kV4l2;
+  // dataset: any folder agvslam::io reads (KITTI layout, agvslam-sim output, EuRoC ASL).
+  std::string dataset;
+  // dataset: playback speed as a multiple of the dataset's own rate (1 = real time); 0 = as fast as the pipeline
+  // takes frames, none dropped (the capture queue then waits instead of dropping).
+  double rate = 1.0;
+  // dataset: a fixed playback rate in Hz instead of `rate` (0 = use `rate`).
+  double rate_hz = 0.0;
+  bool loop = false;        // dataset: start again at the first frame after the last (else: stop at the end)
+  std::string frames;       // dataset: inclusive frame range "A:B" (either side may be empty); "" = all
+  // v4l2: a camera that cannot be opened at start is retried with back-off (the daemon runs and reports its
+  // state meanwhile); false: exit 1 with the device's error.
+  bool wait_for_camera = true;
+};
+
+struct StageFiles {
+  std::string features, slam, dynamic, stereo;  // resolved paths; "" = built-in defaults
+};
+
+enum class DynamicMode { kDetector, kOff };
+enum class MappingMode { kThread, kInline };
+
+struct PipelineConfig {
+  DynamicMode dynamic = DynamicMode::kDetector;
+  MappingMode mapping = MappingMode::kThread;
+  // Frames waiting between capture and processing; when full the oldest is dropped and counted (newest wins).
+  int capture_queue = 2;
+  // Samples waiting between tracking and the outputs thread (newest wins as well).
+  int output_queue = 8;
+  // The camera rate the SLAM assumes (keyframe spacing counts frames); 0 = camera.fps or the dataset's rate.
+  double frame_rate_hz = 0.0;
+  int opencv_threads = 1;  // OpenCV's threads inside a stage (1: one core per pipeline thread)
+  // While no frame is processed for this long, a status sample (state lost) goes out every heartbeat_ms.
+  int heartbeat_ms = 500;
+  // Grab / pop time-outs of the loops (ms): how often a waiting thread checks for stop and proves it is alive.
+  int poll_ms = 100;
+};
+
+// T_base_cam: the (raw) left camera in base_link (REP-103: x forward, y left, z up), given as the position and
+// roll/pitch/yaw (degrees, applied z-y'-x'') of the camera's body frame. With `optical` (default) that body frame
+// is the ROS camera_link convention (x along the optical axis, y left, z up) and the optical frame the SLAM uses
+// (z forward, x right, y down) is rotated from it; without, the angles give the optical frame directly.
+struct BaseLinkConfig {
+  double x_m = 0, y_m = 0, z_m = 0;
+  double roll_deg = 0, pitch_deg = 0, yaw_deg = 0;
+  bool optical = true;
+  SE3d T_base_cam() const;
+  std::string describe() const;
+};
+
+// The tracker reports no covariance yet. Heuristic: standard deviations scale with sqrt(reference_inliers /
+// inliers) (a pose from half the inliers is sqrt(2) less certain), floored at min_inliers; diagonal matrices.
+struct CovarianceConfig {
+  double position_sd_m = 0.02;       // per axis, at reference_inliers
+  double rotation_sd_deg = 0.5;      // per axis
+  double velocity_sd_mps = 0.05;     // per axis of the finite-difference twist
+  double angular_sd_degps = 2.0;
+  int reference_inliers = 200;
+  int min_inliers = 10;
+  std::string describe() const;
+};
+
+struct OutputsConfig {
+  bool dds_enabled = true;
+  drivers::dds::DdsConfig dds;
+  bool can_enabled = false;
+  drivers::can::CanConfig can;
+};
+
+enum class TrajectoryFrame { kBaseLink, kCamera };
+
+struct TrajectoryConfig {
+  // TUM file with the pose of every published sample (capture time stamps), written as the daemon runs (flushed
+  // every flush_every poses and at stop). "" = none.
+  std::string file;
+  TrajectoryFrame frame = TrajectoryFrame::kBaseLink;  // base_link: T_map_base; camera: T_w_c of the SLAM
+  int flush_every = 20;
+  // At stop: the keyframe-refined trajectory of the left camera (TUM, T_w_c, the SLAM's own frame), as
+  // agvslam-run --out writes it. "" = none.
+  std::string final_file;
+};
+
+struct LogConfig {
+  std::string file;       // also log to this file (appended; reopened on SIGHUP for logrotate). "" = stderr only
+  std::string level = "info";  // trace, debug, info, warn, error
+  // One JSON line per sample handed to the outputs (the sample's SI values, the source frame, what CAN did);
+  // the format agvslam-pose-replay --json writes, so can_log_check reads it. "" = none.
+  std::string pose_log;
+  double stats_every_s = 10;  // a statistics line in the log every S seconds (0: only at stop)
+};
+
+enum class ReadyWhen { kFirstFrame, kStartup };
+
+struct SystemdConfig {
+  // first_frame: READY=1 once the first frame went through tracking and its sample reached the outputs, or after
+  // ready_timeout_s without one (a vehicle booting with its camera unplugged still gets a running daemon that
+  // reports "lost"); startup: as soon as the outputs are open.
+  ReadyWhen ready = ReadyWhen::kFirstFrame;
+  double ready_timeout_s = 20;
+};
+
+struct DaemonConfig {
+  std::string path;  // the YAML file
+  SourceConfig source;
+  drivers::v4l2::V4l2CameraConfig camera;
+  std::string calibration_file;  // resolved; "" = the dataset's own
+  StageFiles stage_files;
+  PipelineConfig pipeline;
+  BaseLinkConfig base_link;
+  CovarianceConfig covariance;
+  OutputsConfig outputs;
+  TrajectoryConfig trajectory;
+  LogConfig log;
+  SystemdConfig systemd;
+
+  // Loaded from the stage files (defaults when a file is not given).
+  slam::SystemConfig system;
+  dynamic::DynamicDetectorConfig detector;
+  stereo::StereoConfig stereo;
+
+  // Throws InputError(path, "section.key", "expected ...").
+  void validate() const;
+  // Every setting, a line each, for the start-up echo.
+  std::vector<std::string> describe() const;
+};
+
+// Reads `path` and the stage files it names, validates, resolves relative paths against the file's folder.
+DaemonConfig load_daemon_config(const std::string& path);
+
+// The `dds` and `can` sections alone (the keys of DdsConfig / CanConfig), for tools that share the daemon's file.
+drivers::dds::DdsConfig load_dds_config(const std::string& path, const std::string& section = "dds");
+drivers::can::CanConfig load_can_config(const std::string& path, const std::string& section = "can");
+
+// "A:B" (inclusive, either side may be empty) -> [first, last] clipped to `size` frames; throws
+// InputError(source, field, ...) for a malformed or empty range.
+void parse_frame_range(const std::string& text, std::size_t size, const std::string& source, const std::string& field,
+                       std::size_t& first, std::size_t& last);
+
+}  // namespace agvslam::daemon

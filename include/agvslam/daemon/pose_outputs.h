@@ -1,0 +1,105 @@
+#pragma once
+// agvslamd's outputs, driven by the outputs thread one sample at a time:
+//   DDS   rt/<ns>/pose and rt/<ns>/odom only for a tracking sample; rt/<ns>/status for every sample (two
+//         DdsPosePublishers: one with pose+odom, one with status, each with its own writer thread, so a lost frame
+//         publishes status alone and never a pose)
+//   CAN   every sample (the frames carry the state bits; a sample that is not tracking carries the last good
+//         pose, see PoseSampleBuilder), rate-limited by can.rate_hz; never blocks
+//   trajectory file (TUM) of the tracking samples, and the per-sample JSON log (pose_log)
+// publish() stamps latency_ns (capture -> handed to the outputs) just before handing the sample over.
+
+#include <chrono>
+#include <cstdio>
+#include <memory>
+#include <mutex>
+#include <nlohmann/json_fwd.hpp>
+#include <string>
+
+#include "agvslam/daemon/daemon_config.h"
+#include "agvslam/drivers/can/can_publisher.h"
+#include "agvslam/drivers/dds/publisher.h"
+#include "agvslam/drivers/pose_sample.h"
+
+namespace agvslam::daemon {
+
+// The sample's SI values as JSON, the field names agvslam-pose-replay --json uses ("t", "R", "cov_pose", ...).
+nlohmann::json sample_to_json(const drivers::PoseSample& s);
+
+// Where one frame's time went (ms): waiting in the capture queue, in the detector (wall and the thread's CPU time),
+// waiting for tracking, in tracking, waiting for the outputs thread. -1: not applicable.
+struct StageTimes {
+  double capture_queue_ms = -1, detector_ms = -1, detector_cpu_ms = -1, detected_queue_ms = -1, tracking_ms = -1,
+         tracking_cpu_ms = -1, output_queue_ms = -1;
+  int64_t tracked_mono_ns = 0;  // when tracking handed the sample over
+};
+
+// What the outputs thread hands over: the sample and where its frame came from (for the JSON log).
+struct OutputItem {
+  drivers::PoseSample sample;
+  bool heartbeat = false;     // no frame behind it (status while nothing is processed)
+  int64_t source_index = -1;  // dataset frame index (-1: camera or heartbeat)
+  int64_t source_t_ns = 0;
+  SE3d T_w_c = SE3d::Identity();  // the SLAM's camera pose (tracking samples), for trajectory.frame camera
+  StageTimes times;
+};
+
+struct OutputStats {
+  uint64_t samples = 0, tracking_samples = 0, heartbeats = 0;
+  drivers::dds::DdsPublisherStats dds_pose, dds_status;
+  bool can_enabled = false;
+  drivers::can::CanPublisherStats can;
+  std::string can_last_error;
+};
+
+// A line-buffered append-only text file (the TUM trajectory, the JSON log); RAII over FILE*.
+class TextFile {
+ public:
+  TextFile() = default;
+  // Opens for writing (truncates); throws InputError(source, field, ...) when it cannot.
+  TextFile(const std::string& path, const std::string& source, const std::string& field);
+  ~TextFile();
+  TextFile(TextFile&& other) noexcept;
+  TextFile& operator=(TextFile&& other) noexcept;
+  TextFile(const TextFile&) = delete;
+  TextFile& operator=(const TextFile&) = delete;
+  bool is_open() const { return file_ != nullptr; }
+  void write_line(const char* text, std::size_t size);
+  void flush();
+
+ private:
+  std::FILE* file_ = nullptr;
+  std::string path_;
+};
+
+class PoseOutputs {
+ public:
+  // Opens every enabled output. DDS failures throw (DdsError naming the domain/topic); CAN retries with back-off
+  // (an absent interface is not an error: the bus may come up later); files throw InputError naming the field.
+  explicit PoseOutputs(const DaemonConfig& config);
+  ~PoseOutputs();
+  PoseOutputs(const PoseOutputs&) = delete;
+  PoseOutputs& operator=(const PoseOutputs&) = delete;
+
+  // Stamps item.sample.latency_ns and hands the sample to every output. Outputs thread only.
+  void publish(OutputItem& item);
+  // Flushes the files and waits up to `timeout` for DDS readers to acknowledge what was written.
+  void flush(std::chrono::milliseconds timeout);
+  OutputStats stats() const;
+  // Waits until the DDS topics have `count` matched readers each (tests, benchmarks).
+  bool wait_for_subscribers(int count, std::chrono::milliseconds timeout) const;
+
+ private:
+  const DaemonConfig& config_;
+  // The status publisher is created first: it owns the DDS domain when one is created, so it must go last.
+  std::unique_ptr<drivers::dds::DdsPosePublisher> dds_status_;
+  std::unique_ptr<drivers::dds::DdsPosePublisher> dds_pose_;
+  std::unique_ptr<drivers::can::CanPosePublisher> can_;
+  TextFile trajectory_, pose_log_;
+  int unflushed_ = 0;
+  uint64_t samples_ = 0, tracking_samples_ = 0, heartbeats_ = 0;
+  mutable std::mutex stats_mutex_;  // stats() is read by the supervisor while the outputs thread publishes
+  drivers::can::CanPublisherStats can_stats_;  // copied after each publish (CanPosePublisher is single-threaded)
+  std::string can_last_error_;
+};
+
+}  // namespace agvslam::daemon

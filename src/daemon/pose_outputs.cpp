@@ -1,0 +1,197 @@
+#include "agvslam/daemon/pose_outputs.h"
+
+#include <cerrno>
+#include <cinttypes>
+#include <cstring>
+#include <nlohmann/json.hpp>
+#include <spdlog/spdlog.h>
+
+#include "agvslam/core/error.h"
+#include "agvslam/drivers/dds/subscriber.h"
+
+namespace agvslam::daemon {
+
+namespace dds = drivers::dds;
+
+nlohmann::json sample_to_json(const drivers::PoseSample& s) {
+  const Eigen::Vector3d& t = s.T_map_base.translation();
+  const Eigen::Matrix3d& R = s.T_map_base.linear();
+  nlohmann::json r = nlohmann::json::array();
+  for (int i = 0; i < 3; ++i) {
+    for (int j = 0; j < 3; ++j) r.push_back(R(i, j));
+  }
+  nlohmann::json cov = nlohmann::json::array();
+  for (int i = 0; i < 36; ++i) cov.push_back(s.cov_pose(i / 6, i % 6));
+  return {{"t_ns", s.t_ns},
+          {"t", {t.x(), t.y(), t.z()}},
+          {"R", r},
+          {"cov_pose", cov},
+          {"v_base_mps", {s.v_base_mps.x(), s.v_base_mps.y(), s.v_base_mps.z()}},
+          {"w_base_radps", {s.w_base_radps.x(), s.w_base_radps.y(), s.w_base_radps.z()}},
+          {"tracking_state", static_cast<int>(s.tracking_state)},
+          {"frame_index", s.frame_index},
+          {"frames_processed", s.frames_processed},
+          {"frames_dropped", s.frames_dropped},
+          {"fps", s.fps},
+          {"dynamic_pixel_fraction", s.dynamic_pixel_fraction},
+          {"latency_ns", s.latency_ns}};
+}
+
+TextFile::TextFile(const std::string& path, const std::string& source, const std::string& field) : path_(path) {
+  file_ = std::fopen(path.c_str(), "w");
+  if (file_ == nullptr) {
+    throw InputError(source, field, "expected a writable file, " + path + ": " + std::strerror(errno));
+  }
+}
+
+TextFile::~TextFile() {
+  if (file_ != nullptr) std::fclose(file_);
+}
+
+TextFile::TextFile(TextFile&& other) noexcept : file_(other.file_), path_(std::move(other.path_)) { other.file_ = nullptr; }
+
+TextFile& TextFile::operator=(TextFile&& other) noexcept {
+  if (this != &other) {
+    if (file_ != nullptr) std::fclose(file_);
+    file_ = other.file_;
+    path_ = std::move(other.path_);
+    other.file_ = nullptr;
+  }
+  return *this;
+}
+
+void TextFile::write_line(const char* text, std::size_t size) {
+  if (file_ == nullptr) return;
+  std::fwrite(text, 1, size, file_);
+  std::fputc('\n', file_);
+}
+
+void TextFile::flush() {
+  if (file_ != nullptr) std::fflush(file_);
+}
+
+PoseOutputs::PoseOutputs(const DaemonConfig& config) : config_(config) {
+  if (config.outputs.dds_enabled) {
+    const dds::DdsConfig& base = config.outputs.dds;
+    if (base.publish_status) {
+      dds::DdsConfig c = base;
+      c.publish_pose = c.publish_odom = false;
+      dds_status_ = std::make_unique<dds::DdsPosePublisher>(c);
+    }
+    if (base.publish_pose || base.publish_odom) {
+      dds::DdsConfig c = base;
+      c.publish_status = false;
+      dds_pose_ = std::make_unique<dds::DdsPosePublisher>(c);
+    }
+  }
+  if (config.outputs.can_enabled) {
+    can_ = std::make_unique<drivers::can::CanPosePublisher>(config.outputs.can);
+    if (!can_->is_open()) {
+      spdlog::warn("can: {} not available yet ({}); retrying with back-off", config.outputs.can.interface,
+                   can_->last_error());
+    }
+  }
+  if (!config.trajectory.file.empty()) trajectory_ = TextFile(config.trajectory.file, config.path, "trajectory.file");
+  if (!config.log.pose_log.empty()) pose_log_ = TextFile(config.log.pose_log, config.path, "log.pose_log");
+}
+
+PoseOutputs::~PoseOutputs() {
+  // The pose publisher first: the status publisher may own the DDS domain.
+  dds_pose_.reset();
+  dds_status_.reset();
+}
+
+void PoseOutputs::publish(OutputItem& item) {
+  drivers::PoseSample& s = item.sample;
+  const bool tracking = s.tracking_state == drivers::TrackingState::kTracking && !item.heartbeat;
+  s.latency_ns = item.heartbeat ? 0 : dds::realtime_now_ns() - s.t_ns;
+  if (tracking && dds_pose_) dds_pose_->publish(s);
+  if (dds_status_) dds_status_->publish(s);
+  drivers::can::CanPublishResult can_result;
+  if (can_) can_result = can_->publish(s);
+
+  if (tracking && trajectory_.is_open()) {
+    const SE3d T = config_.trajectory.frame == TrajectoryFrame::kBaseLink ? s.T_map_base : item.T_w_c;
+    Eigen::Quaterniond q(T.linear());
+    q.normalize();
+    if (q.w() < 0) q.coeffs() *= -1.0;
+    const Eigen::Vector3d& t = T.translation();
+    char line[256];
+    const int64_t sec = s.t_ns / 1000000000LL, nsec = s.t_ns % 1000000000LL;
+    const int n = std::snprintf(line, sizeof line, "%" PRId64 ".%09" PRId64 " %.10f %.10f %.10f %.12f %.12f %.12f %.12f",
+                                sec, nsec, t.x(), t.y(), t.z(), q.x(), q.y(), q.z(), q.w());
+    trajectory_.write_line(line, static_cast<std::size_t>(n));
+    if (++unflushed_ >= config_.trajectory.flush_every) {
+      trajectory_.flush();
+      unflushed_ = 0;
+    }
+  }
+  if (pose_log_.is_open()) {
+    nlohmann::json j = {{"i", samples_},
+                        {"t_ns", s.t_ns},
+                        {"heartbeat", item.heartbeat},
+                        {"source_index", item.source_index},
+                        {"source_t_ns", item.source_t_ns},
+                        {"sample", sample_to_json(s)},
+                        {"times_ms", {{"capture_queue", item.times.capture_queue_ms}, {"detector", item.times.detector_ms},
+                                      {"detector_cpu", item.times.detector_cpu_ms},
+                                      {"detected_queue", item.times.detected_queue_ms}, {"tracking", item.times.tracking_ms},
+                                      {"tracking_cpu", item.times.tracking_cpu_ms},
+                                      {"output_queue", item.times.output_queue_ms}}},
+                        {"dds", {{"pose", tracking && dds_pose_ != nullptr}, {"status", dds_status_ != nullptr}}}};
+    if (can_) {
+      j["can"] = {{"due", can_result.due}, {"sent", can_result.sent}, {"counter", can_result.counter},
+                  {"frames_sent", can_result.frames_sent}};
+    }
+    const std::string text = j.dump();
+    pose_log_.write_line(text.data(), text.size());
+    pose_log_.flush();  // a test or an operator tailing the file sees each sample as it goes
+  }
+  std::lock_guard<std::mutex> lock(stats_mutex_);
+  ++samples_;
+  if (tracking) ++tracking_samples_;
+  if (item.heartbeat) ++heartbeats_;
+  if (can_) {
+    can_stats_ = can_->stats();
+    if (can_last_error_ != can_->last_error()) can_last_error_ = can_->last_error();
+  }
+}
+
+void PoseOutputs::flush(std::chrono::milliseconds timeout) {
+  trajectory_.flush();
+  pose_log_.flush();
+  const auto deadline = std::chrono::steady_clock::now() + timeout;
+  for (auto* pub : {dds_pose_.get(), dds_status_.get()}) {
+    if (pub == nullptr) continue;
+    const auto left = std::chrono::duration_cast<std::chrono::milliseconds>(deadline - std::chrono::steady_clock::now());
+    if (!pub->flush(std::max(left, std::chrono::milliseconds(0)))) {
+      spdlog::warn("dds: not every sample was acknowledged by the subscribers within {} ms", timeout.count());
+    }
+  }
+}
+
+OutputStats PoseOutputs::stats() const {
+  OutputStats s;
+  if (dds_pose_) s.dds_pose = dds_pose_->stats();
+  if (dds_status_) s.dds_status = dds_status_->stats();
+  std::lock_guard<std::mutex> lock(stats_mutex_);
+  s.samples = samples_;
+  s.tracking_samples = tracking_samples_;
+  s.heartbeats = heartbeats_;
+  s.can_enabled = can_ != nullptr;
+  s.can = can_stats_;
+  s.can_last_error = can_last_error_;
+  return s;
+}
+
+bool PoseOutputs::wait_for_subscribers(int count, std::chrono::milliseconds timeout) const {
+  const auto deadline = std::chrono::steady_clock::now() + timeout;
+  for (auto* pub : {dds_pose_.get(), dds_status_.get()}) {
+    if (pub == nullptr) continue;
+    const auto left = std::chrono::duration_cast<std::chrono::milliseconds>(deadline - std::chrono::steady_clock::now());
+    if (!pub->wait_for_subscribers(count, std::max(left, std::chrono::milliseconds(0)))) return false;
+  }
+  return true;
+}
+
+}  // namespace agvslam::daemon
