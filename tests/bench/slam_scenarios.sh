@@ -3,13 +3,14 @@
 #   tests/bench/slam_scenarios.sh [--build DIR] [--data DIR] [--seeds "101 102 103 104 105"]
 #                                 [--scenarios "static scene1 scene2 scene3 scene4 scene5"]
 #                                 [--modes "detector gt off"] [--mapping inline|thread] [--threads N]
-#                                 [--generate-only]
+#                                 [--generate-only] [--table-only]
 # Generates each <scenario>_<seed> sequence under --data once (agvslam-sim, full default length; ~0.2-0.35 s per
 # frame and core), runs agvslam-run on it per mode (trajectory, JSON and log under <data>/slam/), and prints one
 # line per sequence: ATE RMSE per mode (SE(3)-aligned), drift (largest distance from the first position: the
 # figure for scene1, where the AGV stands still), detector vs off (reduction, %), detector vs gt (%), lost frames
-# and the median tracking time; then the per-scenario means over the seeds.
+# and the median tracking-thread CPU time per frame (ms); then the per-scenario means over the seeds.
 # --mapping inline (default) maps each keyframe before the next frame: the same input gives the same result.
+# --table-only prints the table from the results already under <data>/slam/.
 set -euo pipefail
 build=build/release
 data=${TMPDIR:-/tmp}/agvslam-slam-scenarios
@@ -19,6 +20,7 @@ modes="detector gt off"
 mapping=inline
 threads=$(nproc)
 generate_only=0
+table_only=0
 while [[ $# -gt 0 ]]; do
   case "$1" in
     --build) build=$2; shift 2 ;;
@@ -29,7 +31,8 @@ while [[ $# -gt 0 ]]; do
     --mapping) mapping=$2; shift 2 ;;
     --threads) threads=$2; shift 2 ;;
     --generate-only) generate_only=1; shift ;;
-    *) echo "slam_scenarios.sh: unknown option '$1' (expected --build, --data, --seeds, --scenarios, --modes, --mapping, --threads, --generate-only)" >&2; exit 2 ;;
+    --table-only) table_only=1; shift ;;
+    *) echo "slam_scenarios.sh: unknown option '$1' (expected --build, --data, --seeds, --scenarios, --modes, --mapping, --threads, --generate-only, --table-only)" >&2; exit 2 ;;
   esac
 done
 sim=$build/bin/agvslam-sim
@@ -38,7 +41,8 @@ for tool in "$sim" "$run"; do
   [[ -x $tool ]] || { echo "slam_scenarios.sh: $tool not found; build first (cmake --build --preset release)" >&2; exit 2; }
 done
 mkdir -p "$data/slam"
-for scenario in $scenarios; do
+[[ $table_only == 1 ]] && scenarios_to_run="" || scenarios_to_run=$scenarios
+for scenario in $scenarios_to_run; do
   for seed in $seeds; do
     seq=$data/${scenario}_$seed
     if [[ ! -f $seq/objects.txt ]]; then
@@ -62,7 +66,7 @@ scenarios, seeds = args[:sep], args[sep + 1:]
 def load(sc, seed, mode):
     p = f"{root}/{sc}_{seed}_{mode}.json"
     return json.load(open(p)) if os.path.exists(p) else None
-head = f"{'sequence':<14}" + "".join(f"{'ATE ' + m:>13}" for m in modes) + f"{'drift det':>11}{'det/off':>9}{'det/gt':>8}{'lost':>6}{'trk ms':>8}"
+head = f"{'sequence':<14}" + "".join(f"{'ATE ' + m:>13}" for m in modes) + f"{'drift det':>11}{'det/off':>9}{'det/gt':>8}{'lost':>6}{'trk cpu':>8}"
 print(head)
 means = {}
 for sc in scenarios:
@@ -75,7 +79,8 @@ for sc in scenarios:
         red = (1 - ate["detector"] / ate["off"]) * 100 if "detector" in ate and "off" in ate and ate["off"] > 0 else float("nan")
         vs_gt = (ate["detector"] / ate["gt"] - 1) * 100 if "detector" in ate and "gt" in ate and ate["gt"] > 0 else float("nan")
         lost = sum(j["frames"]["lost"] for j in js.values() if j)
-        trk = ref["timings"]["tracking"]["median_ms"] if ref else float("nan")
+        t = ref["timings"] if ref else {}
+        trk = t.get("tracking_cpu", t.get("tracking", {})).get("median_ms", float("nan")) if ref else float("nan")
         print(line + f"{drift:>11.4f}{red:>8.1f}%{vs_gt:>7.1f}%{lost:>6}{trk:>8.2f}")
         for m in modes:
             means.setdefault((sc, m), []).append(ate[m])
