@@ -48,6 +48,30 @@ int32_t surface_key(const RayHit& hit) {
   return 0;
 }
 
+// The hit on the box face with surface key `key` (>= 16) at ray parameter t.
+inline void set_box_hit(int32_t key, float t, RayHit& hit) {
+  const int32_t k = key - 16;
+  hit.t = t;
+  hit.kind = RayHit::Kind::kBox;
+  hit.index = k / 8;
+  hit.face = static_cast<uint8_t>(k % 8);
+  V3 n{0, 0, 0};
+  n[hit.face / 2] = (hit.face & 1) ? 1.0f : -1.0f;
+  hit.normal = n;
+}
+
+// Per-row scratch of the antialiasing pass (one per thread, reused): the row's silhouette pixels and, per extra
+// sample, the nearest box face's depth and key there.
+struct SampleScratch {
+  std::vector<int> cols;
+  std::vector<float> z[2];
+  std::vector<int32_t> key[2];
+};
+SampleScratch& sample_scratch() {
+  thread_local SampleScratch scratch;
+  return scratch;
+}
+
 // Texture cache: level-0 texels of 1/512 m (about 2 mm: the footprint of a pixel on the floor nearest to the
 // camera), tiles kept while any of the last 16 images (8 stereo frames) used them.
 constexpr float kBaseTexelM = 1.0f / 512.0f;
@@ -376,24 +400,13 @@ void Renderer::cast_dynamic(const Ray& ray, const std::vector<DynamicObject>& ob
   }
 }
 
-void Renderer::rasterize_boxes(const CameraIntrinsics& cam, const Eigen::Isometry3d& T_m_c, cv::Mat& depth,
-                               cv::Mat& key, int threads) const {
+void Renderer::project_box_faces(const CameraIntrinsics& cam, const Eigen::Isometry3d& T_m_c,
+                                 std::vector<BoxFace>& faces, std::vector<std::vector<uint32_t>>& buckets) const {
   const int width = cam.width, height = cam.height;
-  depth.setTo(kInfinity);
-  key.setTo(-1);
   const Eigen::Matrix3d R_c_m = T_m_c.linear().transpose();
   const Eigen::Vector3d o = T_m_c.translation();
   const double z_near = 1e-3;
-  // Per face: polygon in pixel coordinates (clipped to z >= z_near) and the plane for the depth at a pixel:
-  // z(u, v) = k / (a u + b v + c).
-  struct Face {
-    float a, b, c, k;
-    int32_t key;
-    int n;
-    double u[8], v[8];
-    int row0, row1;
-  };
-  std::vector<Face> faces;
+  faces.clear();
   faces.reserve(4096);
   const double fx = cam.fx, fy = cam.fy, cx = cam.cx, cy = cam.cy;
   for (std::size_t bi = 0; bi < warehouse_.boxes.size(); ++bi) {
@@ -428,7 +441,7 @@ void Renderer::rasterize_boxes(const CameraIntrinsics& cam, const Eigen::Isometr
         if (p_in != q_in) poly[n++] = p + (q - p) * ((z_near - p.z()) / (q.z() - p.z()));
       }
       if (n < 3) continue;
-      Face f;
+      BoxFace f;
       f.n = n;
       double v_min = 1e30, v_max = -1e30, u_min = 1e30, u_max = -1e30;
       for (int i = 0; i < n; ++i) {
@@ -439,10 +452,13 @@ void Renderer::rasterize_boxes(const CameraIntrinsics& cam, const Eigen::Isometr
         u_min = std::min(u_min, f.u[i]);
         u_max = std::max(u_max, f.u[i]);
       }
-      if (u_max < 0 || u_min > width - 1 || v_max < 0 || v_min > height - 1) continue;
+      // Kept when it may cover a sample within half a pixel of some pixel centre.
+      if (u_max < -0.5 || u_min > width - 0.5 || v_max < -0.5 || v_min > height - 0.5) continue;
       f.row0 = std::max(0, static_cast<int>(std::ceil(v_min)));
       f.row1 = std::min(height - 1, static_cast<int>(std::floor(v_max)));
-      if (f.row0 > f.row1) continue;
+      f.sample_row0 = std::max(0, static_cast<int>(std::ceil(v_min - 0.5)));
+      f.sample_row1 = std::min(height - 1, static_cast<int>(std::floor(v_max + 0.5)));
+      if (f.sample_row0 > f.sample_row1) continue;
       // Plane n_c . X = k in the camera frame; for the pixel ray X = z (xn, yn, 1).
       Eigen::Vector3d n_m = Eigen::Vector3d::Zero();
       n_m[axis] = side ? 1.0 : -1.0;
@@ -456,32 +472,48 @@ void Renderer::rasterize_boxes(const CameraIntrinsics& cam, const Eigen::Isometr
       faces.push_back(f);
     }
   }
-  // Bucket the faces by blocks of rows, then fill each row (rows are independent: any thread count gives the
-  // same result; ties keep the face that comes first).
-  constexpr int kRowsPerBucket = 8;
-  const int n_buckets = (height + kRowsPerBucket - 1) / kRowsPerBucket;
-  std::vector<std::vector<uint32_t>> buckets(static_cast<std::size_t>(n_buckets));
+  // Bucket the faces by blocks of rows (ties in a row keep the face that comes first).
+  const int n_buckets = (height + kFaceRowsPerBucket - 1) / kFaceRowsPerBucket;
+  buckets.resize(static_cast<std::size_t>(n_buckets));
+  for (auto& b : buckets) b.clear();
   for (std::size_t i = 0; i < faces.size(); ++i)
-    for (int bk = faces[i].row0 / kRowsPerBucket; bk <= faces[i].row1 / kRowsPerBucket; ++bk)
+    for (int bk = faces[i].sample_row0 / kFaceRowsPerBucket; bk <= faces[i].sample_row1 / kFaceRowsPerBucket; ++bk)
       buckets[static_cast<std::size_t>(bk)].push_back(static_cast<uint32_t>(i));
+}
+
+namespace {
+// Span [s0, s1) of image row vv (image coordinates) inside a convex projected face; s0 > s1 when the row misses it.
+inline void face_row_span(const double* fu, const double* fv, int n, double vv, double& s0, double& s1) {
+  s0 = 1e30;
+  s1 = -1e30;
+  for (int i = 0; i < n; ++i) {
+    const int j = i + 1 < n ? i + 1 : 0;
+    const double va = fv[i], vb = fv[j];
+    if ((va <= vv && vv < vb) || (vb <= vv && vv < va)) {
+      const double uu = fu[i] + (vv - va) * (fu[j] - fu[i]) / (vb - va);
+      s0 = std::min(s0, uu);
+      s1 = std::max(s1, uu);
+    }
+  }
+}
+}  // namespace
+
+void Renderer::rasterize_boxes(const CameraIntrinsics& cam, const std::vector<BoxFace>& faces,
+                               const std::vector<std::vector<uint32_t>>& buckets, cv::Mat& depth, cv::Mat& key,
+                               int threads) const {
+  const int width = cam.width, height = cam.height;
+  depth.setTo(kInfinity);
+  key.setTo(-1);
+  // Rows are independent: any thread count gives the same result.
   for_each_row(height, threads, [&](int v) {
     float* zrow = depth.ptr<float>(v);
     int32_t* krow = key.ptr<int32_t>(v);
-    const double vv = v;
-    for (uint32_t fi : buckets[static_cast<std::size_t>(v / kRowsPerBucket)]) {
-      const Face& f = faces[fi];
+    for (uint32_t fi : buckets[static_cast<std::size_t>(v / kFaceRowsPerBucket)]) {
+      const BoxFace& f = faces[fi];
       if (v < f.row0 || v > f.row1) continue;
       // Span of the convex polygon on this row.
-      double s0 = 1e30, s1 = -1e30;
-      for (int i = 0; i < f.n; ++i) {
-        const int j = i + 1 < f.n ? i + 1 : 0;
-        const double va = f.v[i], vb = f.v[j];
-        if ((va <= vv && vv < vb) || (vb <= vv && vv < va)) {
-          const double uu = f.u[i] + (vv - va) * (f.u[j] - f.u[i]) / (vb - va);
-          s0 = std::min(s0, uu);
-          s1 = std::max(s1, uu);
-        }
-      }
+      double s0, s1;
+      face_row_span(f.u, f.v, f.n, static_cast<double>(v), s0, s1);
       if (s0 > s1) continue;
       const int u0 = std::max(0, static_cast<int>(std::ceil(s0)));
       const int u1 = std::min(width - 1, static_cast<int>(std::ceil(s1)) - 1);
@@ -726,7 +758,10 @@ void Renderer::render(const CameraIntrinsics& cam, const Eigen::Isometry3d& T_m_
 
   // Static boxes by rasterisation into depth_m / surface_key, then per pixel: the hall, the nearer of the two,
   // the actors (ray cast inside their screen rectangles), shading.
-  rasterize_boxes(cam, T_m_c, out.depth_m, out.surface_key, threads);
+  std::vector<BoxFace> faces;
+  std::vector<std::vector<uint32_t>> face_buckets;
+  project_box_faces(cam, T_m_c, faces, face_buckets);
+  rasterize_boxes(cam, faces, face_buckets, out.depth_m, out.surface_key, threads);
   std::vector<float> column_x(static_cast<std::size_t>(width));  // normalised image x of each pixel column
   for (int u = 0; u < width; ++u) column_x[static_cast<std::size_t>(u)] = (static_cast<float>(u) - cx) / fx;
   const RenderSettings& s = settings_;
@@ -751,16 +786,7 @@ void Renderer::render(const CameraIntrinsics& cam, const Eigen::Isometry3d& T_m_
       RayHit& hit = row.hits[static_cast<std::size_t>(u)];
       hit = RayHit{};
       set_hall_hit(row.plane[static_cast<std::size_t>(u)], row.t[static_cast<std::size_t>(u)], hit);
-      if (keys[u] >= 16 && depth[u] < hit.t) {
-        const int32_t k = keys[u] - 16;
-        hit.t = depth[u];
-        hit.kind = RayHit::Kind::kBox;
-        hit.index = k / 8;
-        hit.face = static_cast<uint8_t>(k % 8);
-        V3 n{0, 0, 0};
-        n[hit.face / 2] = (hit.face & 1) ? 1.0f : -1.0f;
-        hit.normal = n;
-      }
+      if (keys[u] >= 16 && depth[u] < hit.t) set_box_hit(keys[u], depth[u], hit);
       if (u >= actor_u0 && u <= actor_u1)
         cast_dynamic(Ray(origin, col_x * column_x[static_cast<std::size_t>(u)] + row_dir), objects, rect_ptr, u, v, hit);
       const bool none = hit.kind == RayHit::Kind::kNone;
@@ -826,18 +852,59 @@ void Renderer::render(const CameraIntrinsics& cam, const Eigen::Isometry3d& T_m_
       if (k1 && is_edge(k0[u], k1[u], z0[u], z1[u])) e0[u] = e1[u] = 1;
     }
   }
-  // The centre sample plus two more on the pixel's diagonal.
+  // The centre sample plus two more on the pixel's diagonal (within half a pixel of the centre: the faces'
+  // sample rows). The static boxes at the samples are rasterised like the pixel centres, but only at the
+  // silhouette pixels of each row.
   static constexpr float kOffsets[2][2] = {{-0.3f, -0.22f}, {0.3f, 0.22f}};
   for_each_row(height, threads, [&](int v) {
     const uint8_t* e = out.edge.ptr<uint8_t>(v);
     float* radiance = out.radiance.ptr<float>(v);
-    for (int u = 0; u < width; ++u) {
-      if (!e[u]) continue;
+    SampleScratch& aa = sample_scratch();
+    aa.cols.clear();
+    for (int u = 0; u < width; ++u)
+      if (e[u]) aa.cols.push_back(u);
+    if (aa.cols.empty()) return;
+    const std::size_t n = aa.cols.size();
+    for (int k = 0; k < 2; ++k) {
+      aa.z[k].assign(n, kInfinity);
+      aa.key[k].assign(n, -1);
+    }
+    const int* cols = aa.cols.data();
+    for (uint32_t fi : face_buckets[static_cast<std::size_t>(v / kFaceRowsPerBucket)]) {
+      const BoxFace& f = faces[fi];
+      if (v < f.sample_row0 || v > f.sample_row1) continue;
+      for (int k = 0; k < 2; ++k) {
+        const float du = kOffsets[k][0];
+        const float vs = static_cast<float>(v) + kOffsets[k][1];
+        double s0, s1;
+        face_row_span(f.u, f.v, f.n, static_cast<double>(vs), s0, s1);
+        if (s0 > s1) continue;
+        // Silhouette pixels whose sample u + du lies in [s0, s1).
+        const int u_lo = static_cast<int>(std::max(s0 - du, -4.0)) - 2;  // <= floor(s0 - du) - 1
+        std::size_t i = static_cast<std::size_t>(std::lower_bound(cols, cols + n, u_lo) - cols);
+        const float row_term = f.b * vs + f.c;
+        float* zk = aa.z[k].data();
+        int32_t* kk = aa.key[k].data();
+        for (; i < n; ++i) {
+          const float us = static_cast<float>(cols[i]) + du;
+          if (us >= s1) break;
+          if (us < s0) continue;
+          const float z = f.k / (f.a * us + row_term);
+          if (z > 0 && z < zk[i]) {
+            zk[i] = z;
+            kk[i] = f.key;
+          }
+        }
+      }
+    }
+    for (std::size_t i = 0; i < n; ++i) {
+      const int u = cols[i];
       float sum = radiance[u];
-      for (const auto& off : kOffsets) {
-        const Ray ray = make_ray(static_cast<float>(u) + off[0], static_cast<float>(v) + off[1]);
+      for (int k = 0; k < 2; ++k) {
+        const Ray ray = make_ray(static_cast<float>(u) + kOffsets[k][0], static_cast<float>(v) + kOffsets[k][1]);
         RayHit hit;
-        cast_static(ray, hit);
+        cast_hall(ray.origin, ray.dir, hit);
+        if (aa.key[k][i] >= 16 && aa.z[k][i] < hit.t) set_box_hit(aa.key[k][i], aa.z[k][i], hit);
         cast_dynamic(ray, objects, rect_ptr, u, v, hit);
         sum += shade_hit(hit, ray.origin, ray.dir, objects, shadows, focal);
       }

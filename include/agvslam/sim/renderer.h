@@ -3,7 +3,8 @@
 // floor/walls/ceiling, the nearest static box face (found by rasterising the camera-facing faces of the boxes
 // with each face's exact plane depth at the pixel centre; identical to casting the pixel-centre ray), and the
 // few moving primitives (ray cast inside each object's screen rectangle). Pixels on silhouettes get two more
-// samples, ray cast through the 2-D grid DDA (cast_static), when antialiasing is on.
+// samples when antialiasing is on, found the same way: the box faces rasterised at the sample positions (only
+// at those pixels), the hall and the actors ray cast. (cast() uses the 2-D grid DDA, cast_static, instead.)
 //
 // The procedural textures of the static surfaces (floor, ceiling, walls, box faces) are looked up in
 // mip-mapped tiles baked on first use (TextureCache) rather than evaluated per pixel; the actors' textures are
@@ -105,10 +106,26 @@ class Renderer {
   // Walls, floor and ceiling only, for the ray origin + t * dir (the origin is inside the hall).
   void cast_hall(const V3& origin, const V3& dir, RayHit& hit) const;
   V3 hall_extent() const { return {warehouse_.width_m, warehouse_.depth_m, warehouse_.height_m}; }
+  // A camera-facing box face projected into the image (clipped to z >= z_near), with its plane for the depth at
+  // image point (u, v): z = k / (a u + b v + c).
+  struct BoxFace {
+    float a, b, c, k;
+    int32_t key;
+    int n;
+    double u[8], v[8];
+    int row0, row1;                // rows whose pixel centres it may cover (empty when row0 > row1)
+    int sample_row0, sample_row1;  // rows whose samples within half a pixel of the centre it may cover
+  };
+  static constexpr int kFaceRowsPerBucket = 8;
+  // Projects the camera-facing faces of the static boxes (in box order) and lists them by blocks of
+  // kFaceRowsPerBucket rows (over their sample rows; in face order).
+  void project_box_faces(const CameraIntrinsics& cam, const Eigen::Isometry3d& T_m_c, std::vector<BoxFace>& faces,
+                         std::vector<std::vector<uint32_t>>& buckets) const;
   // Primary visibility of the static boxes by rasterising their camera-facing faces, with the exact depth of
   // each face's plane at the pixel centre (what a pixel-centre ray cast returns). Fills `depth` (+inf where no
   // box) and `key` (surface key of the nearest face, -1 where none).
-  void rasterize_boxes(const CameraIntrinsics& cam, const Eigen::Isometry3d& T_m_c, cv::Mat& depth, cv::Mat& key,
+  void rasterize_boxes(const CameraIntrinsics& cam, const std::vector<BoxFace>& faces,
+                       const std::vector<std::vector<uint32_t>>& buckets, cv::Mat& depth, cv::Mat& key,
                        int threads) const;
   void cast_dynamic(const Ray& ray, const std::vector<DynamicObject>& objects, const ObjectRects* rects, int u, int v,
                     RayHit& hit) const;
