@@ -32,12 +32,14 @@ std::string fmt(const char* format, double a) {
 const char* to_string(DynamicMode m) { return m == DynamicMode::kDetector ? "detector" : "off"; }
 const char* to_string(MappingMode m) { return m == MappingMode::kThread ? "thread" : "inline"; }
 
-void read_dds(const ParamsReader& in, const std::string& s, drivers::dds::DdsConfig& c, bool* enabled) {
-  if (enabled != nullptr) {
-    in.check_keys(s, {"enabled", "domain_id", "network_interface", "config_uri", "topic_namespace", "publish_pose",
+void read_dds(const ParamsReader& in, const std::string& s, drivers::dds::DdsConfig& c, OutputsConfig* outputs) {
+  if (outputs != nullptr) {
+    in.check_keys(s, {"enabled", "wait_for_subscribers", "wait_timeout_s", "domain_id", "network_interface", "config_uri", "topic_namespace", "publish_pose",
                       "publish_odom", "publish_status", "map_frame_id", "odom_frame_id", "base_frame_id",
                       "history_depth", "max_blocking_ms", "queue_capacity"});
-    in.read(s, "enabled", *enabled, "true or false");
+    in.read(s, "enabled", outputs->dds_enabled, "true or false");
+    in.read(s, "wait_for_subscribers", outputs->dds_wait_for_subscribers, "an integer >= 0 (subscribers)");
+    in.read(s, "wait_timeout_s", outputs->dds_wait_timeout_s, "seconds");
   } else {
     in.check_keys(s, {"domain_id", "network_interface", "config_uri", "topic_namespace", "publish_pose", "publish_odom",
                       "publish_status", "map_frame_id", "odom_frame_id", "base_frame_id", "history_depth",
@@ -172,6 +174,12 @@ void DaemonConfig::validate() const {
   if (c.reference_inliers < 1) throw InputError(p, "covariance.reference_inliers", "expected an integer >= 1");
   if (c.min_inliers < 1) throw InputError(p, "covariance.min_inliers", "expected an integer >= 1");
   if (outputs.dds_enabled) outputs.dds.validate(p);
+  if (outputs.dds_wait_for_subscribers < 0 || outputs.dds_wait_for_subscribers > 100) {
+    throw InputError(p, "dds.wait_for_subscribers", "expected an integer in 0..100");
+  }
+  if (!(outputs.dds_wait_timeout_s > 0) || outputs.dds_wait_timeout_s > 3600) {
+    throw InputError(p, "dds.wait_timeout_s", "expected seconds in (0, 3600]");
+  }
   if (outputs.can_enabled) outputs.can.validate(p);
   if (trajectory.flush_every < 1) throw InputError(p, "trajectory.flush_every", "expected an integer >= 1 (poses)");
   if (!(log.stats_every_s >= 0)) throw InputError(p, "log.stats_every_s", "expected seconds >= 0 (0: only at stop)");
@@ -223,6 +231,10 @@ std::vector<std::string> DaemonConfig::describe() const {
   out.push_back(base_link.describe());
   out.push_back(covariance.describe());
   out.push_back(outputs.dds_enabled ? outputs.dds.describe() : std::string("dds: disabled"));
+  if (outputs.dds_enabled && outputs.dds_wait_for_subscribers > 0) {
+    out.push_back("dds: the first frame waits for " + std::to_string(outputs.dds_wait_for_subscribers) +
+                  " subscriber(s) on every topic, at most " + fmt("%g s", outputs.dds_wait_timeout_s));
+  }
   out.push_back(outputs.can_enabled ? outputs.can.describe() : std::string("can: disabled"));
   out.push_back("trajectory: " + (trajectory.file.empty() ? std::string("-") : trajectory.file) + " (" +
                 (trajectory.frame == TrajectoryFrame::kBaseLink ? "T_map_base" : "T_w_c camera") + ", TUM, flush every " +
@@ -346,7 +358,7 @@ DaemonConfig load_daemon_config(const std::string& path) {
   in.read("covariance", "reference_inliers", c.covariance.reference_inliers, "an integer >= 1");
   in.read("covariance", "min_inliers", c.covariance.min_inliers, "an integer >= 1");
 
-  read_dds(in, "dds", c.outputs.dds, &c.outputs.dds_enabled);
+  read_dds(in, "dds", c.outputs.dds, &c.outputs);
   read_can(in, "can", c.outputs.can, &c.outputs.can_enabled);
 
   in.check_keys("trajectory", {"file", "frame", "flush_every", "final_file"});

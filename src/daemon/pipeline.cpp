@@ -188,6 +188,18 @@ PipelineStats Pipeline::stats() const {
 void Pipeline::capture_loop() {
   const int poll_ms = config_.pipeline.poll_ms;
   try {
+    const OutputsConfig& oc = config_.outputs;
+    if (oc.dds_enabled && oc.dds_wait_for_subscribers > 0) {
+      const auto deadline = Clock::now() + std::chrono::duration_cast<Clock::duration>(
+                                               std::chrono::duration<double>(oc.dds_wait_timeout_s));
+      bool matched = false;
+      while (!stop_.load() && Clock::now() < deadline && !matched) {
+        beat(beat_capture_);
+        matched = outputs_->wait_for_subscribers(oc.dds_wait_for_subscribers, std::chrono::milliseconds(poll_ms));
+      }
+      spdlog::info("dds: {} subscriber(s) on every topic{}", oc.dds_wait_for_subscribers,
+                   matched ? " matched; capturing" : " not matched in time; capturing anyway");
+    }
     bool was_connected = true;
     while (!stop_.load()) {
       beat(beat_capture_);

@@ -104,6 +104,10 @@ struct CovarianceConfig {
 struct OutputsConfig {
   bool dds_enabled = true;
   drivers::dds::DdsConfig dds;
+  // Before the first frame is captured, wait until every DDS topic has this many matched subscribers, at most
+  // dds_wait_timeout_s (tests and benchmarks that must see every sample; 0 = do not wait, the vehicle default).
+  int dds_wait_for_subscribers = 0;
+  double dds_wait_timeout_s = 10;
   bool can_enabled = false;
   drivers::can::CanConfig can;
 };

@@ -1,0 +1,181 @@
+// Frame sources: a dataset played like a camera (order, range, loop, pacing on an absolute schedule, lossless at
+// rate 0, capture stamps on CLOCK_REALTIME), what prepare_source() checks, and a camera that is not there.
+#include "agvslam/daemon/frame_source.h"
+
+#include <gtest/gtest.h>
+#include <time.h>
+
+#include <filesystem>
+#include <opencv2/imgcodecs.hpp>
+
+#include "agvslam/core/error.h"
+#include "agvslam/drivers/v4l2/device.h"
+#include "daemon_test_util.h"
+
+namespace agvslam::daemon {
+namespace {
+
+namespace fs = std::filesystem;
+
+int64_t realtime_ns() {
+  timespec ts{};
+  clock_gettime(CLOCK_REALTIME, &ts);
+  return static_cast<int64_t>(ts.tv_sec) * 1000000000LL + ts.tv_nsec;
+}
+
+// A KITTI-layout folder of n 64x48 frames; left image i is filled with 10 * i, the right with 10 * i + 1.
+std::string tiny_dataset(int n) {
+  const std::string dir = test::make_temp_dir("agvslamd-source");
+  fs::create_directories(dir + "/image_0");
+  fs::create_directories(dir + "/image_1");
+  std::string times;
+  for (int i = 0; i < n; ++i) {
+    char name[32];
+    std::snprintf(name, sizeof name, "/%06d.png", i);
+    cv::imwrite(dir + "/image_0" + name, cv::Mat(48, 64, CV_8UC1, cv::Scalar(10 * i)));
+    cv::imwrite(dir + "/image_1" + name, cv::Mat(48, 64, CV_8UC1, cv::Scalar(10 * i + 1)));
+    times += std::to_string(0.05 * i) + "\n";
+  }
+  test::write_text(dir + "/times.txt", times);
+  test::write_text(dir + "/calib.txt", "P0: 50 0 32 0 0 50 24 0 0 0 1 0\nP1: 50 0 32 -5 0 50 24 0 0 0 1 0\n");
+  return dir;
+}
+
+DaemonConfig dataset_config(const std::string& dir, double rate, bool loop = false, const std::string& frames = "") {
+  DaemonConfig c;
+  c.path = "test.yaml";
+  c.source.type = SourceType::kDataset;
+  c.source.dataset = dir;
+  c.source.rate = rate;
+  c.source.loop = loop;
+  c.source.frames = frames;
+  return c;
+}
+
+TEST(DatasetSource, PlaysEveryFrameInOrderThenEnds) {
+  const std::string dir = tiny_dataset(5);
+  const DaemonConfig c = dataset_config(dir, 0);
+  const SourceSetup setup = prepare_source(c);
+  EXPECT_DOUBLE_EQ(setup.rate_hz, 20.0);
+  EXPECT_DOUBLE_EQ(setup.slam_rate_hz, 20.0);
+  EXPECT_EQ(setup.calibration.left.width, 64);
+  DatasetSource source(setup, c.source);
+  EXPECT_TRUE(source.lossless());
+  CapturedFrame f;
+  for (int i = 0; i < 5; ++i) {
+    const int64_t before = realtime_ns();
+    ASSERT_EQ(source.grab(f, 100), FrameSource::Grab::kFrame);
+    EXPECT_EQ(f.source_index, i);
+    EXPECT_EQ(f.frame.index, static_cast<std::size_t>(i));
+    EXPECT_EQ(f.source_t_ns, 50000000LL * i);
+    EXPECT_EQ(f.frame.left.at<uint8_t>(10, 10), 10 * i);
+    EXPECT_EQ(f.frame.right.at<uint8_t>(10, 10), 10 * i + 1);
+    EXPECT_GE(f.capture_t_ns, before);  // stamped when delivered, on CLOCK_REALTIME
+    EXPECT_LE(f.capture_t_ns, realtime_ns());
+  }
+  EXPECT_EQ(source.grab(f, 100), FrameSource::Grab::kEnd);
+  EXPECT_EQ(source.stats().frames, 5U);
+  fs::remove_all(dir);
+}
+
+TEST(DatasetSource, LoopsOverTheRangeAndCountsDeliveredFrames) {
+  const std::string dir = tiny_dataset(6);
+  const DaemonConfig c = dataset_config(dir, 0, /*loop=*/true, "2:4");
+  const SourceSetup setup = prepare_source(c);
+  DatasetSource source(setup, c.source);
+  CapturedFrame f;
+  std::vector<int64_t> seen;
+  for (int i = 0; i < 7; ++i) {
+    ASSERT_EQ(source.grab(f, 100), FrameSource::Grab::kFrame);
+    seen.push_back(f.source_index);
+    EXPECT_EQ(f.frame.index, static_cast<std::size_t>(i));
+  }
+  EXPECT_EQ(seen, (std::vector<int64_t>{2, 3, 4, 2, 3, 4, 2}));
+  fs::remove_all(dir);
+}
+
+TEST(DatasetSource, ReleasesFramesOnAnAbsoluteScheduleAndReturnsWithinTheTimeout) {
+  const std::string dir = tiny_dataset(4);
+  DaemonConfig c = dataset_config(dir, 1.0);
+  c.source.rate_hz = 25;  // 40 ms apart
+  const SourceSetup setup = prepare_source(c);
+  DatasetSource source(setup, c.source);
+  EXPECT_FALSE(source.lossless());
+  std::vector<int64_t> stamps;
+  CapturedFrame f;
+  int no_frame = 0;
+  while (stamps.size() < 4) {
+    const FrameSource::Grab g = source.grab(f, 5);  // shorter than the period: kNoFrame in between
+    if (g == FrameSource::Grab::kFrame) stamps.push_back(f.capture_t_ns);
+    if (g == FrameSource::Grab::kNoFrame) ++no_frame;
+    ASSERT_NE(g, FrameSource::Grab::kEnd);
+  }
+  EXPECT_GT(no_frame, 0);
+  // Frame k is released no earlier than k periods after the first (a loaded machine only delays it).
+  for (std::size_t k = 1; k < stamps.size(); ++k) EXPECT_GE(stamps[k] - stamps[0], static_cast<int64_t>(k) * 40000000LL - 1000000);
+  fs::remove_all(dir);
+}
+
+TEST(PrepareSource, NamesTheSettingThatLedToAnUnreadableFileOrAMismatch) {
+  const std::string dir = tiny_dataset(3);
+  auto expect_field = [](const DaemonConfig& c, const std::string& field) {
+    try {
+      prepare_source(c);
+      ADD_FAILURE() << "no error, expected one naming " << field;
+    } catch (const InputError& e) {
+      EXPECT_NE(std::string(e.what()).find("test.yaml: " + field), std::string::npos) << e.what();
+    }
+  };
+  expect_field(dataset_config(dir + "/missing", 1), "source.dataset");
+  expect_field(dataset_config(dir, 1, false, "5:9"), "source.frames");
+  // The camera: the calibration must be for its image size, and the SLAM must know the rate.
+  DaemonConfig cam;
+  cam.path = "test.yaml";
+  cam.source.type = SourceType::kV4l2;
+  cam.calibration_file = dir + "/calib.txt";  // 64x48 is taken from the camera size for KITTI files ...
+  cam.camera.width = 64;
+  cam.camera.height = 48;
+  EXPECT_NO_THROW(prepare_source(cam));
+  cam.calibration_file = std::string(AGVSLAM_SOURCE_DIR) + "/params/agvslamd_calibration_example.yaml";  // 752x480
+  expect_field(cam, "calibration.file");
+  cam.calibration_file = dir + "/nothing.yaml";
+  expect_field(cam, "calibration.file");
+  cam.calibration_file = dir + "/calib.txt";
+  cam.camera.fps = 0;
+  expect_field(cam, "pipeline.frame_rate_hz");
+  cam.pipeline.frame_rate_hz = 15;
+  EXPECT_DOUBLE_EQ(prepare_source(cam).slam_rate_hz, 15.0);
+  fs::remove_all(dir);
+}
+
+TEST(V4l2Source, AnAbsentCameraIsRetriedOrReportedByName) {
+  const std::string dir = tiny_dataset(1);
+  DaemonConfig c;
+  c.path = "test.yaml";
+  c.source.type = SourceType::kV4l2;
+  c.calibration_file = dir + "/calib.txt";
+  c.camera.width = 64;
+  c.camera.height = 48;
+  c.camera.left_device = dir + "/no-video-left";
+  c.camera.right_device = dir + "/no-video-right";
+  c.camera.reopen_backoff_initial_ms = 20;
+  const SourceSetup setup = prepare_source(c);
+  // Without waiting: the device's error, naming it.
+  try {
+    V4l2Source source(setup, c.camera, /*wait_for_camera=*/false);
+    ADD_FAILURE() << "opened a device that does not exist";
+  } catch (const drivers::v4l2::V4l2Error& e) {
+    EXPECT_NE(std::string(e.what()).find("no-video-left"), std::string::npos) << e.what();
+  }
+  // Waiting: grab() keeps returning within its time-out while it retries, and says the camera is not there.
+  V4l2Source source(setup, c.camera, /*wait_for_camera=*/true);
+  CapturedFrame f;
+  for (int i = 0; i < 3; ++i) EXPECT_EQ(source.grab(f, 30), FrameSource::Grab::kNoFrame);
+  const SourceStats st = source.stats();
+  EXPECT_FALSE(st.connected);
+  EXPECT_EQ(st.frames, 0U);
+  fs::remove_all(dir);
+}
+
+}  // namespace
+}  // namespace agvslam::daemon

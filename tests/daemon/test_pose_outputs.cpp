@@ -1,0 +1,116 @@
+// The daemon's outputs in one process (DDS pinned to lo, a domain of this test's own): a tracking sample goes out
+// on pose, odom and status; a lost sample and a heartbeat only on status (never a pose); the trajectory file
+// holds the tracking samples; the JSON log holds every sample with its SI values; an absent CAN interface is
+// retried, not fatal.
+#include "agvslam/daemon/pose_outputs.h"
+
+#include <gtest/gtest.h>
+#include <unistd.h>
+
+#include <filesystem>
+#include <nlohmann/json.hpp>
+
+#include "agvslam/core/error.h"
+#include "agvslam/daemon/pose_builder.h"
+#include "agvslam/drivers/dds/subscriber.h"
+#include "agvslam/io/trajectory_io.h"
+#include "daemon_test_util.h"
+
+namespace agvslam::daemon {
+namespace {
+
+namespace dds = drivers::dds;
+
+TEST(PoseOutputs, PoseOnlyWhileTrackingStatusAlwaysFilesAsPublished) {
+  const std::string dir = test::make_temp_dir("agvslamd-outputs");
+  DaemonConfig c;
+  c.path = "test.yaml";
+  c.outputs.dds_enabled = true;
+  c.outputs.dds.domain_id = 100 + static_cast<int>(getpid() % 100);
+  c.outputs.dds.network_interface = "lo";
+  c.outputs.dds.topic_namespace = "agvslamd_test";
+  c.outputs.can_enabled = true;
+  c.outputs.can.interface = "agvnocan0";  // does not exist: retried with back-off, frames counted as dropped
+  c.trajectory.file = dir + "/t.tum";
+  c.log.pose_log = dir + "/poses.jsonl";
+  PoseOutputs out(c);
+
+  int poses = 0, odoms = 0;
+  std::vector<int> status_states;
+  dds::SubscriberHandlers h;
+  h.on_pose = [&](const dds::PoseMsg&, int64_t) { ++poses; };
+  h.on_odom = [&](const dds::OdomMsg&, int64_t) { ++odoms; };
+  h.on_status = [&](const dds::StatusMsg& m, int64_t) { status_states.push_back(m.tracking_state); };
+  dds::DdsPoseSubscriber sub(c.outputs.dds, h);
+  ASSERT_TRUE(out.wait_for_subscribers(1, std::chrono::seconds(10)));
+
+  const int64_t t0 = dds::realtime_now_ns() - 1000000000LL;  // captured a second ago
+  std::vector<drivers::TrackingState> states = {drivers::TrackingState::kNotInitialized, drivers::TrackingState::kTracking,
+                                                drivers::TrackingState::kTracking, drivers::TrackingState::kLost,
+                                                drivers::TrackingState::kTracking};
+  for (std::size_t i = 0; i < states.size(); ++i) {
+    OutputItem item;
+    item.sample = drivers::synthetic_pose_sample(i, t0 + static_cast<int64_t>(i) * 50000000LL);
+    item.sample.tracking_state = states[i];
+    item.source_index = static_cast<int64_t>(i);
+    out.publish(item);
+    EXPECT_GE(item.sample.latency_ns, 0);  // stamped at hand-over
+    EXPECT_LT(item.sample.latency_ns, 60LL * 1000000000LL);
+  }
+  OutputItem hb;
+  hb.heartbeat = true;
+  PoseSampleBuilder::build_heartbeat(dds::realtime_now_ns(), true, hb.sample);
+  out.publish(hb);
+  out.flush(std::chrono::seconds(5));
+  for (int k = 0; k < 100 && status_states.size() < 6; ++k) sub.poll(std::chrono::milliseconds(50));
+
+  EXPECT_EQ(poses, 3);
+  EXPECT_EQ(odoms, 3);
+  EXPECT_EQ(status_states, (std::vector<int>{0, 1, 1, 3, 1, 3}));
+  const OutputStats st = out.stats();
+  EXPECT_EQ(st.samples, 6U);
+  EXPECT_EQ(st.tracking_samples, 3U);
+  EXPECT_EQ(st.heartbeats, 1U);
+  EXPECT_TRUE(st.can_enabled);
+  EXPECT_FALSE(st.can.open);
+  EXPECT_EQ(st.can.frames_sent, 0U);
+
+  // Trajectory: the three tracking samples, exactly their poses.
+  const Trajectory traj = io::read_tum(c.trajectory.file);
+  ASSERT_EQ(traj.size(), 3U);
+  EXPECT_EQ(traj[0].t_ns, t0 + 50000000LL);
+  const auto s1 = drivers::synthetic_pose_sample(1, 0);
+  EXPECT_TRUE(traj[0].T_w_c.isApprox(s1.T_map_base, 1e-9));
+  // JSON log: every sample, with the SI values and what CAN did.
+  const auto lines = test::read_json_lines(c.log.pose_log);
+  ASSERT_EQ(lines.size(), 6U);
+  EXPECT_EQ(lines[3].at("sample").at("tracking_state"), 3);
+  EXPECT_EQ(lines[3].at("dds").at("pose"), false);
+  EXPECT_EQ(lines[1].at("dds").at("pose"), true);
+  EXPECT_EQ(lines[5].at("heartbeat"), true);
+  EXPECT_EQ(lines[2].at("source_index"), 2);
+  EXPECT_EQ(lines[2].at("can").at("sent"), false);
+  EXPECT_EQ(lines[1].at("sample"), sample_to_json([&] {
+              auto s = drivers::synthetic_pose_sample(1, t0 + 50000000LL);
+              s.tracking_state = drivers::TrackingState::kTracking;
+              s.latency_ns = lines[1].at("sample").at("latency_ns").get<int64_t>();
+              return s;
+            }()));
+  std::filesystem::remove_all(dir);
+}
+
+TEST(PoseOutputs, AnUnwritableFileIsAnInputErrorNamingTheField) {
+  DaemonConfig c;
+  c.path = "test.yaml";
+  c.outputs.dds_enabled = false;
+  c.trajectory.file = "/nonexistent-dir/t.tum";
+  try {
+    PoseOutputs out(c);
+    ADD_FAILURE() << "opened " << c.trajectory.file;
+  } catch (const InputError& e) {
+    EXPECT_NE(std::string(e.what()).find("test.yaml: trajectory.file"), std::string::npos) << e.what();
+  }
+}
+
+}  // namespace
+}  // namespace agvslam::daemon
