@@ -120,7 +120,11 @@ TrackResult System::track_stereo(int64_t t_ns, const cv::Mat& left, const cv::Ma
     }
   }
   if (counts.reset) reset_now();
-  if (!config_.threaded_mapping) mapper_->process_pending();
+  if (!config_.threaded_mapping) {
+    const auto t_map = Clock::now();
+    mapper_->process_pending();
+    r.timings.inline_mapping_ms = ms_since(t_map);
+  }
   {
     std::lock_guard<std::mutex> lock(map_.mutex());
     r.keyframes = map_.keyframe_count();

@@ -36,7 +36,8 @@ struct TrackTimings {
   double frame_ms = 0;         // motion model / reference keyframe / recovery, with its motion-only BA
   double local_map_ms = 0;     // local map update, projection search and motion-only BA
   double keyframe_ms = 0;      // keyframe decision and creation
-  double total_ms = 0;         // all of track_stereo
+  double inline_mapping_ms = 0;  // local mapping run in this thread (SystemConfig::threaded_mapping = false only)
+  double total_ms = 0;         // all of track_stereo (including inline mapping)
   double total_cpu_ms = 0;     // CPU time of the calling thread in track_stereo (what one core spends, whatever
                                // else runs on the machine)
 };
