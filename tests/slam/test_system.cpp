@@ -36,9 +36,9 @@ TEST(System, KittiExcerptTracksEveryFrameAccurately) {
   const auto d = io::open_dataset(root);
   SystemConfig c = inline_config(*d);
   // ORB-SLAM2's KITTI settings (2000 features, descriptor stereo matching).
-  const features::FeaturesConfig f = features::load_features_config(AGVSLAM_SOURCE_DIR "/params/features_kitti.yaml");
-  c.orb = f.orb;
-  c.stereo = f.stereo_matching;
+  const features::FeaturesConfig fc = features::load_features_config(AGVSLAM_SOURCE_DIR "/params/features_kitti.yaml");
+  c.orb = fc.orb;
+  c.stereo = fc.stereo_matching;
   System slam(d->calibration(), c);
   int ok = 0;
   for (std::size_t i = 0; i < d->size(); ++i) {
