@@ -143,6 +143,51 @@ TEST(LocalMapping, CullsRedundantKeyframes) {
   for (const KeyFramePtr& kf : rig.map.keyframes()) EXPECT_FALSE(kf->bad());
 }
 
+// A large object close to the camera (a third of the keypoints) moving sideways 3 cm per frame while the camera
+// drives forward. Without a mask its points enter the map and pull the pose; with the mask (its keypoints removed,
+// as the extractor does inside the dilated dynamic mask) the path is followed. This is the mechanism of paper 004;
+// the simulator's people, a few per cent of the image, are too small to show it (see the README figures).
+double moving_object_error(bool masked) {
+  SlamConfig c;
+  Rig rig(c);
+  const test::World background = test::make_world(1500, 16, 4.0, 15.0);
+  test::World object;
+  {
+    std::mt19937 rng(17);
+    std::uniform_real_distribution<double> ux(-1.2, 1.2), uy(-1.0, 0.8), uz(2.0, 2.6);
+    std::uniform_int_distribution<int> ub(0, 255);
+    for (int i = 0; i < 700; ++i) {
+      object.points_w.emplace_back(ux(rng), uy(rng), uz(rng));
+      Descriptor d;
+      for (auto& b : d) b = static_cast<uint8_t>(ub(rng));
+      object.descriptors.push_back(d);
+    }
+  }
+  double worst = 0;
+  for (int k = 0; k < 60; ++k) {
+    test::World w = background;
+    if (!masked) {
+      for (std::size_t i = 0; i < object.points_w.size(); ++i) {
+        // The object keeps its distance ahead of the camera (walks with it) and drifts sideways.
+        w.points_w.push_back(object.points_w[i] + Eigen::Vector3d(0.03 * k, 0.0, 0.05 * k));
+        w.descriptors.push_back(object.descriptors[i]);
+      }
+    }
+    const SE3d T_true = test::path_pose(k, 0.05);
+    if (rig.step(w, T_true, static_cast<uint64_t>(k)) != TrackingState::kOk) return 1e9;
+    worst = std::max(worst, position_error(rig.tracking->last_frame().T_c_w() * test::path_pose(0), T_true));
+  }
+  return worst;
+}
+
+TEST(Tracking, MaskingALargeMovingObjectKeepsThePose) {
+  const double masked = moving_object_error(true);
+  const double unmasked = moving_object_error(false);
+  std::printf("largest position error over 60 frames: masked %.4f m, unmasked %.4f m\n", masked, unmasked);
+  EXPECT_LT(masked, 0.02);
+  EXPECT_GT(unmasked, 5 * masked);
+}
+
 TEST(Tracking, EmptyFrameIsLostNotGarbage) {
   SlamConfig c;
   c.tracking.reset_max_keyframes = 0;
