@@ -31,7 +31,10 @@ SourceSetup prepare_source(const DaemonConfig& config) {
     } catch (const InputError& e) {
       // The dataset reader names the file inside the folder; say which setting led there.
       const bool calib = !config.calibration_file.empty() && std::string(e.what()).find(config.calibration_file) == 0;
-      throw InputError(config.path, calib ? "calibration.file" : "source.dataset", e.what());
+      throw InputError(config.path, calib ? "calibration.file" : "source.dataset",
+                       std::string(calib ? "expected a calibration file agvslam::io reads: "
+                                         : "expected a dataset folder (KITTI layout, agvslam-sim output or EuRoC ASL): ") +
+                           e.what());
     }
     parse_frame_range(config.source.frames, s.dataset->size(), config.path, "source.frames", s.first, s.last);
     s.calibration = s.dataset->calibration();
@@ -44,7 +47,8 @@ SourceSetup prepare_source(const DaemonConfig& config) {
     try {
       s.calibration = io::load_calibration(config.calibration_file, size);
     } catch (const InputError& e) {
-      throw InputError(config.path, "calibration.file", e.what());
+      throw InputError(config.path, "calibration.file",
+                       std::string("expected a calibration file agvslam::io reads: ") + e.what());
     }
     if (s.calibration.left.size() != size) {
       throw InputError(config.path, "calibration.file",
