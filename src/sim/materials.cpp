@@ -3,6 +3,7 @@
 #include <algorithm>
 #include <cmath>
 
+#include "agvslam/sim/cpu_dispatch.h"
 #include "agvslam/sim/renderer.h"
 #include "agvslam/sim/texture.h"
 
@@ -25,7 +26,7 @@ float label(float base, const FaceSample& f, float u0, float v0, float lw, float
   return lerp(base, c, cov);
 }
 
-float carton(const FaceSample& f) {
+AGVSLAM_SIM_INLINE float carton(const FaceSample& f) {
   const float w = f.footprint_m;
   const uint32_t box_seed = f.seed & ~7U;  // shared by all faces of a box (tone), faces differ in f.seed
   float c = 0.38f + 0.2f * unit_from_hash(hash32(box_seed, 11U));
@@ -101,7 +102,7 @@ float pallet_top(float u, float v, float su, float sv, float w, uint32_t seed) {
   return c;
 }
 
-float wrapped_load(const FaceSample& f) {
+AGVSLAM_SIM_INLINE float wrapped_load(const FaceSample& f) {
   const float w = f.footprint_m;
   const uint32_t box_seed = f.seed & ~7U;
   float c = 0.62f + 0.16f * unit_from_hash(hash32(box_seed, 21U));
@@ -122,7 +123,7 @@ float wrapped_load(const FaceSample& f) {
   return c;
 }
 
-float crate(const FaceSample& f) {
+AGVSLAM_SIM_INLINE float crate(const FaceSample& f) {
   const float w = f.footprint_m;
   const uint32_t box_seed = f.seed & ~7U;
   static constexpr float kTones[5] = {0.18f, 0.3f, 0.45f, 0.62f, 0.75f};
@@ -159,7 +160,7 @@ float upright(uint8_t variant, const FaceSample& f) {
   return c;
 }
 
-float beam(const FaceSample& f) {
+AGVSLAM_SIM_INLINE float beam(const FaceSample& f) {
   const float w = f.footprint_m;
   float c = 0.27f + 0.06f * fractal_noise(f.u, f.v, 0.25f, 3, 0.6f, w, f.seed);
   if (!vertical_face(f)) return c;
@@ -178,7 +179,7 @@ float beam(const FaceSample& f) {
   return c;
 }
 
-float deck(const FaceSample& f) {
+AGVSLAM_SIM_INLINE float deck(const FaceSample& f) {
   const float w = f.footprint_m;
   float c = 0.36f + 0.05f * fractal_noise(f.u, f.v, 0.3f, 2, 0.6f, w, f.seed);
   if (vertical_face(f)) return c;
@@ -186,7 +187,7 @@ float deck(const FaceSample& f) {
   return lerp(c, 0.62f, mesh);
 }
 
-float pillar(const FaceSample& f) {
+AGVSLAM_SIM_INLINE float pillar(const FaceSample& f) {
   const float w = f.footprint_m;
   float c = 0.6f + 0.16f * fractal_noise(f.u, f.v, 0.3f, 4, 0.62f, w, f.seed);
   if (!vertical_face(f)) return c;
@@ -215,7 +216,7 @@ float vehicle_body(const FaceSample& f, float tone, bool agv) {
 
 }  // namespace
 
-float box_albedo(Material material, uint8_t variant, const FaceSample& f) {
+AGVSLAM_SIM_CLONES float box_albedo(Material material, uint8_t variant, const FaceSample& f) {
   const float w = f.footprint_m;
   switch (material) {
     case Material::kCarton: return carton(f);
@@ -251,7 +252,7 @@ float box_albedo(Material material, uint8_t variant, const FaceSample& f) {
   }
 }
 
-float actor_albedo(const DynamicObject& obj, const DynamicPrimitive& prim, const V3& p, const V3& n, float axis_param,
+AGVSLAM_SIM_CLONES float actor_albedo(const DynamicObject& obj, const DynamicPrimitive& prim, const V3& p, const V3& n, float axis_param,
                    float w) {
   const PersonLook& look = obj.look;
   if (prim.shape == PrimitiveShape::kBox) {

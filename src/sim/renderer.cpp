@@ -7,6 +7,7 @@
 
 #include <opencv2/imgproc.hpp>
 
+#include "agvslam/sim/cpu_dispatch.h"
 #include "agvslam/sim/texture.h"
 
 namespace agvslam::sim {
@@ -506,28 +507,32 @@ void Renderer::rasterize_boxes(const CameraIntrinsics& cam, const std::vector<Bo
   key.setTo(-1);
   // Rows are independent: any thread count gives the same result.
   for_each_row(height, threads, [&](int v) {
-    float* zrow = depth.ptr<float>(v);
-    int32_t* krow = key.ptr<int32_t>(v);
-    for (uint32_t fi : buckets[static_cast<std::size_t>(v / kFaceRowsPerBucket)]) {
-      const BoxFace& f = faces[fi];
-      if (v < f.row0 || v > f.row1) continue;
-      // Span of the convex polygon on this row.
-      double s0, s1;
-      face_row_span(f.u, f.v, f.n, static_cast<double>(v), s0, s1);
-      if (s0 > s1) continue;
-      const int u0 = std::max(0, static_cast<int>(std::ceil(s0)));
-      const int u1 = std::min(width - 1, static_cast<int>(std::ceil(s1)) - 1);
-      const float row_term = f.b * static_cast<float>(v) + f.c;
-      for (int u = u0; u <= u1; ++u) {
-        const float denom = f.a * static_cast<float>(u) + row_term;
-        const float z = f.k / denom;
-        if (z > 0 && z < zrow[u]) {
-          zrow[u] = z;
-          krow[u] = f.key;
-        }
+    rasterize_row(width, faces, buckets[static_cast<std::size_t>(v / kFaceRowsPerBucket)], v, depth.ptr<float>(v),
+                  key.ptr<int32_t>(v));
+  });
+}
+
+AGVSLAM_SIM_CLONES void Renderer::rasterize_row(int width, const std::vector<BoxFace>& faces, const std::vector<uint32_t>& bucket, int v,
+                             float* zrow, int32_t* krow) {
+  for (uint32_t fi : bucket) {
+    const BoxFace& f = faces[fi];
+    if (v < f.row0 || v > f.row1) continue;
+    // Span of the convex polygon on this row.
+    double s0, s1;
+    face_row_span(f.u, f.v, f.n, static_cast<double>(v), s0, s1);
+    if (s0 > s1) continue;
+    const int u0 = std::max(0, static_cast<int>(std::ceil(s0)));
+    const int u1 = std::min(width - 1, static_cast<int>(std::ceil(s1)) - 1);
+    const float row_term = f.b * static_cast<float>(v) + f.c;
+    for (int u = u0; u <= u1; ++u) {
+      const float denom = f.a * static_cast<float>(u) + row_term;
+      const float z = f.k / denom;
+      if (z > 0 && z < zrow[u]) {
+        zrow[u] = z;
+        krow[u] = f.key;
       }
     }
-  });
+  }
 }
 
 RayHit Renderer::cast(const Ray& ray, const std::vector<DynamicObject>& objects) const {
@@ -552,7 +557,7 @@ void Renderer::face_size(const StaticBox& box, int face, float& su, float& sv) {
   }
 }
 
-float Renderer::box_face_albedo(std::size_t box_index, int face, float u, float v, float footprint_m) const {
+AGVSLAM_SIM_CLONES float Renderer::box_face_albedo(std::size_t box_index, int face, float u, float v, float footprint_m) const {
   const StaticBox& box = warehouse_.boxes[box_index];
   FaceSample f;
   f.box_size = box.hi - box.lo;
@@ -565,23 +570,23 @@ float Renderer::box_face_albedo(std::size_t box_index, int face, float u, float 
   return box_albedo(box.material, box.variant, f);
 }
 
-float Renderer::cached_floor_albedo(float x, float y, float footprint_m) const {
+AGVSLAM_SIM_CLONES float Renderer::cached_floor_albedo(float x, float y, float footprint_m) const {
   return textures_.sample(kFloorSurface, warehouse_.width_m, warehouse_.depth_m, x, y, footprint_m,
                           [this](float u, float v, float w) { return floor_albedo(u, v, w); });
 }
 
-float Renderer::cached_ceiling_albedo(float x, float y, float footprint_m) const {
+AGVSLAM_SIM_CLONES float Renderer::cached_ceiling_albedo(float x, float y, float footprint_m) const {
   return textures_.sample(kCeilingSurface, warehouse_.width_m, warehouse_.depth_m, x, y, footprint_m,
                           [this](float u, float v, float w) { return ceiling_albedo(u, v, w); });
 }
 
-float Renderer::cached_wall_albedo(int wall, float u, float z, float footprint_m) const {
+AGVSLAM_SIM_CLONES float Renderer::cached_wall_albedo(int wall, float u, float z, float footprint_m) const {
   const float length = (wall & 1) ? warehouse_.depth_m : warehouse_.width_m;
   return textures_.sample(kFirstWallSurface + static_cast<std::size_t>(wall), length, warehouse_.height_m, u, z,
                           footprint_m, [this, wall](float a, float b, float w) { return wall_albedo(wall, a, b, w); });
 }
 
-float Renderer::cached_box_face_albedo(std::size_t box, int face, float u, float v, float footprint_m) const {
+AGVSLAM_SIM_CLONES float Renderer::cached_box_face_albedo(std::size_t box, int face, float u, float v, float footprint_m) const {
   float su, sv;
   face_size(warehouse_.boxes[box], face, su, sv);
   return textures_.sample(box_surface(box, face), su, sv, u, v, footprint_m,
@@ -612,7 +617,7 @@ float Renderer::shade_hit(const RayHit& hit, const V3& origin, const V3& dir, co
   return hazed(s, albedo * lighting(s, hit.normal), hit.t * dir_len);
 }
 
-float Renderer::surface_albedo(const RayHit& hit, const V3& p, float footprint, const std::vector<DynamicObject>& objects,
+AGVSLAM_SIM_CLONES float Renderer::surface_albedo(const RayHit& hit, const V3& p, float footprint, const std::vector<DynamicObject>& objects,
                                const std::vector<BlobShadow>& shadows) const {
   float albedo = 0.5f;
   switch (hit.kind) {
@@ -670,6 +675,26 @@ float Renderer::surface_albedo(const RayHit& hit, const V3& p, float footprint, 
   return albedo;
 }
 
+// What the row passes of one render() share.
+struct Renderer::RenderPass {
+  int width = 0, height = 0;
+  V3 origin, col_x, col_y, col_z;  // camera centre and the camera axes in the map frame
+  float fx = 1, fy = 1, cx = 0, cy = 0, focal = 1;
+  V3 hall;                         // the hall's extent
+  const float* column_x = nullptr; // normalised image x of each pixel column
+  const std::vector<DynamicObject>* objects = nullptr;
+  const ObjectRects* rects = nullptr;
+  const std::vector<BlobShadow>* shadows = nullptr;
+  const std::vector<BoxFace>* faces = nullptr;
+  const std::vector<std::vector<uint32_t>>* face_buckets = nullptr;
+  CameraRender* out = nullptr;
+  // The ray through image point (u, v).
+  Ray ray(float u, float v) const {
+    const float xn = (u - cx) / fx, yn = (v - cy) / fy;
+    return Ray(origin, col_x * xn + col_y * yn + col_z);
+  }
+};
+
 void Renderer::render(const CameraIntrinsics& cam, const Eigen::Isometry3d& T_m_c,
                       const std::vector<DynamicObject>& objects, CameraRender& out, int threads) const {
   {
@@ -694,10 +719,6 @@ void Renderer::render(const CameraIntrinsics& cam, const Eigen::Isometry3d& T_m_
   const float fx = static_cast<float>(cam.fx), fy = static_cast<float>(cam.fy);
   const float cx = static_cast<float>(cam.cx), cy = static_cast<float>(cam.cy);
   const float focal = std::sqrt(fx * fy);
-  auto make_ray = [&](float u, float v) {
-    const float xn = (u - cx) / fx, yn = (v - cy) / fy;
-    return Ray(origin, col_x * xn + col_y * yn + col_z);
-  };
 
   // Screen-space bounds of each object and of each of its primitives (rays outside them skip it).
   const Eigen::Isometry3d T_c_m = T_m_c.inverse();
@@ -752,7 +773,6 @@ void Renderer::render(const CameraIntrinsics& cam, const Eigen::Isometry3d& T_m_
       rects.primitive[i][k] = screen_rect(lo, hi);
     }
   }
-  const ObjectRects* rect_ptr = &rects;
   const std::vector<BlobShadow> shadows = blob_shadows(objects);
   const V3 hall = hall_extent();
 
@@ -764,65 +784,27 @@ void Renderer::render(const CameraIntrinsics& cam, const Eigen::Isometry3d& T_m_
   rasterize_boxes(cam, faces, face_buckets, out.depth_m, out.surface_key, threads);
   std::vector<float> column_x(static_cast<std::size_t>(width));  // normalised image x of each pixel column
   for (int u = 0; u < width; ++u) column_x[static_cast<std::size_t>(u)] = (static_cast<float>(u) - cx) / fx;
-  const RenderSettings& s = settings_;
-  for_each_row(height, threads, [&](int v) {
-    float* radiance = out.radiance.ptr<float>(v);
-    float* depth = out.depth_m.ptr<float>(v);
-    uint16_t* ids = out.object_id.ptr<uint16_t>(v);
-    int32_t* keys = out.surface_key.ptr<int32_t>(v);
-    const V3 row_dir = col_y * ((static_cast<float>(v) - cy) / fy) + col_z;
-    // Columns of this row inside some object's screen rectangle: only there are rays cast against the actors.
-    int actor_u0 = width, actor_u1 = -1;
-    for (const PixelRect& r : rects.object)
-      if (v >= r.v0 && v <= r.v1 && r.u0 <= r.u1) {
-        actor_u0 = std::min(actor_u0, r.u0);
-        actor_u1 = std::max(actor_u1, r.u1);
-      }
-    // The row is shaded in passes over arrays, so that the arithmetic shared by all pixels vectorises: the hits,
-    // then footprints, lighting and haze, then the albedos (texture lookups), then the radiance.
-    RowScratch& row = row_scratch(width);
-    row_hall_hits(width, origin, col_x, row_dir, hall, column_x.data(), row.t.data(), row.plane.data());
-    for (int u = 0; u < width; ++u) {
-      RayHit& hit = row.hits[static_cast<std::size_t>(u)];
-      hit = RayHit{};
-      set_hall_hit(row.plane[static_cast<std::size_t>(u)], row.t[static_cast<std::size_t>(u)], hit);
-      if (keys[u] >= 16 && depth[u] < hit.t) set_box_hit(keys[u], depth[u], hit);
-      if (u >= actor_u0 && u <= actor_u1)
-        cast_dynamic(Ray(origin, col_x * column_x[static_cast<std::size_t>(u)] + row_dir), objects, rect_ptr, u, v, hit);
-      const bool none = hit.kind == RayHit::Kind::kNone;
-      row.t[u] = none ? 0.0f : hit.t;
-      row.nx[u] = hit.normal.x;
-      row.ny[u] = hit.normal.y;
-      row.nz[u] = hit.normal.z;
-      depth[u] = none ? 0.0f : hit.t;
-      ids[u] = hit.kind == RayHit::Kind::kDynamic
-                   ? static_cast<uint16_t>(objects[static_cast<std::size_t>(hit.object)].id)
-                   : static_cast<uint16_t>(0);
-      keys[u] = surface_key(hit);
-    }
-    row_footprint_light_haze(width, col_x, row_dir, column_x.data(), focal, s, row.t.data(), row.nx.data(),
-                             row.ny.data(), row.nz.data(), row.footprint.data(), row.light.data(), row.haze.data());
-    for (int u = 0; u < width; ++u) {
-      const RayHit& hit = row.hits[static_cast<std::size_t>(u)];
-      if (hit.kind == RayHit::Kind::kNone) {  // nothing hit (not in a closed hall): all haze
-        row.albedo[u] = 0;
-        row.haze[u] = 1;
-        continue;
-      }
-      const V3 dir = col_x * column_x[static_cast<std::size_t>(u)] + row_dir;
-      row.albedo[u] = surface_albedo(hit, origin + dir * hit.t, row.footprint[u], objects, shadows);
-    }
-    {
-      const float haze_level = s.haze_level;
-      const float* __restrict albedo = row.albedo.data();
-      const float* __restrict light = row.light.data();
-      const float* __restrict haze = row.haze.data();
-      for (int u = 0; u < width; ++u) {
-        const float lit = albedo[u] * light[u];
-        radiance[u] = lit + (haze_level - lit) * haze[u];
-      }
-    }
-  });
+  RenderPass pass;
+  pass.width = width;
+  pass.height = height;
+  pass.origin = origin;
+  pass.col_x = col_x;
+  pass.col_y = col_y;
+  pass.col_z = col_z;
+  pass.fx = fx;
+  pass.fy = fy;
+  pass.cx = cx;
+  pass.cy = cy;
+  pass.focal = focal;
+  pass.hall = hall;
+  pass.column_x = column_x.data();
+  pass.objects = &objects;
+  pass.rects = &rects;
+  pass.shadows = &shadows;
+  pass.faces = &faces;
+  pass.face_buckets = &face_buckets;
+  pass.out = &out;
+  for_each_row(height, threads, [&](int v) { render_row(pass, v); });
 
   out.edge.setTo(0);
   if (!settings_.antialias_edges) return;
@@ -852,70 +834,151 @@ void Renderer::render(const CameraIntrinsics& cam, const Eigen::Isometry3d& T_m_
       if (k1 && is_edge(k0[u], k1[u], z0[u], z1[u])) e0[u] = e1[u] = 1;
     }
   }
-  // The centre sample plus two more on the pixel's diagonal (within half a pixel of the centre: the faces'
-  // sample rows). The static boxes at the samples are rasterised like the pixel centres, but only at the
-  // silhouette pixels of each row.
-  static constexpr float kOffsets[2][2] = {{-0.3f, -0.22f}, {0.3f, 0.22f}};
-  for_each_row(height, threads, [&](int v) {
-    const uint8_t* e = out.edge.ptr<uint8_t>(v);
-    float* radiance = out.radiance.ptr<float>(v);
-    SampleScratch& aa = sample_scratch();
-    aa.cols.clear();
-    for (int u = 0; u < width; ++u)
-      if (e[u]) aa.cols.push_back(u);
-    if (aa.cols.empty()) return;
-    const std::size_t n = aa.cols.size();
-    for (int k = 0; k < 2; ++k) {
-      aa.z[k].assign(n, kInfinity);
-      aa.key[k].assign(n, -1);
+  // The centre sample plus two more on the pixel's diagonal, see antialias_row.
+  for_each_row(height, threads, [&](int v) { antialias_row(pass, v); });
+}
+
+AGVSLAM_SIM_CLONES void Renderer::render_row(const RenderPass& p, int v) const {
+  const int width = p.width;
+  CameraRender& out = *p.out;
+  const std::vector<DynamicObject>& objects = *p.objects;
+  const ObjectRects& rects = *p.rects;
+  const ObjectRects* rect_ptr = p.rects;
+  const std::vector<BlobShadow>& shadows = *p.shadows;
+  const V3 origin = p.origin, col_x = p.col_x, col_y = p.col_y, col_z = p.col_z, hall = p.hall;
+  const float fy = p.fy, cy = p.cy, focal = p.focal;
+  const float* column_x = p.column_x;
+  const RenderSettings& s = settings_;
+  float* radiance = out.radiance.ptr<float>(v);
+  float* depth = out.depth_m.ptr<float>(v);
+  uint16_t* ids = out.object_id.ptr<uint16_t>(v);
+  int32_t* keys = out.surface_key.ptr<int32_t>(v);
+  const V3 row_dir = col_y * ((static_cast<float>(v) - cy) / fy) + col_z;
+  // Columns of this row inside some object's screen rectangle: only there are rays cast against the actors.
+  int actor_u0 = width, actor_u1 = -1;
+  for (const PixelRect& r : rects.object)
+    if (v >= r.v0 && v <= r.v1 && r.u0 <= r.u1) {
+      actor_u0 = std::min(actor_u0, r.u0);
+      actor_u1 = std::max(actor_u1, r.u1);
     }
-    const int* cols = aa.cols.data();
-    for (uint32_t fi : face_buckets[static_cast<std::size_t>(v / kFaceRowsPerBucket)]) {
-      const BoxFace& f = faces[fi];
-      if (v < f.sample_row0 || v > f.sample_row1) continue;
-      for (int k = 0; k < 2; ++k) {
-        const float du = kOffsets[k][0];
-        const float vs = static_cast<float>(v) + kOffsets[k][1];
-        double s0, s1;
-        face_row_span(f.u, f.v, f.n, static_cast<double>(vs), s0, s1);
-        if (s0 > s1) continue;
-        // Silhouette pixels whose sample u + du lies in [s0, s1).
-        const int u_lo = static_cast<int>(std::max(s0 - du, -4.0)) - 2;  // <= floor(s0 - du) - 1
-        std::size_t i = static_cast<std::size_t>(std::lower_bound(cols, cols + n, u_lo) - cols);
-        const float row_term = f.b * vs + f.c;
-        float* zk = aa.z[k].data();
-        int32_t* kk = aa.key[k].data();
-        for (; i < n; ++i) {
-          const float us = static_cast<float>(cols[i]) + du;
-          if (us >= s1) break;
-          if (us < s0) continue;
-          const float z = f.k / (f.a * us + row_term);
-          if (z > 0 && z < zk[i]) {
-            zk[i] = z;
-            kk[i] = f.key;
-          }
+  // The row is shaded in passes over arrays, so that the arithmetic shared by all pixels vectorises: the hits,
+  // then footprints, lighting and haze, then the albedos (texture lookups), then the radiance.
+  RowScratch& row = row_scratch(width);
+  row_hall_hits(width, origin, col_x, row_dir, hall, column_x, row.t.data(), row.plane.data());
+  for (int u = 0; u < width; ++u) {
+    RayHit& hit = row.hits[static_cast<std::size_t>(u)];
+    hit = RayHit{};
+    set_hall_hit(row.plane[static_cast<std::size_t>(u)], row.t[static_cast<std::size_t>(u)], hit);
+    if (keys[u] >= 16 && depth[u] < hit.t) set_box_hit(keys[u], depth[u], hit);
+    if (u >= actor_u0 && u <= actor_u1)
+      cast_dynamic(Ray(origin, col_x * column_x[static_cast<std::size_t>(u)] + row_dir), objects, rect_ptr, u, v, hit);
+    const bool none = hit.kind == RayHit::Kind::kNone;
+    row.t[u] = none ? 0.0f : hit.t;
+    row.nx[u] = hit.normal.x;
+    row.ny[u] = hit.normal.y;
+    row.nz[u] = hit.normal.z;
+    depth[u] = none ? 0.0f : hit.t;
+    ids[u] = hit.kind == RayHit::Kind::kDynamic
+                 ? static_cast<uint16_t>(objects[static_cast<std::size_t>(hit.object)].id)
+                 : static_cast<uint16_t>(0);
+    keys[u] = surface_key(hit);
+  }
+  row_footprint_light_haze(width, col_x, row_dir, column_x, focal, s, row.t.data(), row.nx.data(),
+                           row.ny.data(), row.nz.data(), row.footprint.data(), row.light.data(), row.haze.data());
+  for (int u = 0; u < width; ++u) {
+    const RayHit& hit = row.hits[static_cast<std::size_t>(u)];
+    if (hit.kind == RayHit::Kind::kNone) {  // nothing hit (not in a closed hall): all haze
+      row.albedo[u] = 0;
+      row.haze[u] = 1;
+      continue;
+    }
+    const V3 dir = col_x * column_x[static_cast<std::size_t>(u)] + row_dir;
+    row.albedo[u] = surface_albedo(hit, origin + dir * hit.t, row.footprint[u], objects, shadows);
+  }
+  {
+    const float haze_level = s.haze_level;
+    const float* __restrict albedo = row.albedo.data();
+    const float* __restrict light = row.light.data();
+    const float* __restrict haze = row.haze.data();
+    for (int u = 0; u < width; ++u) {
+      const float lit = albedo[u] * light[u];
+      radiance[u] = lit + (haze_level - lit) * haze[u];
+    }
+  }
+}
+
+// The centre sample plus two more on the pixel's diagonal (within half a pixel of the centre: the faces'
+// sample rows). The static boxes at the samples are rasterised like the pixel centres, but only at the
+// silhouette pixels of the row.
+AGVSLAM_SIM_CLONES void Renderer::antialias_row(const RenderPass& p, int v) const {
+  static constexpr float kOffsets[2][2] = {{-0.3f, -0.22f}, {0.3f, 0.22f}};
+  const int width = p.width;
+  CameraRender& out = *p.out;
+  const std::vector<DynamicObject>& objects = *p.objects;
+  const ObjectRects* rect_ptr = p.rects;
+  const std::vector<BlobShadow>& shadows = *p.shadows;
+  const std::vector<BoxFace>& faces = *p.faces;
+  const std::vector<std::vector<uint32_t>>& face_buckets = *p.face_buckets;
+  const float focal = p.focal;
+  auto make_ray = [&p](float su, float sv) { return p.ray(su, sv); };
+  const uint8_t* e = out.edge.ptr<uint8_t>(v);
+  float* radiance = out.radiance.ptr<float>(v);
+  SampleScratch& aa = sample_scratch();
+  aa.cols.clear();
+  for (int u = 0; u < width; ++u)
+    if (e[u]) aa.cols.push_back(u);
+  if (aa.cols.empty()) return;
+  const std::size_t n = aa.cols.size();
+  for (int k = 0; k < 2; ++k) {
+    aa.z[k].assign(n, kInfinity);
+    aa.key[k].assign(n, -1);
+  }
+  const int* cols = aa.cols.data();
+  for (uint32_t fi : face_buckets[static_cast<std::size_t>(v / kFaceRowsPerBucket)]) {
+    const BoxFace& f = faces[fi];
+    if (v < f.sample_row0 || v > f.sample_row1) continue;
+    for (int k = 0; k < 2; ++k) {
+      const float du = kOffsets[k][0];
+      const float vs = static_cast<float>(v) + kOffsets[k][1];
+      double s0, s1;
+      face_row_span(f.u, f.v, f.n, static_cast<double>(vs), s0, s1);
+      if (s0 > s1) continue;
+      // Silhouette pixels whose sample u + du lies in [s0, s1).
+      const int u_lo = static_cast<int>(std::max(s0 - du, -4.0)) - 2;  // <= floor(s0 - du) - 1
+      std::size_t i = static_cast<std::size_t>(std::lower_bound(cols, cols + n, u_lo) - cols);
+      const float row_term = f.b * vs + f.c;
+      float* zk = aa.z[k].data();
+      int32_t* kk = aa.key[k].data();
+      for (; i < n; ++i) {
+        const float us = static_cast<float>(cols[i]) + du;
+        if (us >= s1) break;
+        if (us < s0) continue;
+        const float z = f.k / (f.a * us + row_term);
+        if (z > 0 && z < zk[i]) {
+          zk[i] = z;
+          kk[i] = f.key;
         }
       }
     }
-    for (std::size_t i = 0; i < n; ++i) {
-      const int u = cols[i];
-      float sum = radiance[u];
-      for (int k = 0; k < 2; ++k) {
-        const Ray ray = make_ray(static_cast<float>(u) + kOffsets[k][0], static_cast<float>(v) + kOffsets[k][1]);
-        RayHit hit;
-        cast_hall(ray.origin, ray.dir, hit);
-        if (aa.key[k][i] >= 16 && aa.z[k][i] < hit.t) set_box_hit(aa.key[k][i], aa.z[k][i], hit);
-        cast_dynamic(ray, objects, rect_ptr, u, v, hit);
-        sum += shade_hit(hit, ray.origin, ray.dir, objects, shadows, focal);
-      }
-      radiance[u] = sum * (1.0f / 3.0f);
+  }
+  for (std::size_t i = 0; i < n; ++i) {
+    const int u = cols[i];
+    float sum = radiance[u];
+    for (int k = 0; k < 2; ++k) {
+      const Ray ray = make_ray(static_cast<float>(u) + kOffsets[k][0], static_cast<float>(v) + kOffsets[k][1]);
+      RayHit hit;
+      cast_hall(ray.origin, ray.dir, hit);
+      if (aa.key[k][i] >= 16 && aa.z[k][i] < hit.t) set_box_hit(aa.key[k][i], aa.z[k][i], hit);
+      cast_dynamic(ray, objects, rect_ptr, u, v, hit);
+      sum += shade_hit(hit, ray.origin, ray.dir, objects, shadows, focal);
     }
-  });
+    radiance[u] = sum * (1.0f / 3.0f);
+  }
 }
 
 // ---- Analytic surfaces -----------------------------------------------------------------------------------------
 
-float Renderer::floor_albedo(float x, float y, float w) const {
+AGVSLAM_SIM_CLONES float Renderer::floor_albedo(float x, float y, float w) const {
   const uint32_t seed = warehouse_.floor_seed;
   // Power-trowelled concrete: gentle broad tone variation, dark stains, lighter worn patches, fine grit.
   float c = 0.55f + 0.16f * fractal_noise(x, y, 1.2f, 3, 0.6f, w, seed);
@@ -956,7 +1019,7 @@ float Renderer::floor_albedo(float x, float y, float w) const {
   return std::max(0.02f, c);
 }
 
-float Renderer::wall_albedo(int wall, float u, float z, float w) const {
+AGVSLAM_SIM_CLONES float Renderer::wall_albedo(int wall, float u, float z, float w) const {
   const uint32_t seed = warehouse_.wall_seed + static_cast<uint32_t>(wall) * 7919U;
   float c;
   if (z < 0.3f) {
@@ -1060,7 +1123,7 @@ float Renderer::wall_albedo(int wall, float u, float z, float w) const {
   return std::max(0.02f, c);
 }
 
-float Renderer::ceiling_albedo(float x, float y, float w) const {
+AGVSLAM_SIM_CLONES float Renderer::ceiling_albedo(float x, float y, float w) const {
   const uint32_t seed = warehouse_.ceiling_seed;
   float c = 0.32f + 0.1f * fractal_noise(x, y, 1.0f, 3, 0.6f, w, seed);
   c = lerp(c, 0.5f, stripe_coverage(x, 5.0f, 0.3f, w));   // roof trusses

@@ -11,6 +11,7 @@
 #include "agvslam/core/error.h"
 #include "agvslam/io/calibration_io.h"
 #include "agvslam/io/trajectory_io.h"
+#include "agvslam/sim/cpu_dispatch.h"
 #include "agvslam/sim/png_writer.h"
 #include "agvslam/sim/random.h"
 #include "agvslam/sim/texture.h"
@@ -30,6 +31,24 @@ double noise_1d(double x, uint32_t seed) {
   const double a = unit_from_hash(hash32(static_cast<uint32_t>(i), seed));
   const double b = unit_from_hash(hash32(static_cast<uint32_t>(i + 1), seed));
   return 2.0 * (a + (b - a) * t) - 1.0;
+}
+
+// Sensor model of image row v: global gain, vignetting, read noise, 8-bit quantisation.
+AGVSLAM_SIM_CLONES void expose_row(const float* rad, uint8_t* px, int width, int v, float gain, float sigma,
+                                   float vignetting, float cx, float cy, float r2_corner, uint32_t cam_seed) {
+  const float dy = static_cast<float>(v) - cy;
+  for (int u = 0; u < width; ++u) {
+    const float dx = static_cast<float>(u) - cx;
+    const float vig = 1.0f - vignetting * (dx * dx + dy * dy) / r2_corner;
+    // Approximately Gaussian noise: sum of four 16-bit uniforms (Irwin-Hall), unit variance.
+    const uint32_t pixel = static_cast<uint32_t>(v * width + u);
+    const uint32_t h1 = hash32(pixel, cam_seed), h2 = hash32(pixel ^ 0x5bd1e995U, cam_seed + 0x68e31da4U);
+    const float sum =
+        static_cast<float>((h1 & 0xffffU) + (h1 >> 16) + (h2 & 0xffffU) + (h2 >> 16)) * (1.0f / 65536.0f);
+    const float noise = (sum - 2.0f) * 1.7320508f * sigma;
+    const float value = rad[u] * gain * vig + noise;
+    px[u] = static_cast<uint8_t>(value <= 0.0f ? 0 : (value >= 254.5f ? 255 : static_cast<int>(value + 0.5f)));
+  }
 }
 
 RenderSettings render_settings(const SimConfig& c) {
@@ -148,23 +167,9 @@ void Simulator::render_frame(int frame, SimFrame& out, int threads) const {
     cv::Mat& image = c == 0 ? out.left : out.right;
     image.create(height, width, CV_8UC1);
     const uint32_t cam_seed = hash32(frame_seed, static_cast<uint32_t>(c + 1));
-    for (int v = 0; v < height; ++v) {
-      const float* rad = radiance.ptr<float>(v);
-      uint8_t* px = image.ptr<uint8_t>(v);
-      const float dy = static_cast<float>(v) - cy;
-      for (int u = 0; u < width; ++u) {
-        const float dx = static_cast<float>(u) - cx;
-        const float vig = 1.0f - vignetting * (dx * dx + dy * dy) / r2_corner;
-        // Approximately Gaussian noise: sum of four 16-bit uniforms (Irwin-Hall), unit variance.
-        const uint32_t pixel = static_cast<uint32_t>(v * width + u);
-        const uint32_t h1 = hash32(pixel, cam_seed), h2 = hash32(pixel ^ 0x5bd1e995U, cam_seed + 0x68e31da4U);
-        const float sum = static_cast<float>((h1 & 0xffffU) + (h1 >> 16) + (h2 & 0xffffU) + (h2 >> 16)) *
-                          (1.0f / 65536.0f);
-        const float noise = (sum - 2.0f) * 1.7320508f * sigma;
-        const float value = rad[u] * gain * vig + noise;
-        px[u] = static_cast<uint8_t>(value <= 0.0f ? 0 : (value >= 254.5f ? 255 : static_cast<int>(value + 0.5f)));
-      }
-    }
+    for (int v = 0; v < height; ++v)
+      expose_row(radiance.ptr<float>(v), image.ptr<uint8_t>(v), width, v, gain, sigma, vignetting, cx, cy, r2_corner,
+                 cam_seed);
   }
 
   // Ground truth from the left camera.

@@ -127,8 +127,14 @@ class Renderer {
   void rasterize_boxes(const CameraIntrinsics& cam, const std::vector<BoxFace>& faces,
                        const std::vector<std::vector<uint32_t>>& buckets, cv::Mat& depth, cv::Mat& key,
                        int threads) const;
+  static void rasterize_row(int width, const std::vector<BoxFace>& faces, const std::vector<uint32_t>& bucket,
+                            int v, float* zrow, int32_t* krow);
   void cast_dynamic(const Ray& ray, const std::vector<DynamicObject>& objects, const ObjectRects* rects, int u, int v,
                     RayHit& hit) const;
+  // The row passes of render(): hits, depth, ids, keys and radiance of row v; the antialiasing of row v.
+  struct RenderPass;
+  void render_row(const RenderPass& pass, int v) const;
+  void antialias_row(const RenderPass& pass, int v) const;
   // Soft shadow of an actor on the floor: albedo *= 1 - 0.6 q^2 where q = 1 - squared distance / radius^2 > 0.
   struct BlobShadow {
     float x, y, inv_radius2;

@@ -123,7 +123,7 @@ AGVSLAM_SIM_INLINE f32x4 value_noise(f32x4 x, f32x4 y, u32x4 seed) {
 }  // namespace simd
 #endif
 
-inline float fractal_noise(float u, float v, float wavelength_m, int octaves, float persistence, float footprint_m,
+AGVSLAM_SIM_INLINE float fractal_noise(float u, float v, float wavelength_m, int octaves, float persistence, float footprint_m,
                            uint32_t seed) {
 #if defined(__GNUC__)
   if (octaves <= 4) {
@@ -156,7 +156,7 @@ AGVSLAM_SIM_INLINE float interval_coverage(float x, float lo, float hi, float fo
 
 // Box-filtered coverage of periodic stripes [k * period, k * period + width). Tends to width / period (the
 // mean) as the footprint approaches the period.
-inline float stripe_coverage(float x, float period, float width, float footprint_m) {
+AGVSLAM_SIM_INLINE float stripe_coverage(float x, float period, float width, float footprint_m) {
   const float mean = width / period;
   if (footprint_m >= period) return mean;
   const float f = x - fast_floor(x / period) * period;  // [0, period)
@@ -168,7 +168,7 @@ inline float stripe_coverage(float x, float period, float width, float footprint
 }
 
 // Coverage of the axis-aligned rectangle [u0, u1] x [v0, v1] (separable box filter).
-inline float rect_coverage(float u, float v, float u0, float u1, float v0, float v1, float footprint_m) {
+AGVSLAM_SIM_INLINE float rect_coverage(float u, float v, float u0, float u1, float v0, float v1, float footprint_m) {
   if (u < u0 - footprint_m || u > u1 + footprint_m || v < v0 - footprint_m || v > v1 + footprint_m) return 0.0f;
   return interval_coverage(u, u0, u1, footprint_m) * interval_coverage(v, v0, v1, footprint_m);
 }

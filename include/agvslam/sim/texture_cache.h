@@ -45,6 +45,9 @@ class TextureCache {
   // Albedo of surface `id` (of size size_u x size_v; the same for every lookup of that surface) at (u, v) seen
   // with a pixel footprint of `footprint_m`. `source(u, v, footprint_m)` is called only to bake missing texels.
   template <typename Source>
+#if defined(__GNUC__)
+  __attribute__((always_inline))  // into the caller, and so into its AVX2 copy (cpu_dispatch.h)
+#endif
   float sample(std::size_t id, float size_u, float size_v, float u, float v, float footprint_m,
                const Source& source) const {
     const Surface& s = surface(id, size_u, size_v);
@@ -112,6 +115,9 @@ class TextureCache {
   const Surface& create_surface(std::size_t id, float size_u, float size_v) const;
 
   template <typename Source>
+#if defined(__GNUC__)
+  __attribute__((always_inline))
+#endif
   float sample_level(const Surface& s, int level, float u, float v, const Source& source) const {
     const Level& lv = s.levels[static_cast<std::size_t>(level)];
     // Texel coordinates clamped to the surface (std::max(0, NaN) is 0).
