@@ -4,7 +4,9 @@
 //   agvslam-run --dataset DIR --out TRAJ [--calib FILE] [--format tum|kitti] [--dynamic detector|gt|off]
 //               [--json STATS] [--frames A:B] [--params-slam params/slam.yaml] [--params-features ...]
 //               [--params-dynamic ...] [--params-stereo ...] [--mapping thread|inline] [--speed X]
-//               [--opencv-threads N]
+//               [--opencv-threads N] [--params-place params/place.yaml] [--loop on|off]
+//               [--save-map FILE] [--load-map FILE --mode localise|map] [--blank A:B] [--repeat N]
+//               [--map-dataset DIR]
 //
 // Reads KITTI-layout folders (also what agvslam-sim writes) and EuRoC ASL folders through agvslam::io. The frames
 // are read, and with --dynamic detector their dynamic masks computed, in a second thread one frame ahead of
@@ -25,6 +27,19 @@
 // not inflate). --json adds per-frame records (state, counts, times, mapping queue length).
 // A progress bar with the frame rate goes to stderr. Exit status: 0 on success, 2 on bad input (the message names
 // the option, file or field), 1 on any other failure.
+//
+// Place recognition and maps (issue 5): --params-place names the vocabulary (default: the source tree's
+// params/place.yaml); --loop off disables loop closing (relocalisation stays). --load-map FILE starts in a saved map
+// (--mode localise: track without changing it; map: extend it); the first frames relocalise in it. --save-map FILE
+// writes the final map (atomically). --blank A:B replaces frames A..B by black images (a covered camera: forced
+// loss). --repeat N plays the frame range N times in a row with continuing time stamps (laps of a loop sequence
+// that ends where it starts; the ground truth is repeated alike). stdout then also has
+//   LOOPS <n> ...                          loops closed (keyframe -> old keyframe, frame, correction)
+//   RELOCALISATION first_tracked <k> [blank_recovered_after <m>]   frames until the first pose / after the blank
+// --map-dataset DIR (simulator folders only): the folder the loaded map was made from; the ground truth of this run
+// is expressed in that run's world frame (its first left camera) through the simulator's warehouse frame,
+// T_w1_c = T_map_cam1(0)^-1 * T_map_cam2(0) * T_w2_c, and `MAP_FRAME_ATE_M <x>` is the RMSE of the estimated
+// positions against it without any alignment (the estimate is in the saved map's frame).
 
 #include <CLI/CLI.hpp>
 #include <spdlog/sinks/stdout_color_sinks.h>
@@ -33,6 +48,7 @@
 
 #include <algorithm>
 #include <chrono>
+#include <fstream>
 #include <cmath>
 #include <condition_variable>
 #include <cstdio>
@@ -53,6 +69,8 @@
 #include "agvslam/features/features_config.h"
 #include "agvslam/io/dataset.h"
 #include "agvslam/io/trajectory_io.h"
+#include "agvslam/place/place_config.h"
+#include "agvslam/sim/simulator.h"
 #include "agvslam/slam/system.h"
 #include "agvslam/stereo/stereo_config.h"
 
@@ -67,12 +85,73 @@ double ms_since(Clock::time_point t0) { return std::chrono::duration<double, std
 
 enum class DynamicMode { kDetector, kGroundTruth, kOff };
 
+#ifndef AGVSLAM_PARAMS_DIR
+#define AGVSLAM_PARAMS_DIR "params"
+#endif
+
 struct Options {
   std::string dataset, calib, out, format = "tum", dynamic = "detector", json, frames, mapping = "thread";
   std::string params_slam, params_features, params_dynamic, params_stereo;
+  std::string params_place = AGVSLAM_PARAMS_DIR "/place.yaml";
+  std::string loop = "on", save_map, load_map, mode, blank, map_dataset;
+  int repeat = 1;
   double speed = 0;
   int opencv_threads = 1;
 };
+
+// "A:B" (inclusive) for --blank.
+std::pair<std::size_t, std::size_t> parse_blank(const std::string& text) {
+  const auto colon = text.find(':');
+  std::size_t a = 0, b = 0, used_a = 0, used_b = 0;
+  bool ok = colon != std::string::npos && colon > 0 && colon + 1 < text.size();
+  if (ok) {
+    try {
+      a = static_cast<std::size_t>(std::stoull(text.substr(0, colon), &used_a));
+      b = static_cast<std::size_t>(std::stoull(text.substr(colon + 1), &used_b));
+    } catch (const std::exception&) {
+      ok = false;
+    }
+  }
+  if (!ok || used_a != colon || used_b != text.size() - colon - 1 || text[0] == '-' || b < a) {
+    throw InputError("--blank", text, "expected A:B with 0 <= A <= B (inclusive frame range to black out)");
+  }
+  return {a, b};
+}
+
+// T_w1_w2: the world frame of a simulator run (its first left camera) in the world frame of another run through
+// the same warehouse (scenario.json of both; default simulator settings).
+agvslam::SE3d simulator_world_offset(const std::string& map_dir, const std::string& run_dir) {
+  auto first_camera = [](const std::string& dir) {
+    const std::string path = dir + "/scenario.json";
+    std::ifstream f(path);
+    if (!f) throw InputError("--map-dataset", path, "expected a simulator folder with scenario.json");
+    nlohmann::json j;
+    try {
+      j = nlohmann::json::parse(f);
+    } catch (const std::exception& e) {
+      throw InputError(path, "", std::string("expected JSON (") + e.what() + ")");
+    }
+    agvslam::sim::ScenarioOptions so;
+    try {
+      so.name = j.at("scenario").get<std::string>();
+      so.frames = j.at("frames").get<int>();
+      so.seed = j.at("seed").get<uint64_t>();
+      so.layout_seed = j.at("layout_seed").get<uint64_t>();
+      so.start_offset_m = j.at("start_offset_m").get<double>();
+    } catch (const std::exception& e) {
+      throw InputError(path, "scenario, frames, seed, layout_seed, start_offset_m", std::string("expected them (") + e.what() + ")");
+    }
+    const agvslam::sim::Simulator sim(agvslam::sim::SimConfig{}, so);
+    return std::make_pair(agvslam::SE3d(sim.T_map_cam(0)), so.effective_layout_seed());
+  };
+  const auto [T_map_c1, layout1] = first_camera(map_dir);
+  const auto [T_map_c2, layout2] = first_camera(run_dir);
+  if (layout1 != layout2) {
+    throw InputError("--map-dataset", map_dir, "expected a run through the same warehouse (layout seed " +
+                                                   std::to_string(layout2) + ", that folder has " + std::to_string(layout1) + ")");
+  }
+  return T_map_c1.inverse() * T_map_c2;
+}
 
 // "A:B" (inclusive, either side may be empty) -> [first, last] clipped to the sequence.
 void parse_frames(const std::string& text, std::size_t size, std::size_t& first, std::size_t& last) {
@@ -127,6 +206,8 @@ struct Job {
   double detector_ms = -1;   // -1: no detector
   double detector_cpu_ms = -1;
   double read_ms = 0;
+  int lap = 0;               // --repeat
+  bool blank = false;        // --blank
   std::string error;         // an exception in the worker, re-raised by the main thread
   bool end = false;
 };
@@ -215,6 +296,18 @@ int run(const Options& o) {
     throw InputError("--opencv-threads", std::to_string(o.opencv_threads), "expected an integer in [1, 64]");
   }
   cv::setNumThreads(o.opencv_threads);
+  if (o.loop != "on" && o.loop != "off") throw InputError("--loop", o.loop, "expected on or off");
+  if (o.repeat < 1 || o.repeat > 100) throw InputError("--repeat", std::to_string(o.repeat), "expected an integer in [1, 100]");
+  slam::MapMode map_mode = slam::MapMode::kMapping;
+  if (!o.mode.empty()) {
+    if (o.load_map.empty()) throw InputError("--mode", o.mode, "expected only with --load-map");
+    map_mode = slam::parse_map_mode(o.mode, "--mode");
+  } else if (!o.load_map.empty()) {
+    throw InputError("--load-map", o.load_map, "expected --mode localise or --mode map with it");
+  }
+  if (!o.map_dataset.empty() && o.load_map.empty()) throw InputError("--map-dataset", o.map_dataset, "expected only with --load-map");
+  std::optional<std::pair<std::size_t, std::size_t>> blank;
+  if (!o.blank.empty()) blank = parse_blank(o.blank);
 
   const auto dataset = agvslam::io::open_dataset(o.dataset, o.calib);
   std::size_t first = 0, last = 0;
@@ -233,6 +326,12 @@ int run(const Options& o) {
   }
   config.frame_rate_hz = dataset->rate_hz();
   config.threaded_mapping = o.mapping == "thread";
+  const agvslam::place::PlaceConfig place_config = agvslam::place::load_place_config(o.params_place);
+  config.vocabulary = slam::load_vocabulary(place_config);
+  config.direct_index_level = place_config.direct_index_level;
+  if (o.loop == "off") config.slam.loop_closing.enabled = false;
+  std::optional<agvslam::SE3d> T_w1_w2;
+  if (!o.map_dataset.empty()) T_w1_w2 = simulator_world_offset(o.map_dataset, o.dataset);
   dyn::DynamicDetectorConfig dynamic_config;
   agvslam::stereo::StereoConfig stereo_config;
   if (mode == DynamicMode::kDetector) {
@@ -250,6 +349,16 @@ int run(const Options& o) {
                o.speed > 0 ? std::to_string(o.speed) + "x the dataset rate" : std::string("as fast as possible"), o.opencv_threads);
   spdlog::info("  output: {} ({}){}", o.out, agvslam::io::to_string(format), o.json.empty() ? "" : ", stats " + o.json);
   spdlog::info("  slam settings{}", o.params_slam.empty() ? " (built-in defaults)" : " from " + o.params_slam);
+  spdlog::info("  place recognition from {}: {}", o.params_place, place_config.describe());
+  spdlog::info("  loop closing {}; map: {}{}{}", o.loop, o.load_map.empty() ? "new" : "load " + o.load_map,
+               o.load_map.empty() ? "" : std::string(" (mode ") + slam::to_string(map_mode) + ")",
+               o.save_map.empty() ? "" : ", save to " + o.save_map);
+  if (blank) spdlog::info("  blank (covered camera) frames {}..{}", blank->first, blank->second);
+  if (o.repeat > 1) spdlog::info("  {} laps of frames {}..{}", o.repeat, first, last);
+  if (T_w1_w2) {
+    spdlog::info("  map frame: the ground truth is expressed in {}'s world frame (t = {:.3f} {:.3f} {:.3f} m)", o.map_dataset,
+                 T_w1_w2->translation().x(), T_w1_w2->translation().y(), T_w1_w2->translation().z());
+  }
   spdlog::info("  feature settings{}", o.params_features.empty() ? " (built-in defaults)" : " from " + o.params_features);
   if (mode == DynamicMode::kDetector) {
     spdlog::info("  detector settings{}", o.params_dynamic.empty() ? " (built-in defaults)" : " from " + o.params_dynamic);
@@ -260,6 +369,15 @@ int run(const Options& o) {
 
   slam::System system(dataset->calibration(), config);
   for (const auto& line : system.describe()) spdlog::info("    {}", line);
+  nlohmann::json load_json;
+  if (!o.load_map.empty()) {
+    const slam::MapLoadStats ls = system.load_map(o.load_map, map_mode);
+    spdlog::info("  loaded {}: {} keyframes, {} map points, {:.1f} MB (read {:.0f} ms, decode {:.0f} ms, bag of words {:.0f} ms)",
+                 o.load_map, ls.keyframes, ls.map_points, static_cast<double>(ls.bytes) / 1e6, ls.read_ms, ls.decode_ms, ls.bow_ms);
+    load_json = {{"file", o.load_map}, {"mode", slam::to_string(map_mode)}, {"keyframes", ls.keyframes},
+                 {"map_points", ls.map_points}, {"bytes", ls.bytes}, {"read_ms", ls.read_ms}, {"decode_ms", ls.decode_ms},
+                 {"bow_ms", ls.bow_ms}};
+  }
 
   // Reader (+ detector) thread, one frame ahead.
   JobQueue queue(2);
@@ -268,11 +386,24 @@ int run(const Options& o) {
     dyn::DetectorResult result;
     try {
       if (mode == DynamicMode::kDetector) detector.emplace(dataset->calibration(), dynamic_config, stereo_config);
-      for (std::size_t i = first; i <= last && !queue.cancelled(); ++i) {
+      const std::size_t per_lap = last - first + 1;
+      const int64_t lap_ns = per_lap > 1 ? (dataset->frame(last).t_ns - dataset->frame(first).t_ns) +
+                                               static_cast<int64_t>(1e9 / dataset->rate_hz())
+                                         : static_cast<int64_t>(1e9 / dataset->rate_hz());
+      for (std::size_t step = 0; step < per_lap * static_cast<std::size_t>(o.repeat) && !queue.cancelled(); ++step) {
+        const std::size_t i = first + step % per_lap;
+        const int64_t lap = static_cast<int64_t>(step / per_lap);
         Job job;
         job.index = i;
+        job.lap = static_cast<int>(lap);
         const auto t0 = Clock::now();
         job.frame = dataset->frame(i);
+        job.frame.t_ns += lap * lap_ns;
+        if (blank && i >= blank->first && i <= blank->second) {
+          job.frame.left = cv::Mat::zeros(job.frame.left.size(), job.frame.left.type());
+          job.frame.right = cv::Mat::zeros(job.frame.right.size(), job.frame.right.type());
+          job.blank = true;
+        }
         job.read_ms = ms_since(t0);
         if (mode == DynamicMode::kDetector) {
           const auto t1 = Clock::now();
@@ -312,7 +443,11 @@ int run(const Options& o) {
   nlohmann::json per_frame = nlohmann::json::array();
   std::size_t frames = 0, tracked = 0, lost = 0, resets = 0, recovered = 0, max_queue = 0;
   std::size_t keyframes = 0;
-  ProgressBar progress(last - first + 1);
+  ProgressBar progress((last - first + 1) * static_cast<std::size_t>(o.repeat));
+  long first_tracked = -1;          // frames processed before the first pose
+  long blank_end_step = -1;         // step of the last blanked frame (first lap)
+  long blank_recovered_after = -1;  // frames after the blank until a pose
+  std::vector<std::size_t> laps_keyframes, laps_points;
   const auto t_run = Clock::now();
   auto t_prev_output = Clock::now();
   const double period_s = o.speed > 0 ? 1.0 / (dataset->rate_hz() * o.speed) : 0;
@@ -326,7 +461,17 @@ int run(const Options& o) {
       std::this_thread::sleep_until(due);
     }
     const slam::TrackResult r = system.track_stereo(job.frame.t_ns, job.frame.left, job.frame.right, job.mask);
+    const long step = static_cast<long>(frames);
     ++frames;
+    if (r.state == slam::TrackingState::kOk && first_tracked < 0) first_tracked = step;
+    if (job.blank && job.lap == 0) blank_end_step = step;
+    if (blank_end_step >= 0 && blank_recovered_after < 0 && !job.blank && r.state == slam::TrackingState::kOk) {
+      blank_recovered_after = step - blank_end_step - 1;
+    }
+    if (job.index == last) {
+      laps_keyframes.push_back(r.keyframes);
+      laps_points.push_back(r.map_points);
+    }
     if (r.state == slam::TrackingState::kOk) ++tracked;
     if (r.state == slam::TrackingState::kLost) ++lost;
     if (r.counts.reset) ++resets;
@@ -353,6 +498,9 @@ int run(const Options& o) {
     }
     if (frames > 1) series["frame_interval"].add(interval);
     per_frame.push_back({{"frame", job.index},
+                         {"lap", job.lap},
+                         {"blank", job.blank},
+                         {"loops", r.loops_closed},
                          {"t_ns", job.frame.t_ns},
                          {"state", slam::to_string(r.state)},
                          {"features", r.counts.features},
@@ -378,6 +526,15 @@ int run(const Options& o) {
   system.wait_for_mapping();
   const agvslam::Trajectory trajectory = system.trajectory();
   const slam::LocalMappingStats mstats = system.mapping_stats();
+  const slam::LoopClosingStats lstats = system.loop_stats();
+  nlohmann::json save_json;
+  if (!o.save_map.empty()) {
+    const slam::MapSaveStats ss = system.save_map(o.save_map);
+    spdlog::info("saved {}: {} keyframes, {} map points, {:.1f} MB (encode {:.0f} ms, write {:.0f} ms)", o.save_map,
+                 ss.keyframes, ss.map_points, static_cast<double>(ss.bytes) / 1e6, ss.encode_ms, ss.write_ms);
+    save_json = {{"file", o.save_map}, {"keyframes", ss.keyframes}, {"map_points", ss.map_points}, {"bytes", ss.bytes},
+                 {"encode_ms", ss.encode_ms}, {"write_ms", ss.write_ms}};
+  }
   const auto mapping_history = system.local_mapping().timing_history();
   agvslam::slam::MapCounts map_counts;
   {
@@ -402,7 +559,23 @@ int run(const Options& o) {
   double drift_m = 0;
   for (const auto& p : trajectory) drift_m = std::max(drift_m, (p.T_w_c.translation() - trajectory.front().T_w_c.translation()).norm());
   nlohmann::json j;
-  const auto gt = dataset->ground_truth();
+  std::optional<agvslam::Trajectory> gt = dataset->ground_truth();
+  if (gt && (o.repeat > 1 || first > 0 || last + 1 < dataset->size())) {
+    // The ground truth of the frames played, lap after lap, with the same continuing stamps.
+    agvslam::Trajectory g;
+    const std::size_t per_lap = last - first + 1;
+    const int64_t lap_ns = per_lap > 1 ? (dataset->frame(last).t_ns - dataset->frame(first).t_ns) +
+                                             static_cast<int64_t>(1e9 / dataset->rate_hz())
+                                       : static_cast<int64_t>(1e9 / dataset->rate_hz());
+    const int64_t t_first = dataset->frame(first).t_ns, t_last = dataset->frame(last).t_ns;
+    for (int lap = 0; lap < o.repeat; ++lap) {
+      for (const auto& p : *gt) {
+        if (p.t_ns < t_first || p.t_ns > t_last) continue;
+        g.push_back({p.t_ns + lap * lap_ns, p.T_w_c});
+      }
+    }
+    gt = g;
+  }
   if (gt && !trajectory.empty()) {
     const auto pairs = agvslam::eval::associate_by_timestamp(*gt, trajectory, 5'000'000);
     if (pairs.size() >= 3) {
@@ -418,6 +591,46 @@ int run(const Options& o) {
     }
   }
   std::printf("DRIFT_M %.5f (largest distance from the first tracked position)\n", drift_m);
+  if (gt && T_w1_w2 && !trajectory.empty()) {
+    // Positions in the saved map's frame, without alignment.
+    agvslam::Trajectory gt_map;
+    for (const auto& p : *gt) gt_map.push_back({p.t_ns, *T_w1_w2 * p.T_w_c});
+    const auto pairs = agvslam::eval::associate_by_timestamp(gt_map, trajectory, 5'000'000);
+    if (pairs.size() >= 1) {
+      const auto ate = agvslam::eval::compute_ate(pairs, agvslam::eval::AlignMode::kNone);
+      std::printf("MAP_FRAME_ATE_M %.5f (no alignment, %zu poses, max %.4f m)\n", ate.translation_m.rmse,
+                  ate.translation_m.count, ate.translation_m.max);
+      j["map_frame_ate"] = {{"rmse_m", ate.translation_m.rmse}, {"max_m", ate.translation_m.max},
+                            {"poses", ate.translation_m.count}};
+    }
+  }
+  std::printf("LOOPS %llu", static_cast<unsigned long long>(lstats.loops_closed));
+  nlohmann::json loops_json = nlohmann::json::array();
+  for (const slam::LoopEvent& e : lstats.loops) {
+    std::printf("  [kf %llu -> %llu, frame %llu -> %llu, %d matches, moved %.3f m %.2f deg]",
+                static_cast<unsigned long long>(e.keyframe_id), static_cast<unsigned long long>(e.loop_keyframe_id),
+                static_cast<unsigned long long>(e.frame_id), static_cast<unsigned long long>(e.loop_frame_id),
+                e.total_matches, e.correction_m, e.correction_deg);
+    loops_json.push_back({{"keyframe", e.keyframe_id}, {"loop_keyframe", e.loop_keyframe_id}, {"frame", e.frame_id},
+                          {"loop_frame", e.loop_frame_id}, {"t_ns", e.t_ns}, {"bow_matches", e.bow_matches},
+                          {"ransac_inliers", e.ransac_inliers}, {"refined_inliers", e.refined_inliers},
+                          {"total_matches", e.total_matches}, {"correction_m", e.correction_m},
+                          {"correction_deg", e.correction_deg}, {"fused_points", e.fused_points},
+                          {"graph_keyframes", e.graph_keyframes}, {"graph_edges", e.graph_edges},
+                          {"detect_ms", e.detect_ms}, {"correct_ms", e.correct_ms}, {"pose_graph_ms", e.pose_graph_ms},
+                          {"global_ba_ms", e.global_ba_ms}, {"global_ba_merge_ms", e.global_ba_merge_ms}});
+  }
+  std::printf("\n");
+  std::printf("RELOCALISATION first_tracked %ld", first_tracked);
+  if (blank) std::printf(" blank_recovered_after %ld", blank_recovered_after);
+  std::printf("\n");
+  if (o.repeat > 1) {
+    std::printf("laps:");
+    for (std::size_t k = 0; k < laps_keyframes.size(); ++k) {
+      std::printf(" [%zu: %zu keyframes, %zu map points]", k + 1, laps_keyframes[k], laps_points[k]);
+    }
+    std::printf("\n");
+  }
   std::printf("counts: %zu frames, %zu tracked, %zu lost, %zu recovered, %zu resets; %zu keyframes, %zu map points "
               "(%.1f MB); mapping: %llu keyframes processed, %llu skipped (queue full), max queue %zu, %llu culled "
               "keyframes, %llu created / %llu culled points\n",
@@ -458,6 +671,16 @@ int run(const Options& o) {
     j["frames"] = {{"first", first}, {"last", last}, {"processed", frames}, {"tracked", tracked}, {"lost", lost},
                    {"recovered", recovered}, {"resets", resets}};
     j["drift_m"] = drift_m;
+    j["loops"] = loops_json;
+    j["loop_closing"] = {{"enabled", o.loop == "on"}, {"keyframes_processed", lstats.keyframes_processed},
+                         {"keyframes_dropped", lstats.keyframes_dropped}, {"consistent_detections", lstats.consistent_detections},
+                         {"rejected_geometry", lstats.rejected_geometry}, {"rejected_correction", lstats.rejected_correction},
+                         {"loops_closed", lstats.loops_closed}, {"global_ba_runs", lstats.global_ba_runs},
+                         {"global_ba_aborted", lstats.global_ba_aborted}};
+    j["relocalisation"] = {{"first_tracked", first_tracked}, {"blank_recovered_after", blank_recovered_after}};
+    if (!load_json.is_null()) j["load_map"] = load_json;
+    if (!save_json.is_null()) j["save_map"] = save_json;
+    if (o.repeat > 1) j["laps"] = {{"keyframes", laps_keyframes}, {"map_points", laps_points}};
     j["map"] = {{"keyframes", map_counts.keyframes}, {"map_points", map_counts.map_points},
                 {"observations", map_counts.observations}, {"memory_bytes", map_counts.memory_bytes}};
     j["local_mapping"] = {{"keyframes_processed", mstats.keyframes_processed}, {"keyframes_skipped", mstats.keyframes_skipped},
@@ -498,6 +721,14 @@ int main(int argc, char** argv) {
   app.add_option("--mapping", o.mapping, "local mapping: thread (default, as on the vehicle) or inline (deterministic)");
   app.add_option("--speed", o.speed, "feed frames at this multiple of the dataset rate (0, default: as fast as possible)");
   app.add_option("--opencv-threads", o.opencv_threads, "OpenCV's threads inside a stage (default 1: one core per thread)");
+  app.add_option("--params-place", o.params_place, "params/place.yaml (the vocabulary; default: the source tree's)");
+  app.add_option("--loop", o.loop, "loop closing: on (default) or off");
+  app.add_option("--save-map", o.save_map, "write the final map to this file (atomically)");
+  app.add_option("--load-map", o.load_map, "start in this saved map (needs --mode)");
+  app.add_option("--mode", o.mode, "with --load-map: localise (track without changing the map) or map (extend it)");
+  app.add_option("--blank", o.blank, "black out frames A:B (inclusive): a covered camera, forced loss");
+  app.add_option("--repeat", o.repeat, "play the frame range this many times in a row (laps of a loop)");
+  app.add_option("--map-dataset", o.map_dataset, "with --load-map on simulator folders: the folder the map was made from (MAP_FRAME_ATE_M)");
   try {
     app.parse(argc, argv);
   } catch (const CLI::ParseError& e) {

@@ -3,6 +3,7 @@
 #include <algorithm>
 #include <cmath>
 
+#include "agvslam/place/vocabulary.h"
 #include "agvslam/slam/map_point.h"
 
 namespace agvslam::slam {
@@ -101,8 +102,16 @@ void Frame::assign(uint64_t frame_id, int64_t time_ns, const FrameGeometryPtr& g
   map_points.assign(keypoints.size(), nullptr);
   outlier.assign(keypoints.size(), 0);
   reference_keyframe.reset();
+  has_bow = false;
   has_pose_ = false;
   grid.build(keypoints, *geometry);
+}
+
+void Frame::compute_bow(const place::Vocabulary& vocabulary, int direct_index_level) {
+  if (has_bow && bow_vocabulary_id == vocabulary.identity() && bow_features.level == direct_index_level) return;
+  vocabulary.transform(descriptors, bow, bow_features, direct_index_level);
+  bow_vocabulary_id = vocabulary.identity();
+  has_bow = true;
 }
 
 void Frame::set_pose(const SE3d& T_c_w) {

@@ -4,6 +4,7 @@
 #include <set>
 #include <unordered_map>
 
+#include "agvslam/place/vocabulary.h"
 #include "agvslam/slam/map.h"
 #include "agvslam/slam/map_point.h"
 
@@ -25,6 +26,17 @@ KeyFrame::KeyFrame(uint64_t kf_id, const Frame& frame)
       grid(frame.grid),
       map_points_(frame.map_points) {
   set_pose(frame.T_c_w());
+  if (frame.has_bow) {
+    bow.words = frame.bow;
+    bow.features = frame.bow_features;
+    bow.vocabulary_id = frame.bow_vocabulary_id;
+  }
+}
+
+void KeyFrame::compute_bow(const place::Vocabulary& vocabulary, int direct_index_level) {
+  if (bow.computed() && bow.vocabulary_id == vocabulary.identity() && bow.features.level == direct_index_level) return;
+  vocabulary.transform(descriptors, bow.words, bow.features, direct_index_level);
+  bow.vocabulary_id = vocabulary.identity();
 }
 
 Eigen::Vector3d KeyFrame::unproject_stereo(std::size_t i) const {

@@ -279,7 +279,15 @@ void LocalMapping::create_new_map_points(KeyFrame& kf) {
     if ((c2 - c1).norm() < g.baseline_m) continue;  // stereo already covers this baseline
     const SE3d T2_c_w = kf2->T_c_w();
     const Eigen::Matrix3d F12 = fundamental_from_poses(T1_c_w, T2_c_w, K);
-    matcher_.search_for_triangulation(kf, *kf2, F12, matches);
+    if (place_ && config_.mapping.triangulation_bow) {
+      // ORB-SLAM2's SearchForTriangulation: candidates from the vocabulary's direct index. kf2's BoW exists (it
+      // was inserted before); kf's was computed in process_new_keyframe.
+      place_->compute(kf);
+      place_->compute(*kf2);
+      matcher_.search_for_triangulation_bow(kf, *kf2, F12, matches);
+    } else {
+      matcher_.search_for_triangulation(kf, *kf2, F12, matches);
+    }
     for (const auto& [i1, i2] : matches) {
       const std::size_t s1 = static_cast<std::size_t>(i1), s2 = static_cast<std::size_t>(i2);
       if (kf.map_point(s1) || kf2->map_point(s2)) continue;

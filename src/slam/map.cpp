@@ -100,4 +100,19 @@ void Map::clear() {
   ++big_change_;
 }
 
+void Map::take_from(Map& other) {
+  clear();
+  keyframes_ = std::move(other.keyframes_);
+  map_points_ = std::move(other.map_points_);
+  removed_ = std::move(other.removed_);
+  next_keyframe_id_ = other.next_keyframe_id_;
+  next_map_point_id_ = other.next_map_point_id_;
+  origin_id_ = other.origin_id_;
+  other.keyframes_.clear();
+  other.map_points_.clear();
+  other.removed_.clear();
+  other.origin_id_ = UINT64_MAX;
+  ++big_change_;
+}
+
 }  // namespace agvslam::slam

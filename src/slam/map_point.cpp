@@ -15,6 +15,9 @@ MapPoint::MapPoint(uint64_t point_id, const Eigen::Vector3d& position_w, KeyFram
       p_w(position_w),
       reference_keyframe(reference) {}
 
+MapPoint::MapPoint(uint64_t point_id, const Eigen::Vector3d& position_w, uint64_t first_kf_id, uint64_t frame_id)
+    : id(point_id), first_keyframe_id(first_kf_id), first_frame_id(frame_id), p_w(position_w) {}
+
 int MapPoint::index_in(const KeyFrame* kf) const {
   for (const Observation& o : observations_) {
     if (o.keyframe == kf) return o.index;

@@ -2,6 +2,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <unordered_set>
 
 #include "agvslam/slam/map.h"
 
@@ -388,6 +389,354 @@ int Matcher::fuse(KeyFrame& kf, const std::vector<MapPointPtr>& points, float ra
     ++fused;
   }
   return fused;
+}
+
+int Matcher::search_by_bow(const KeyFrame& kf, const Frame& frame, float ratio, std::vector<MapPointPtr>& matches) {
+  matches.assign(frame.size(), nullptr);
+  reset_rotation_histogram();
+  int n = 0;
+  place::for_each_common_node(
+      kf.bow.features, frame.bow_features,
+      [&](place::NodeId, const uint32_t* a0, const uint32_t* a1, const uint32_t* b0, const uint32_t* b1) {
+        for (const uint32_t* ia = a0; ia != a1; ++ia) {
+          const std::size_t i = *ia;
+          const MapPointPtr& point = kf.map_point(i);
+          if (!point || point->bad()) continue;
+          const uint8_t* d1 = kf.descriptor(i);
+          int best = 256, second = 256, best_j = -1;
+          for (const uint32_t* ib = b0; ib != b1; ++ib) {
+            if (matches[*ib]) continue;
+            const int d = hamming_distance(d1, frame.descriptor(*ib));
+            if (d < best) {
+              second = best;
+              best = d;
+              best_j = static_cast<int>(*ib);
+            } else if (d < second) {
+              second = d;
+            }
+          }
+          if (best_j < 0 || best > kMatchThresholdLow || static_cast<float>(best) >= ratio * static_cast<float>(second)) {
+            continue;
+          }
+          matches[static_cast<std::size_t>(best_j)] = point;
+          add_to_histogram(angle_diff_deg(kf.keypoints[i].angle, frame.keypoints[static_cast<std::size_t>(best_j)].angle),
+                           best_j);
+          ++n;
+        }
+      });
+  rotation_outliers(rejected_);
+  for (const int j : rejected_) {
+    matches[static_cast<std::size_t>(j)].reset();
+    --n;
+  }
+  return n;
+}
+
+int Matcher::search_by_bow(const KeyFrame& kf1, const KeyFrame& kf2, float ratio, std::vector<MapPointPtr>& matches12) {
+  matches12.assign(kf1.size(), nullptr);
+  taken_.assign(kf2.size(), 0);
+  reset_rotation_histogram();
+  int n = 0;
+  place::for_each_common_node(
+      kf1.bow.features, kf2.bow.features,
+      [&](place::NodeId, const uint32_t* a0, const uint32_t* a1, const uint32_t* b0, const uint32_t* b1) {
+        for (const uint32_t* ia = a0; ia != a1; ++ia) {
+          const std::size_t i1 = *ia;
+          const MapPointPtr& p1 = kf1.map_point(i1);
+          if (!p1 || p1->bad()) continue;
+          const uint8_t* d1 = kf1.descriptor(i1);
+          int best = 256, second = 256, best_i2 = -1;
+          for (const uint32_t* ib = b0; ib != b1; ++ib) {
+            const std::size_t i2 = *ib;
+            const MapPointPtr& p2 = kf2.map_point(i2);
+            if (taken_[i2] || !p2 || p2->bad()) continue;
+            const int d = hamming_distance(d1, kf2.descriptor(i2));
+            if (d < best) {
+              second = best;
+              best = d;
+              best_i2 = static_cast<int>(i2);
+            } else if (d < second) {
+              second = d;
+            }
+          }
+          if (best_i2 < 0 || best > kMatchThresholdLow || static_cast<float>(best) >= ratio * static_cast<float>(second)) {
+            continue;
+          }
+          const std::size_t s2 = static_cast<std::size_t>(best_i2);
+          matches12[i1] = kf2.map_point(s2);
+          taken_[s2] = 1;
+          add_to_histogram(angle_diff_deg(kf1.keypoints[i1].angle, kf2.keypoints[s2].angle), static_cast<int>(i1));
+          ++n;
+        }
+      });
+  rotation_outliers(rejected_);
+  for (const int i1 : rejected_) {
+    matches12[static_cast<std::size_t>(i1)].reset();
+    --n;
+  }
+  return n;
+}
+
+int Matcher::search_keyframe_projection(Frame& frame, const KeyFrame& kf, float radius_px, int max_distance) {
+  const FrameGeometry& g = *frame.geometry;
+  const SE3d& T_c_w = frame.T_c_w();
+  const Eigen::Vector3d center = frame.center_w();
+  std::unordered_set<const MapPoint*> found;
+  for (const MapPointPtr& p : frame.map_points) {
+    if (p) found.insert(p.get());
+  }
+  reset_rotation_histogram();
+  int n = 0;
+  for (std::size_t i = 0; i < kf.size(); ++i) {
+    const MapPointPtr& point = kf.map_point(i);
+    if (!point || point->bad() || found.count(point.get())) continue;
+    const Eigen::Vector3d p_c = T_c_w * point->p_w;
+    if (p_c.z() <= 0) continue;
+    const double inv_z = 1.0 / p_c.z();
+    const double u = g.camera.fx * p_c.x() * inv_z + g.camera.cx;
+    const double v = g.camera.fy * p_c.y() * inv_z + g.camera.cy;
+    if (!g.in_image(u, v)) continue;
+    const double dist = (point->p_w - center).norm();
+    if (dist < point->min_invariance_distance() || dist > point->max_invariance_distance()) continue;
+    const int level = point->predict_scale_level(dist, g);
+    const float radius = radius_px * g.scale_factors[static_cast<std::size_t>(level)];
+    frame.grid.features_in_area(frame.keypoints, g, static_cast<float>(u), static_cast<float>(v), radius,
+                                std::max(0, level - 1), level + 1, candidates_);
+    int best = 256, best_j = -1;
+    for (const int j : candidates_) {
+      if (frame.map_points[static_cast<std::size_t>(j)]) continue;
+      const int d = hamming_distance(point->descriptor.data(), frame.descriptor(static_cast<std::size_t>(j)));
+      if (d < best) {
+        best = d;
+        best_j = j;
+      }
+    }
+    if (best_j < 0 || best > max_distance) continue;
+    frame.map_points[static_cast<std::size_t>(best_j)] = point;
+    found.insert(point.get());
+    add_to_histogram(angle_diff_deg(kf.keypoints[i].angle, frame.keypoints[static_cast<std::size_t>(best_j)].angle), best_j);
+    ++n;
+  }
+  rotation_outliers(rejected_);
+  for (const int j : rejected_) {
+    frame.map_points[static_cast<std::size_t>(j)].reset();
+    --n;
+  }
+  return n;
+}
+
+namespace {
+
+// Projection of a world point into a keyframe-sized image with pose T_c_w, with ORB-SLAM2's distance-range and
+// viewing-angle checks; false when it does not qualify.
+bool project_checked(const FrameGeometry& g, const SE3d& T_c_w, const Eigen::Vector3d& center_w, const MapPoint& point,
+                     double& u, double& v, int& level) {
+  const Eigen::Vector3d p_c = T_c_w * point.p_w;
+  if (p_c.z() <= 0) return false;
+  const double inv_z = 1.0 / p_c.z();
+  u = g.camera.fx * p_c.x() * inv_z + g.camera.cx;
+  v = g.camera.fy * p_c.y() * inv_z + g.camera.cy;
+  if (!g.in_image(u, v)) return false;
+  const Eigen::Vector3d po = point.p_w - center_w;
+  const double dist = po.norm();
+  if (dist < point.min_invariance_distance() || dist > point.max_invariance_distance()) return false;
+  if (po.dot(point.normal_w) < 0.5 * dist) return false;
+  level = point.predict_scale_level(dist, g);
+  return true;
+}
+
+}  // namespace
+
+int Matcher::search_loop_projection(const KeyFrame& kf, const SE3d& T_c_w, const std::vector<MapPointPtr>& points,
+                                    float radius_px, std::vector<MapPointPtr>& matched) {
+  const FrameGeometry& g = *kf.geometry;
+  const Eigen::Vector3d center = T_c_w.inverse().translation();
+  std::unordered_set<const MapPoint*> already;
+  for (const MapPointPtr& p : matched) {
+    if (p) already.insert(p.get());
+  }
+  int n = 0;
+  for (const MapPointPtr& point : points) {
+    if (!point || point->bad() || already.count(point.get())) continue;
+    double u = 0, v = 0;
+    int level = 0;
+    if (!project_checked(g, T_c_w, center, *point, u, v, level)) continue;
+    const float radius = radius_px * g.scale_factors[static_cast<std::size_t>(level)];
+    kf.grid.features_in_area(kf.keypoints, g, static_cast<float>(u), static_cast<float>(v), radius, 0, -1, candidates_);
+    int best = 256, best_j = -1;
+    for (const int j : candidates_) {
+      const std::size_t sj = static_cast<std::size_t>(j);
+      if (matched[sj]) continue;
+      const int kp_level = kf.keypoints[sj].octave;
+      if (kp_level < level - 1 || kp_level > level) continue;
+      const int d = hamming_distance(point->descriptor.data(), kf.descriptor(sj));
+      if (d < best) {
+        best = d;
+        best_j = j;
+      }
+    }
+    if (best_j < 0 || best > kMatchThresholdLow) continue;
+    matched[static_cast<std::size_t>(best_j)] = point;
+    already.insert(point.get());
+    ++n;
+  }
+  return n;
+}
+
+int Matcher::search_by_se3(const KeyFrame& kf1, const KeyFrame& kf2, const SE3d& T_c1_c2, float radius_px,
+                           std::vector<MapPointPtr>& matches12) {
+  const FrameGeometry& g = *kf1.geometry;
+  const SE3d T_c2_c1 = T_c1_c2.inverse();
+  const std::size_t n1 = kf1.size(), n2 = kf2.size();
+  std::vector<uint8_t> matched2(n2, 0);
+  for (std::size_t i1 = 0; i1 < n1; ++i1) {
+    const MapPointPtr& p = matches12[i1];
+    if (!p) continue;
+    const int i2 = p->index_in(&kf2);
+    if (i2 >= 0) matched2[static_cast<std::size_t>(i2)] = 1;
+  }
+  // One direction: points of `from` (camera-frame positions through T_from_w), projected into `to` with T_to_from.
+  auto search = [&](const KeyFrame& from, const KeyFrame& to, const SE3d& T_to_from, const auto& skip,
+                    std::vector<int>& match) {
+    match.assign(from.size(), -1);
+    const SE3d T_from_w = from.T_c_w();
+    for (std::size_t i = 0; i < from.size(); ++i) {
+      const MapPointPtr& point = from.map_point(i);
+      if (!point || point->bad() || skip(i)) continue;
+      const Eigen::Vector3d p_to = T_to_from * (T_from_w * point->p_w);
+      if (p_to.z() <= 0) continue;
+      const double u = g.camera.fx * p_to.x() / p_to.z() + g.camera.cx;
+      const double v = g.camera.fy * p_to.y() / p_to.z() + g.camera.cy;
+      if (!g.in_image(u, v)) continue;
+      const double dist = p_to.norm();
+      if (dist < point->min_invariance_distance() || dist > point->max_invariance_distance()) continue;
+      const int level = point->predict_scale_level(dist, g);
+      const float radius = radius_px * g.scale_factors[static_cast<std::size_t>(level)];
+      to.grid.features_in_area(to.keypoints, g, static_cast<float>(u), static_cast<float>(v), radius, 0, -1, candidates_);
+      int best = 256, best_j = -1;
+      for (const int j : candidates_) {
+        const std::size_t sj = static_cast<std::size_t>(j);
+        const int kp_level = to.keypoints[sj].octave;
+        if (kp_level < level - 1 || kp_level > level) continue;
+        const int d = hamming_distance(point->descriptor.data(), to.descriptor(sj));
+        if (d < best) {
+          best = d;
+          best_j = j;
+        }
+      }
+      if (best_j >= 0 && best <= kMatchThresholdHigh) match[i] = best_j;
+    }
+  };
+  std::vector<int> match1, match2;
+  search(kf1, kf2, T_c2_c1, [&](std::size_t i1) { return matches12[i1] != nullptr; }, match1);
+  search(kf2, kf1, T_c1_c2, [&](std::size_t i2) { return matched2[i2] != 0; }, match2);
+  int n = 0;
+  for (std::size_t i1 = 0; i1 < n1; ++i1) {
+    const int i2 = match1[i1];
+    if (i2 < 0 || match2[static_cast<std::size_t>(i2)] != static_cast<int>(i1)) continue;
+    const MapPointPtr& p2 = kf2.map_point(static_cast<std::size_t>(i2));
+    if (!p2 || p2->bad()) continue;
+    matches12[i1] = p2;
+    ++n;
+  }
+  return n;
+}
+
+int Matcher::fuse_with_pose(KeyFrame& kf, const SE3d& T_c_w, const std::vector<MapPointPtr>& points, float radius_px,
+                            std::vector<MapPointPtr>& replace) {
+  const FrameGeometry& g = *kf.geometry;
+  const Eigen::Vector3d center = T_c_w.inverse().translation();
+  replace.assign(points.size(), nullptr);
+  int fused = 0;
+  for (std::size_t k = 0; k < points.size(); ++k) {
+    const MapPointPtr& point = points[k];
+    if (!point || point->bad() || point->is_in(&kf)) continue;
+    double u = 0, v = 0;
+    int level = 0;
+    if (!project_checked(g, T_c_w, center, *point, u, v, level)) continue;
+    const float radius = radius_px * g.scale_factors[static_cast<std::size_t>(level)];
+    kf.grid.features_in_area(kf.keypoints, g, static_cast<float>(u), static_cast<float>(v), radius, 0, -1, candidates_);
+    int best = 256, best_j = -1;
+    for (const int j : candidates_) {
+      const std::size_t sj = static_cast<std::size_t>(j);
+      const int kp_level = kf.keypoints[sj].octave;
+      if (kp_level < level - 1 || kp_level > level) continue;
+      const int d = hamming_distance(point->descriptor.data(), kf.descriptor(sj));
+      if (d < best) {
+        best = d;
+        best_j = j;
+      }
+    }
+    if (best_j < 0 || best > kMatchThresholdLow) continue;
+    const std::size_t sb = static_cast<std::size_t>(best_j);
+    const MapPointPtr& existing = kf.map_point(sb);
+    if (existing) {
+      if (!existing->bad()) replace[k] = existing;
+    } else {
+      point->add_observation(&kf, best_j);
+      kf.add_map_point(point, sb);
+    }
+    ++fused;
+  }
+  return fused;
+}
+
+int Matcher::search_for_triangulation_bow(const KeyFrame& kf1, const KeyFrame& kf2, const Eigen::Matrix3d& F12,
+                                          std::vector<std::pair<int, int>>& out) {
+  out.clear();
+  const FrameGeometry& g = *kf1.geometry;
+  const PinholeCamera& cam = g.camera;
+  const Eigen::Vector3d c1_in_2 = kf2.T_c_w() * kf1.center_w();
+  const bool epipole_valid = c1_in_2.z() > 1e-6;
+  const double ex = epipole_valid ? cam.fx * c1_in_2.x() / c1_in_2.z() + cam.cx : 0;
+  const double ey = epipole_valid ? cam.fy * c1_in_2.y() / c1_in_2.z() + cam.cy : 0;
+  taken_.assign(kf2.size(), 0);
+  best_index_.assign(kf1.size(), -1);
+  reset_rotation_histogram();
+  place::for_each_common_node(
+      kf1.bow.features, kf2.bow.features,
+      [&](place::NodeId, const uint32_t* a0, const uint32_t* a1, const uint32_t* b0, const uint32_t* b1) {
+        for (const uint32_t* ia = a0; ia != a1; ++ia) {
+          const std::size_t i1 = *ia;
+          if (kf1.map_point(i1)) continue;
+          const cv::KeyPoint& kp1 = kf1.keypoints[i1];
+          const bool stereo1 = kf1.u_right[i1] >= 0;
+          const double la = kp1.pt.x * F12(0, 0) + kp1.pt.y * F12(1, 0) + F12(2, 0);
+          const double lb = kp1.pt.x * F12(0, 1) + kp1.pt.y * F12(1, 1) + F12(2, 1);
+          const double lc = kp1.pt.x * F12(0, 2) + kp1.pt.y * F12(1, 2) + F12(2, 2);
+          const double line_den = la * la + lb * lb;
+          if (line_den < 1e-20) continue;
+          const uint8_t* d1 = kf1.descriptor(i1);
+          int best = kMatchThresholdLow, best_i2 = -1;
+          for (const uint32_t* ib = b0; ib != b1; ++ib) {
+            const std::size_t i2 = *ib;
+            if (taken_[i2] || kf2.map_point(i2)) continue;
+            const int d = hamming_distance(d1, kf2.descriptor(i2));
+            if (d > best) continue;
+            const cv::KeyPoint& kp2 = kf2.keypoints[i2];
+            const bool stereo2 = kf2.u_right[i2] >= 0;
+            if (!stereo1 && !stereo2 && epipole_valid) {
+              const double dx = ex - kp2.pt.x, dy = ey - kp2.pt.y;
+              if (dx * dx + dy * dy < 100.0 * g.scale_factors[static_cast<std::size_t>(kp2.octave)]) continue;
+            }
+            const double num = la * kp2.pt.x + lb * kp2.pt.y + lc;
+            if (num * num / line_den >= 3.84 * g.level_sigma2[static_cast<std::size_t>(kp2.octave)]) continue;
+            best = d;
+            best_i2 = static_cast<int>(i2);
+          }
+          if (best_i2 < 0) continue;
+          taken_[static_cast<std::size_t>(best_i2)] = 1;
+          best_index_[i1] = best_i2;
+          add_to_histogram(angle_diff_deg(kp1.angle, kf2.keypoints[static_cast<std::size_t>(best_i2)].angle),
+                           static_cast<int>(i1));
+        }
+      });
+  rotation_outliers(rejected_);
+  for (const int i1 : rejected_) best_index_[static_cast<std::size_t>(i1)] = -1;
+  for (std::size_t i1 = 0; i1 < kf1.size(); ++i1) {
+    if (best_index_[i1] >= 0) out.emplace_back(static_cast<int>(i1), best_index_[i1]);
+  }
+  return static_cast<int>(out.size());
 }
 
 }  // namespace agvslam::slam

@@ -110,25 +110,89 @@ std::string OptimizerConfig::describe() const {
   return buf;
 }
 
+void RelocalisationConfig::validate(const std::string& source) const {
+  const Checker require{source, "relocalisation"};
+  require(max_candidates >= 1, "max_candidates", "expected an integer >= 1");
+  require(min_bow_matches >= 4, "min_bow_matches", "expected an integer >= 4");
+  require(bow_ratio > 0 && bow_ratio <= 1, "bow_ratio", "expected a ratio in (0, 1]");
+  require(pnp_iterations >= 1 && pnp_iterations <= 100000, "pnp_iterations", "expected an integer in [1, 100000]");
+  require(pnp_reprojection_px > 0 && pnp_reprojection_px <= 50, "pnp_reprojection_px", "expected a number in (0, 50] px");
+  require(min_pnp_inliers >= 4, "min_pnp_inliers", "expected an integer >= 4");
+  require(min_inliers >= min_pnp_inliers, "min_inliers", "expected an integer >= min_pnp_inliers");
+  require(projection_radius_px > 0 && projection_radius_px <= 100, "projection_radius_px", "expected a number in (0, 100] px");
+}
+
+std::string RelocalisationConfig::describe() const {
+  char buf[384];
+  std::snprintf(buf, sizeof(buf),
+                "relocalisation: <= %d BoW candidates, >= %d BoW matches (ratio %.2f), EPnP RANSAC %d iterations "
+                "%.1f px (>= %d inliers), success with >= %d inliers after motion-only BA and a %.0f px projection "
+                "search",
+                max_candidates, min_bow_matches, bow_ratio, pnp_iterations, pnp_reprojection_px, min_pnp_inliers,
+                min_inliers, projection_radius_px);
+  return buf;
+}
+
+void LoopClosingConfig::validate(const std::string& source) const {
+  const Checker require{source, "loop_closing"};
+  require(queue_capacity >= 1 && queue_capacity <= 1000, "queue_capacity", "expected an integer in [1, 1000]");
+  require(min_keyframes_between_loops >= 0, "min_keyframes_between_loops", "expected an integer >= 0");
+  require(consistency >= 0 && consistency <= 20, "consistency", "expected an integer in [0, 20]");
+  require(covisible_consistency >= 0 && covisible_consistency <= 5, "covisible_consistency", "expected an integer in [0, 5]");
+  require(confirmation_max_m > 0, "confirmation_max_m", "expected a distance > 0 m");
+  require(confirmation_max_deg > 0, "confirmation_max_deg", "expected an angle > 0 deg");
+  require(bow_ratio > 0 && bow_ratio <= 1, "bow_ratio", "expected a ratio in (0, 1]");
+  require(min_bow_matches >= 3, "min_bow_matches", "expected an integer >= 3");
+  require(ransac_iterations >= 1 && ransac_iterations <= 100000, "ransac_iterations", "expected an integer in [1, 100000]");
+  require(ransac_chi2 > 0, "ransac_chi2", "expected a positive chi-square threshold");
+  require(min_ransac_inliers >= 3, "min_ransac_inliers", "expected an integer >= 3");
+  require(projection_radius_px > 0 && projection_radius_px <= 100, "projection_radius_px", "expected a number in (0, 100] px");
+  require(min_refined_inliers >= 3, "min_refined_inliers", "expected an integer >= 3");
+  require(min_total_matches >= min_refined_inliers, "min_total_matches", "expected an integer >= min_refined_inliers");
+  require(max_correction_m >= 0, "max_correction_m", "expected a distance >= 0 m (0: no limit)");
+  require(essential_min_weight >= 15, "essential_min_weight", "expected an integer >= 15 (shared map points)");
+  require(pose_graph_iterations >= 1 && pose_graph_iterations <= 1000, "pose_graph_iterations", "expected an integer in [1, 1000]");
+  require(global_ba_iterations >= 1 && global_ba_iterations <= 1000, "global_ba_iterations", "expected an integer in [1, 1000]");
+}
+
+std::string LoopClosingConfig::describe() const {
+  char buf[512];
+  std::snprintf(buf, sizeof(buf),
+                "loop closing: %s, queue %d, >= %d keyframes apart, %d consistent groups or %d confirming covisible "
+                "keyframes (%.3f m, %.1f deg), BoW >= %d matches (ratio "
+                "%.2f), SE(3) RANSAC %d iterations chi2 %.2f (>= %d inliers), refined >= %d, >= %d matches with the "
+                "loop neighbourhood, correction limit %.2f m (0 = none), essential graph covisibility >= %d, pose "
+                "graph %d iterations, global BA %s (%d iterations, background thread)",
+                enabled ? "on" : "off", queue_capacity, min_keyframes_between_loops, consistency, covisible_consistency,
+                confirmation_max_m, confirmation_max_deg, min_bow_matches,
+                bow_ratio, ransac_iterations, ransac_chi2, min_ransac_inliers, min_refined_inliers, min_total_matches,
+                max_correction_m, essential_min_weight, pose_graph_iterations, global_ba ? "on" : "off",
+                global_ba_iterations);
+  return buf;
+}
+
 void SlamConfig::validate(const std::string& source) const {
   tracking.validate(source);
   mapping.validate(source);
   optimizer.validate(source);
+  relocalisation.validate(source);
+  loop_closing.validate(source);
 }
 
 std::vector<std::string> SlamConfig::describe() const {
-  return {tracking.describe(), mapping.describe(), optimizer.describe()};
+  return {tracking.describe(), mapping.describe(), optimizer.describe(), relocalisation.describe(),
+          loop_closing.describe()};
 }
 
 SlamConfig load_slam_config(const std::string& path) {
   const stereo::ParamsReader in(path);
-  in.check_sections({"tracking", "mapping", "optimizer"});
+  in.check_sections({"tracking", "mapping", "optimizer", "relocalisation", "loop_closing"});
   SlamConfig c;
 
   TrackingConfig& t = c.tracking;
   in.check_keys("tracking",
                 {"close_depth_baselines", "min_init_features", "min_init_stereo", "motion_model_radius_px", "min_motion_model_matches",
-                 "min_frame_inliers", "min_reference_matches", "reference_ratio", "local_map_radius",
+                 "min_frame_inliers", "min_reference_matches", "reference_ratio", "bow_matching", "local_map_radius",
                  "min_local_map_inliers", "max_local_keyframes", "keyframe_max_frames", "keyframe_min_frames",
                  "keyframe_ref_ratio", "keyframe_close_tracked", "keyframe_close_untracked",
                  "keyframe_max_new_points", "reset_max_keyframes", "reset_after_lost_frames"});
@@ -140,6 +204,7 @@ SlamConfig load_slam_config(const std::string& path) {
   in.read("tracking", "min_frame_inliers", t.min_frame_inliers, "an integer");
   in.read("tracking", "min_reference_matches", t.min_reference_matches, "an integer");
   in.read("tracking", "reference_ratio", t.reference_ratio, "a number (ratio)");
+  in.read("tracking", "bow_matching", t.bow_matching, "true or false");
   in.read("tracking", "local_map_radius", t.local_map_radius, "a number (factor)");
   in.read("tracking", "min_local_map_inliers", t.min_local_map_inliers, "an integer");
   in.read("tracking", "max_local_keyframes", t.max_local_keyframes, "an integer");
@@ -153,12 +218,13 @@ SlamConfig load_slam_config(const std::string& path) {
   in.read("tracking", "reset_after_lost_frames", t.reset_after_lost_frames, "an integer (frames)");
 
   LocalMappingConfig& m = c.mapping;
-  in.check_keys("mapping", {"queue_capacity", "triangulation_neighbours", "fusion_neighbours", "fusion_second_order",
+  in.check_keys("mapping", {"queue_capacity", "triangulation_neighbours", "triangulation_bow", "fusion_neighbours", "fusion_second_order",
                             "fusion_radius", "local_ba_iterations_first", "local_ba_iterations_second",
                             "max_local_ba_keyframes", "map_point_min_found_ratio", "map_point_min_observations",
                             "keyframe_redundancy", "keyframe_redundancy_observers", "max_keyframes"});
   in.read("mapping", "queue_capacity", m.queue_capacity, "an integer (keyframes)");
   in.read("mapping", "triangulation_neighbours", m.triangulation_neighbours, "an integer");
+  in.read("mapping", "triangulation_bow", m.triangulation_bow, "true or false");
   in.read("mapping", "fusion_neighbours", m.fusion_neighbours, "an integer");
   in.read("mapping", "fusion_second_order", m.fusion_second_order, "an integer");
   in.read("mapping", "fusion_radius", m.fusion_radius, "a number (factor)");
@@ -180,6 +246,46 @@ SlamConfig load_slam_config(const std::string& path) {
   in.read("optimizer", "motion_iterations", o.motion_iterations, "an integer");
   in.read("optimizer", "motion_robust_rounds", o.motion_robust_rounds, "an integer");
   in.read("optimizer", "local_ba_dense_schur", o.local_ba_dense_schur, "true or false");
+
+  RelocalisationConfig& r = c.relocalisation;
+  in.check_keys("relocalisation", {"max_candidates", "min_bow_matches", "bow_ratio", "pnp_iterations",
+                                   "pnp_reprojection_px", "min_pnp_inliers", "min_inliers", "projection_radius_px"});
+  in.read("relocalisation", "max_candidates", r.max_candidates, "an integer");
+  in.read("relocalisation", "min_bow_matches", r.min_bow_matches, "an integer");
+  in.read("relocalisation", "bow_ratio", r.bow_ratio, "a number (ratio)");
+  in.read("relocalisation", "pnp_iterations", r.pnp_iterations, "an integer");
+  in.read("relocalisation", "pnp_reprojection_px", r.pnp_reprojection_px, "a number (px)");
+  in.read("relocalisation", "min_pnp_inliers", r.min_pnp_inliers, "an integer");
+  in.read("relocalisation", "min_inliers", r.min_inliers, "an integer");
+  in.read("relocalisation", "projection_radius_px", r.projection_radius_px, "a number (px)");
+
+  LoopClosingConfig& l = c.loop_closing;
+  in.check_keys("loop_closing",
+                {"enabled", "queue_capacity", "min_keyframes_between_loops", "consistency", "covisible_consistency",
+                 "confirmation_max_m", "confirmation_max_deg", "bow_ratio",
+                 "min_bow_matches", "ransac_iterations", "ransac_chi2", "min_ransac_inliers", "projection_radius_px",
+                 "min_refined_inliers", "min_total_matches", "max_correction_m", "essential_min_weight",
+                 "pose_graph_iterations", "global_ba", "global_ba_iterations"});
+  in.read("loop_closing", "enabled", l.enabled, "true or false");
+  in.read("loop_closing", "queue_capacity", l.queue_capacity, "an integer (keyframes)");
+  in.read("loop_closing", "min_keyframes_between_loops", l.min_keyframes_between_loops, "an integer (keyframes)");
+  in.read("loop_closing", "consistency", l.consistency, "an integer");
+  in.read("loop_closing", "covisible_consistency", l.covisible_consistency, "an integer");
+  in.read("loop_closing", "confirmation_max_m", l.confirmation_max_m, "a number (m)");
+  in.read("loop_closing", "confirmation_max_deg", l.confirmation_max_deg, "a number (deg)");
+  in.read("loop_closing", "bow_ratio", l.bow_ratio, "a number (ratio)");
+  in.read("loop_closing", "min_bow_matches", l.min_bow_matches, "an integer");
+  in.read("loop_closing", "ransac_iterations", l.ransac_iterations, "an integer");
+  in.read("loop_closing", "ransac_chi2", l.ransac_chi2, "a number");
+  in.read("loop_closing", "min_ransac_inliers", l.min_ransac_inliers, "an integer");
+  in.read("loop_closing", "projection_radius_px", l.projection_radius_px, "a number (px)");
+  in.read("loop_closing", "min_refined_inliers", l.min_refined_inliers, "an integer");
+  in.read("loop_closing", "min_total_matches", l.min_total_matches, "an integer");
+  in.read("loop_closing", "max_correction_m", l.max_correction_m, "a number (m)");
+  in.read("loop_closing", "essential_min_weight", l.essential_min_weight, "an integer");
+  in.read("loop_closing", "pose_graph_iterations", l.pose_graph_iterations, "an integer");
+  in.read("loop_closing", "global_ba", l.global_ba, "true or false");
+  in.read("loop_closing", "global_ba_iterations", l.global_ba_iterations, "an integer");
 
   c.validate(path);
   return c;

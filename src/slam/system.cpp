@@ -2,6 +2,7 @@
 
 #include <chrono>
 #include <cstdio>
+#include <stdexcept>
 
 #include "agvslam/core/error.h"
 
@@ -20,6 +21,20 @@ StereoIntrinsics intrinsics_of(const FrameGeometry& g) {
 
 }  // namespace
 
+std::shared_ptr<const place::Vocabulary> load_vocabulary(const place::PlaceConfig& place_config) {
+  return std::make_shared<const place::Vocabulary>(place::Vocabulary::load(place_config.vocabulary_file));
+}
+
+const char* to_string(MapMode mode) { return mode == MapMode::kMapping ? "mapping" : "localisation"; }
+
+MapMode parse_map_mode(const std::string& text, const std::string& option) {
+  if (text == "map" || text == "mapping") return MapMode::kMapping;
+  if (text == "localise" || text == "localisation" || text == "localize" || text == "localization") {
+    return MapMode::kLocalisation;
+  }
+  throw InputError(option, text, "expected localise (track in the map without changing it) or map (extend it)");
+}
+
 System::System(const StereoCalibration& calibration, const SystemConfig& config)
     : config_(config),
       calibration_(calibration),
@@ -35,9 +50,25 @@ System::System(const StereoCalibration& calibration, const SystemConfig& config)
     throw InputError("SystemConfig", "calibration", "expected a valid rectified camera and a positive baseline");
   }
   if (!(config_.frame_rate_hz > 0)) throw InputError("SystemConfig", "frame_rate_hz", "expected a positive rate (Hz)");
+  if (config_.vocabulary) {
+    try {
+      place_ = std::make_shared<PlaceRecognition>(config_.vocabulary, config_.direct_index_level);
+    } catch (const std::invalid_argument& e) {
+      throw InputError("SystemConfig", "vocabulary / direct_index_level", e.what());
+    }
+  }
   mapper_ = std::make_unique<LocalMapping>(config_.slam, map_, intrinsics_of(*geometry_));
+  if (place_) mapper_->set_place_recognition(place_);
+  if (place_ && config_.slam.loop_closing.enabled) {
+    loop_ = std::make_unique<LoopClosing>(config_.slam, map_, *mapper_, place_, intrinsics_of(*geometry_));
+    mapper_->set_keyframe_sink([this](const KeyFramePtr& kf) { loop_->insert(kf); });
+  }
   tracking_ = std::make_unique<Tracking>(config_.slam, geometry_, map_, *mapper_, config_.frame_rate_hz);
-  if (config_.threaded_mapping) mapper_->start();
+  if (place_) tracking_->set_place_recognition(place_);
+  if (config_.threaded_mapping) {
+    mapper_->start();
+    if (loop_) loop_->start();
+  }
 }
 
 System::~System() { shutdown(); }
@@ -47,15 +78,25 @@ std::vector<std::string> System::describe() const {
   lines.push_back(config_.orb.describe());
   lines.push_back(config_.stereo.describe());
   char buf[160];
-  std::snprintf(buf, sizeof(buf), "system: %.1f Hz camera, local mapping %s", config_.frame_rate_hz,
-                config_.threaded_mapping ? "in its own thread" : "in the tracking thread (deterministic)");
+  std::snprintf(buf, sizeof(buf), "system: %.1f Hz camera, local mapping %s, loop closing %s, mode %s",
+                config_.frame_rate_hz,
+                config_.threaded_mapping ? "in its own thread" : "in the tracking thread (deterministic)",
+                loop_ ? (config_.threaded_mapping ? "in its own thread" : "in the tracking thread") : "off",
+                to_string(mode_));
   lines.emplace_back(buf);
+  if (place_) {
+    lines.push_back("place recognition: vocabulary " + place_->vocabulary().describe() + ", direct index level " +
+                    std::to_string(place_->direct_index_level()));
+  } else {
+    lines.emplace_back("place recognition: none (no vocabulary): no relocalisation by bag of words, no loop closing");
+  }
   return lines;
 }
 
 void System::shutdown() {
   if (shut_down_) return;
   shut_down_ = true;
+  if (loop_) loop_->stop();
   mapper_->stop();
 }
 
@@ -65,20 +106,90 @@ void System::request_reset() {
 }
 
 void System::reset_now() {
+  if (loop_) loop_->reset();
   mapper_->reset();
   {
     std::lock_guard<std::mutex> lock(map_.mutex());
     tracking_->reset();
     map_.clear();
+    if (place_) place_->clear();
   }
 }
 
-void System::set_place_recognition(const std::shared_ptr<PlaceRecognition>& place) {
-  mapper_->set_place_recognition(place);
-  tracking_->set_place_recognition(place);
+void System::settle() {
+  mapper_->wait_until_idle();
+  if (loop_) {
+    loop_->wait_until_idle();
+    mapper_->wait_until_idle();
+  }
 }
 
-void System::wait_for_mapping() { mapper_->wait_until_idle(); }
+void System::wait_for_mapping() { settle(); }
+
+MapFileContext System::file_context() const {
+  return MapFileContext::from(*geometry_, place_ ? place_->vocabulary_id() : 0, config_.direct_index_level);
+}
+
+void System::set_mode(MapMode mode) {
+  mode_ = mode;
+  tracking_->set_localisation_only(mode == MapMode::kLocalisation);
+}
+
+MapSaveStats System::save_map(const std::string& path, const MapWriteHooks& hooks) {
+  MapSaveStats st;
+  auto t0 = Clock::now();
+  settle();
+  st.wait_ms = ms_since(t0);
+  std::string bytes;
+  {
+    t0 = Clock::now();
+    auto pause = mapper_->pause();
+    std::lock_guard<std::mutex> lock(map_.mutex());
+    bytes = encode_map(map_, file_context());
+    st.keyframes = map_.keyframe_count();
+    st.map_points = map_.map_point_count();
+    st.encode_ms = ms_since(t0);
+  }
+  st.bytes = bytes.size();
+  t0 = Clock::now();
+  save_map_file(path, bytes, hooks);
+  st.write_ms = ms_since(t0);
+  return st;
+}
+
+MapLoadStats System::load_map(const std::string& path, MapMode mode) {
+  MapLoadStats st;
+  auto t0 = Clock::now();
+  const std::string bytes = read_map_file(path);
+  st.read_ms = ms_since(t0);
+  st.bytes = bytes.size();
+  // Decoded into a private map first: any error leaves the current map as it is.
+  t0 = Clock::now();
+  Map incoming;
+  decode_map(bytes, path, file_context(), geometry_, incoming);
+  st.decode_ms = ms_since(t0);
+  t0 = Clock::now();
+  if (place_) {
+    for (const KeyFramePtr& kf : incoming.keyframes()) place_->compute(*kf);
+  }
+  st.bow_ms = ms_since(t0);
+  if (loop_) loop_->reset();
+  mapper_->reset();
+  {
+    std::lock_guard<std::mutex> lock(map_.mutex());
+    tracking_->start_relocalising();
+    map_.take_from(incoming);
+    if (place_) {
+      place_->clear();
+      for (const KeyFramePtr& kf : map_.keyframes()) place_->on_keyframe_inserted(*kf);
+    }
+    st.keyframes = map_.keyframe_count();
+    st.map_points = map_.map_point_count();
+  }
+  trajectory_.clear();
+  set_mode(mode);
+  return st;
+}
 
 TrackResult System::track_stereo(int64_t t_ns, const cv::Mat& left, const cv::Mat& right, const cv::Mat& dynamic_mask) {
   const auto t_start = Clock::now();
@@ -123,7 +234,12 @@ TrackResult System::track_stereo(int64_t t_ns, const cv::Mat& left, const cv::Ma
   if (!config_.threaded_mapping) {
     const auto t_map = Clock::now();
     mapper_->process_pending();
+    if (loop_) loop_->process_pending();
     r.timings.inline_mapping_ms = ms_since(t_map);
+  }
+  if (loop_) {
+    r.loops_closed = loop_->stats().loops_closed;
+    r.global_ba_running = loop_->global_ba_running();
   }
   {
     std::lock_guard<std::mutex> lock(map_.mutex());

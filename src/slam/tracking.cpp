@@ -6,6 +6,8 @@
 #include <ctime>
 #include <unordered_map>
 
+#include <opencv2/calib3d.hpp>
+
 #include "agvslam/slam/local_mapping.h"
 #include "agvslam/slam/map.h"
 
@@ -54,6 +56,14 @@ void Tracking::reset() {
   lost_frames_ = 0;
   local_keyframes_.clear();
   local_points_.clear();
+  map_loaded_ = false;
+  last_recovery_frame_id_ = 0;
+}
+
+void Tracking::start_relocalising() {
+  reset();
+  state_ = TrackingState::kLost;
+  map_loaded_ = true;
 }
 
 TrackingState Tracking::track(Frame& frame, TrackTimings& timings, TrackingCounts& counts) {
@@ -96,8 +106,7 @@ TrackingState Tracking::track(Frame& frame, TrackTimings& timings, TrackingCount
       counts.method = "reference";
     }
   } else {
-    ok = recover(matches);
-    counts.method = "recovery";
+    ok = recover(matches, counts);
     if (ok) {
       counts.recovered = true;
       last_recovery_frame_id_ = current_.id;
@@ -137,7 +146,7 @@ TrackingState Tracking::track(Frame& frame, TrackTimings& timings, TrackingCount
     state_ = TrackingState::kLost;
     has_velocity_ = false;
     ++lost_frames_;
-    if (lost_frames_ >= config_.tracking.reset_after_lost_frames &&
+    if (!map_loaded_ && !localisation_only_ && lost_frames_ >= config_.tracking.reset_after_lost_frames &&
         map_.keyframe_count() <= static_cast<std::size_t>(config_.tracking.reset_max_keyframes)) {
       // Lost right after initialisation: start again (the caller's System clears the map).
       counts.reset = true;
@@ -279,7 +288,16 @@ bool Tracking::track_with_motion_model(int& matches) {
 }
 
 bool Tracking::track_reference_keyframe(const KeyFrame& kf, const SE3d& T_c_w_guess, int& matches) {
-  matches = matcher_.search_keyframe_brute_force(kf, current_, static_cast<float>(config_.tracking.reference_ratio), matches_);
+  const float ratio = static_cast<float>(config_.tracking.reference_ratio);
+  if (place_ && config_.tracking.bow_matching) {
+    // ORB-SLAM2's TrackReferenceKeyFrame: only features in the same vocabulary node are compared. A keyframe that
+    // local mapping has not inserted yet gets its BoW here (map mutex held).
+    place_->compute(current_);
+    place_->compute(const_cast<KeyFrame&>(kf));
+    matches = matcher_.search_by_bow(kf, current_, ratio, matches_);
+  } else {
+    matches = matcher_.search_keyframe_brute_force(kf, current_, ratio, matches_);
+  }
   if (matches < config_.tracking.min_reference_matches) return false;
   current_.map_points = matches_;
   current_.set_pose(T_c_w_guess);
@@ -288,23 +306,110 @@ bool Tracking::track_reference_keyframe(const KeyFrame& kf, const SE3d& T_c_w_gu
   return in_map >= config_.tracking.min_frame_inliers;
 }
 
-bool Tracking::recover(int& matches) {
-  // The place-recognition candidates (issue 5, when set), then the last reference keyframe and its best
-  // neighbours, each from its own pose.
+bool Tracking::recover(int& matches, TrackingCounts& counts) {
+  counts.method = "relocalisation";
+  if (relocalise(matches, counts)) return true;
+  // Then the last reference keyframe and its best neighbours, each from its own pose (short losses, maps
+  // without a vocabulary). A loaded map has no last reference: only relocalisation applies.
+  counts.method = "recovery";
+  if (map_loaded_ && !reference_kf_) return false;
   if (!reference_kf_ || reference_kf_->bad()) {
-    // The reference was culled while lost: take any keyframe of the map near the last pose.
+    // The reference was culled while lost: take the newest keyframe of the map.
     const auto kfs = map_.keyframes();
     if (kfs.empty()) return false;
     reference_kf_ = kfs.back();
   }
-  std::vector<KeyFrame*> candidates;
-  if (place_) candidates = place_->relocalisation_candidates(current_);
-  candidates.push_back(reference_kf_.get());
+  std::vector<KeyFrame*> candidates{reference_kf_.get()};
   for (KeyFrame* kf : reference_kf_->best_covisibles(4)) candidates.push_back(kf);
   for (KeyFrame* kf : candidates) {
     if (kf->bad()) continue;
     std::fill(current_.map_points.begin(), current_.map_points.end(), nullptr);
     if (track_reference_keyframe(*kf, kf->T_c_w(), matches)) {
+      reference_kf_ = kf->shared_from_this();
+      return true;
+    }
+  }
+  std::fill(current_.map_points.begin(), current_.map_points.end(), nullptr);
+  return false;
+}
+
+void Tracking::drop_outlier_matches() {
+  for (std::size_t i = 0; i < current_.size(); ++i) {
+    if (current_.map_points[i] && current_.outlier[i]) current_.map_points[i].reset();
+    current_.outlier[i] = 0;
+  }
+}
+
+bool Tracking::relocalise(int& matches, TrackingCounts& counts) {
+  if (!place_ || map_.keyframe_count() == 0) return false;
+  const RelocalisationConfig& rc = config_.relocalisation;
+  const std::vector<KeyFrame*> candidates =
+      place_->relocalisation_candidates(current_, map_, static_cast<std::size_t>(rc.max_candidates));
+  counts.relocalisation_candidates = static_cast<int>(candidates.size());
+  const PinholeCamera& cam = geometry_->camera;
+  const cv::Matx33d K(cam.fx, 0, cam.cx, 0, cam.fy, cam.cy, 0, 0, 1);
+  std::vector<cv::Point3d> object_points;
+  std::vector<cv::Point2d> image_points;
+  std::vector<int> keypoint_of;
+  std::vector<int> inliers;
+  for (KeyFrame* kf : candidates) {
+    if (kf->bad()) continue;
+    place_->compute(*kf);
+    const int n = matcher_.search_by_bow(*kf, current_, static_cast<float>(rc.bow_ratio), matches_);
+    if (n < rc.min_bow_matches) continue;
+    object_points.clear();
+    image_points.clear();
+    keypoint_of.clear();
+    for (std::size_t i = 0; i < matches_.size(); ++i) {
+      if (!matches_[i]) continue;
+      const Eigen::Vector3d& p = matches_[i]->p_w;
+      object_points.emplace_back(p.x(), p.y(), p.z());
+      image_points.emplace_back(current_.keypoints[i].pt.x, current_.keypoints[i].pt.y);
+      keypoint_of.push_back(static_cast<int>(i));
+    }
+    cv::Mat rvec, tvec;
+    inliers.clear();
+    bool solved = false;
+    try {
+      solved = cv::solvePnPRansac(object_points, image_points, K, cv::noArray(), rvec, tvec, false, rc.pnp_iterations,
+                                  static_cast<float>(rc.pnp_reprojection_px), 0.99, inliers, cv::SOLVEPNP_EPNP);
+    } catch (const cv::Exception&) {
+      solved = false;  // degenerate configuration
+    }
+    if (!solved || static_cast<int>(inliers.size()) < rc.min_pnp_inliers) continue;
+    cv::Matx33d R;
+    cv::Rodrigues(rvec, R);
+    Eigen::Matrix3d R_c_w;
+    for (int r = 0; r < 3; ++r) {
+      for (int c = 0; c < 3; ++c) R_c_w(r, c) = R(r, c);
+    }
+    const SE3d T_c_w = make_se3(Eigen::Quaterniond(R_c_w).normalized(),
+                                Eigen::Vector3d(tvec.at<double>(0), tvec.at<double>(1), tvec.at<double>(2)));
+    if (!is_valid_pose(T_c_w)) continue;
+    std::fill(current_.map_points.begin(), current_.map_points.end(), nullptr);
+    for (const int k : inliers) {
+      const std::size_t i = static_cast<std::size_t>(keypoint_of[static_cast<std::size_t>(k)]);
+      current_.map_points[i] = matches_[i];
+    }
+    current_.set_pose(T_c_w);
+    int good = optimize_current_pose();
+    if (good < rc.min_pnp_inliers) continue;
+    drop_outlier_matches();
+    if (good < rc.min_inliers) {
+      // More matches by projecting the candidate's points with the estimated pose (ORB-SLAM2: 10 px, then 3 px).
+      int added = matcher_.search_keyframe_projection(current_, *kf, static_cast<float>(rc.projection_radius_px), 100);
+      if (good + added >= rc.min_inliers) {
+        good = optimize_current_pose();
+        if (good > 30 && good < rc.min_inliers) {
+          drop_outlier_matches();
+          added = matcher_.search_keyframe_projection(current_, *kf, 3.0f, 64);
+          if (good + added >= rc.min_inliers) good = optimize_current_pose();
+        }
+        drop_outlier_matches();
+      }
+    }
+    if (good >= rc.min_inliers) {
+      matches = good;
       reference_kf_ = kf->shared_from_this();
       return true;
     }
@@ -428,7 +533,7 @@ bool Tracking::track_local_map(int& inliers) {
 }
 
 bool Tracking::need_new_keyframe() {
-  if (!reference_kf_) return false;
+  if (!reference_kf_ || localisation_only_) return false;
   const std::size_t n_kfs = map_.keyframe_count();
   if (current_.id < last_recovery_frame_id_ + static_cast<uint64_t>(max_frames_) && last_recovery_frame_id_ > 0 &&
       n_kfs > static_cast<std::size_t>(max_frames_)) {

@@ -5,6 +5,7 @@
 #include "agvslam/slam/local_mapping.h"
 #include "agvslam/slam/map.h"
 #include "agvslam/slam/matcher.h"
+#include "agvslam/slam/place_recognition.h"
 #include "agvslam/slam/tracking.h"
 #include "agvslam/slam/triangulation.h"
 #include "synthetic_world.h"
@@ -29,7 +30,7 @@ struct Rig {
     tracking = std::make_unique<Tracking>(config, geometry, map, *mapper, 20.0);
   }
   TrackingState step(const test::World& world, const SE3d& T_true, uint64_t id, double noise_px = 0.3,
-                     bool drop_stereo_far = false) {
+                     bool drop_stereo_far = false, TrackingCounts* counts = nullptr) {
     Frame f;
     std::vector<int> pok;
     test::make_frame(world, T_true, geometry, id, noise_px, 100u + static_cast<uint32_t>(id), f, pok);
@@ -45,6 +46,7 @@ struct Rig {
     TrackingCounts c;
     const TrackingState s = tracking->track(f, t, c);
     mapper->process_pending();
+    if (counts) *counts = c;
     return s;
   }
 };
@@ -202,42 +204,58 @@ TEST(Tracking, EmptyFrameIsLostNotGarbage) {
   EXPECT_LT(position_error(rig.tracking->last_frame().T_c_w() * test::path_pose(0), test::path_pose(12, 0.05)), 0.02);
 }
 
-// Records the calls of the place-recognition slot (issue 5 implements it; here only the wiring is tested).
-class RecordingPlaceRecognition final : public PlaceRecognition {
- public:
-  void on_keyframe_inserted(KeyFrame& kf) override { inserted.push_back(kf.id); }
-  void on_keyframe_erased(KeyFrame& kf) override { erased.push_back(kf.id); }
-  std::vector<KeyFrame*> relocalisation_candidates(const Frame& /*frame*/) override {
-    ++queries;
-    return {};
-  }
-  std::vector<uint64_t> inserted, erased;
-  int queries = 0;
-};
+// The shipped vocabulary (the synthetic descriptors are random, but each point keeps its descriptor, so its
+// views share a word and a direct-index node).
+std::shared_ptr<const place::Vocabulary> shipped_vocabulary() {
+  static const auto v = std::make_shared<const place::Vocabulary>(
+      place::Vocabulary::load(AGVSLAM_SOURCE_DIR "/params/vocabulary/agvslam_orb_k10l5.bin"));
+  return v;
+}
 
-TEST(Tracking, PlaceRecognitionSlotSeesEveryKeyframeAndEveryLostFrame) {
+TEST(Tracking, PlaceRecognitionIndexesEveryKeyframeAndRelocalisesFarFromTheLoss) {
   SlamConfig c;
   c.tracking.reset_max_keyframes = 0;
   Rig rig(c);
-  auto place = std::make_shared<RecordingPlaceRecognition>();
+  auto place = std::make_shared<PlaceRecognition>(shipped_vocabulary(), 2);
   rig.mapper->set_place_recognition(place);
   rig.tracking->set_place_recognition(place);
   const test::World world = test::make_world(1500, 14, 1.5, 15.0);
   for (int k = 0; k < 60; ++k) {
-    ASSERT_EQ(rig.step(world, test::path_pose(k < 30 ? k : 59 - k, 0.05), static_cast<uint64_t>(k)), TrackingState::kOk);
+    ASSERT_EQ(rig.step(world, test::path_pose(k, 0.05), static_cast<uint64_t>(k)), TrackingState::kOk) << k;
+  }
+  {
+    std::lock_guard<std::mutex> lock(rig.map.mutex());
+    EXPECT_EQ(place->size(), rig.map.keyframe_count());
+    for (const KeyFramePtr& kf : rig.map.keyframes()) EXPECT_TRUE(kf->bow.computed());
   }
   const test::World empty;
-  // The first failing frame is tried the normal way; the following lost frames ask for candidates.
-  EXPECT_EQ(rig.step(empty, test::path_pose(0), 60), TrackingState::kLost);
-  EXPECT_EQ(rig.step(empty, test::path_pose(0), 61), TrackingState::kLost);
-  EXPECT_EQ(rig.step(empty, test::path_pose(0), 62), TrackingState::kLost);
-  EXPECT_EQ(place->queries, 2);
-  std::lock_guard<std::mutex> lock(rig.map.mutex());
-  EXPECT_EQ(place->inserted.size() - place->erased.size(), rig.map.keyframe_count());
-  for (const KeyFramePtr& kf : rig.map.keyframes()) {
-    EXPECT_NE(std::find(place->inserted.begin(), place->inserted.end(), kf->id), place->inserted.end());
-    EXPECT_EQ(std::find(place->erased.begin(), place->erased.end(), kf->id), place->erased.end());
+  EXPECT_EQ(rig.step(empty, test::path_pose(59, 0.05), 60), TrackingState::kLost);
+  EXPECT_EQ(rig.step(empty, test::path_pose(59, 0.05), 61), TrackingState::kLost);
+  // The view comes back 2 m behind the last pose (where the map was made 40 frames earlier).
+  TrackingCounts counts;
+  ASSERT_EQ(rig.step(world, test::path_pose(20, 0.05), 62, 0.3, false, &counts), TrackingState::kOk);
+  EXPECT_STREQ(counts.method, "relocalisation");
+  EXPECT_TRUE(counts.recovered);
+  EXPECT_GE(counts.relocalisation_candidates, 1);
+  EXPECT_LT(position_error(rig.tracking->last_frame().T_c_w() * test::path_pose(0), test::path_pose(20, 0.05)), 0.02);
+}
+
+TEST(Tracking, LocalisationOnlyAddsNoKeyframes) {
+  Rig rig;
+  const test::World world = test::make_world(1500, 15, 1.5, 15.0);
+  for (int k = 0; k < 20; ++k) ASSERT_EQ(rig.step(world, test::path_pose(k, 0.05), static_cast<uint64_t>(k)), TrackingState::kOk);
+  std::size_t kfs = 0, points = 0;
+  {
+    std::lock_guard<std::mutex> lock(rig.map.mutex());
+    kfs = rig.map.keyframe_count();
+    points = rig.map.map_point_count();
   }
+  rig.tracking->set_localisation_only(true);
+  // Beyond the keyframe spacing (1 s), 1 m further on and 23 degrees turned: tracked, and the map stays as it was.
+  for (int k = 20; k < 40; ++k) ASSERT_EQ(rig.step(world, test::path_pose(k, 0.05), static_cast<uint64_t>(k)), TrackingState::kOk) << k;
+  std::lock_guard<std::mutex> lock(rig.map.mutex());
+  EXPECT_EQ(rig.map.keyframe_count(), kfs);
+  EXPECT_EQ(rig.map.map_point_count(), points);
 }
 
 TEST(Tracking, TooFewStereoFeaturesDoNotInitialise) {

@@ -14,6 +14,11 @@
 
 #include "agvslam/core/camera.h"
 #include "agvslam/core/se3.h"
+#include "agvslam/place/bow_vector.h"
+
+namespace agvslam::place {
+class Vocabulary;
+}
 
 namespace agvslam::slam {
 
@@ -94,6 +99,14 @@ class Frame {
   std::vector<uint8_t> outlier;        // per keypoint, set by the motion-only BA
 
   KeyFramePtr reference_keyframe;
+
+  // Bag of words of the descriptors (computed on demand: reference-keyframe matching, relocalisation; a keyframe
+  // made from the frame takes them over). has_bow is reset by assign().
+  place::BowVector bow;
+  place::FeatureVector bow_features;  // direct index (vocabulary nodes -> keypoint indices)
+  uint64_t bow_vocabulary_id = 0;     // identity of the vocabulary that computed them
+  bool has_bow = false;
+  void compute_bow(const place::Vocabulary& vocabulary, int direct_index_level);
 
   // Copies the features (reusing this frame's buffers), clears associations, builds the grid.
   void assign(uint64_t frame_id, int64_t time_ns, const FrameGeometryPtr& geom, const std::vector<cv::KeyPoint>& kps,

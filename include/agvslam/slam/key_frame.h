@@ -7,9 +7,9 @@
 // scratch. Keyframes refer to each other by raw pointer; KeyFrame::set_bad removes every reference to itself
 // (covisibility, spanning tree, map points) before the map drops it.
 //
-// Serialisation (issue 5): the defining fields are plain data: id, frame id, time, pose, keypoints,
-// descriptors, stereo (u_right, depth), map point ids per keypoint, parent id, loop-edge ids, bow vectors; the
-// covisibility graph is recomputed from the map points (update_connections) after loading.
+// Serialisation (map_io.h): id, frame id, time, pose, keypoints, descriptors, stereo (u_right, depth), map point
+// ids per keypoint, parent id, loop-edge ids and the covisibility lists are saved as they are; the bag of words is
+// recomputed with the vocabulary the file names.
 
 #include <Eigen/Core>
 #include <cstdint>
@@ -25,13 +25,15 @@ namespace agvslam::slam {
 
 class Map;
 
-// Bag-of-words data of a keyframe (filled by the place-recognition module; empty until then).
+// Bag-of-words data of a keyframe (place::Vocabulary::transform of its descriptors; see place_recognition.h).
 struct BowData {
-  std::map<uint32_t, double> words;               // word id -> tf-idf weight
-  std::map<uint32_t, std::vector<int>> features;  // node id (at the direct-index level) -> keypoint indices
-  uint64_t vocabulary_id = 0;                     // identity of the vocabulary that produced it, 0 = none
-  bool empty() const { return words.empty(); }
+  place::BowVector words;         // L1-normalised TF-IDF vector
+  place::FeatureVector features;  // direct index: vocabulary node (at features.level) -> keypoint indices
+  uint64_t vocabulary_id = 0;     // identity of the vocabulary that produced it, 0 = not computed
+  bool computed() const { return vocabulary_id != 0; }
 };
+
+struct MapFileAccess;
 
 class KeyFrame : public std::enable_shared_from_this<KeyFrame> {
  public:
@@ -77,6 +79,8 @@ class KeyFrame : public std::enable_shared_from_this<KeyFrame> {
   void erase_connection(KeyFrame* kf);
   std::vector<KeyFrame*> best_covisibles(std::size_t n) const;
   const std::vector<KeyFrame*>& covisibles() const { return ordered_neighbours_; }  // best first
+  // Every keyframe sharing at least one map point (also below the edge threshold), with the count.
+  const std::vector<std::pair<KeyFrame*, int>>& connections() const { return connections_; }
   std::vector<KeyFrame*> covisibles_with_weight(int min_weight) const;
   int weight(const KeyFrame* kf) const;
 
@@ -93,13 +97,17 @@ class KeyFrame : public std::enable_shared_from_this<KeyFrame> {
   void add_loop_edge(KeyFrame* kf);
 
   BowData bow;
+  // Computes `bow` (no-op when already computed with this vocabulary and level).
+  void compute_bow(const place::Vocabulary& vocabulary, int direct_index_level);
 
   bool bad() const { return bad_; }
   // The map's first keyframe (the world origin; no parent, never culled).
   void mark_origin() { origin_ = true; }
   bool is_origin() const { return origin_; }
-  // Keyframes that loop closing is working with are protected from culling (issue 5).
+  // Keyframes that loop closing is working with are protected from culling; release_not_erase() lifts the
+  // protection unless the keyframe has loop edges (which protect it for good, as in ORB-SLAM2).
   void set_not_erase(bool value) { not_erase_ = value; }
+  void release_not_erase() { not_erase_ = !loop_edges_.empty(); }
   bool not_erase() const { return not_erase_; }
   // Removes the keyframe from the graph: its map points lose the observation, covisibility edges are erased, its
   // children are re-attached to the spanning tree, and the map forgets it. The origin keyframe is never removed.
@@ -117,6 +125,7 @@ class KeyFrame : public std::enable_shared_from_this<KeyFrame> {
   } track;
 
  private:
+  friend struct MapFileAccess;  // map_io.cpp restores the graph exactly as saved
   void update_best_covisibles();
 
   SE3d T_c_w_ = SE3d::Identity();

@@ -82,11 +82,18 @@ class LocalMapping {
   // clears the map.
   void reset();
 
-  // The loop-closing slot (issue 5): called with each processed keyframe, in the mapping thread, without the
-  // map mutex.
+  // The loop closer's input: called with each processed keyframe, in the mapping thread, without the map mutex
+  // (it must not block).
   void set_keyframe_sink(std::function<void(const KeyFramePtr&)> sink) { sink_ = std::move(sink); }
-  // Issue 5's keyframe database (set before the first keyframe).
+  // The keyframe database (set before the first keyframe): keyframes get their BoW and enter the inverse index.
   void set_place_recognition(std::shared_ptr<PlaceRecognition> place) { place_ = std::move(place); }
+  // Stops local mapping between keyframes for as long as the returned lock is held (loop correction, global BA
+  // update, map saving): asks a running local BA to stop, then waits for the keyframe in progress. Keyframes
+  // queued meanwhile are processed afterwards. Lock order: this before the map mutex.
+  std::unique_lock<std::mutex> pause() {
+    abort_ba_.store(true);
+    return std::unique_lock<std::mutex>(work_mutex_);
+  }
 
   LocalMappingStats stats() const;
   // Per-keyframe step times since the start (a few dozen bytes per keyframe).
@@ -113,7 +120,7 @@ class LocalMapping {
   bool busy_ = false;
   bool stop_ = false;
   std::condition_variable idle_cv_;
-  std::mutex work_mutex_;  // held while a keyframe is processed (reset waits on it)
+  std::mutex work_mutex_;  // held while a keyframe is processed (reset and pause wait on it)
   std::atomic<bool> abort_ba_{false};
   std::thread thread_;
 

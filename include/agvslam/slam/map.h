@@ -62,8 +62,11 @@ class Map {
 
   // Removes everything, breaking the references between keyframes and points so that all of it is freed.
   void clear();
+  // Replaces the contents with other's (a map read from a file), which is left empty; counts as a big change.
+  void take_from(Map& other);
 
  private:
+  friend struct MapFileAccess;  // map_io.cpp reads and restores the counters and removed-keyframe records
   std::mutex mutex_;
   std::unordered_map<uint64_t, KeyFramePtr> keyframes_;
   std::unordered_map<uint64_t, MapPointPtr> map_points_;

@@ -7,7 +7,7 @@
 // mutex held (Map::mutex()), except the `track` scratch, which only the tracking thread touches, and the `mapping`
 // scratch, which only the local-mapping thread touches.
 //
-// Serialisation (issue 5): every field that defines a point is plain data (id, position, descriptor, normal,
+// Serialisation (map_io.h): every field that defines a point is plain data (id, position, descriptor, normal,
 // distance range, observations as (keyframe id, keypoint index), reference keyframe id, counters).
 
 #include <Eigen/Core>
@@ -29,6 +29,8 @@ struct Observation {
 class MapPoint : public std::enable_shared_from_this<MapPoint> {
  public:
   MapPoint(uint64_t id, const Eigen::Vector3d& p_w, KeyFrame* reference_keyframe, uint64_t first_frame_id);
+  // A point read from a map file (its first keyframe may have been culled).
+  MapPoint(uint64_t id, const Eigen::Vector3d& p_w, uint64_t first_keyframe_id, uint64_t first_frame_id);
 
   const uint64_t id;
   const uint64_t first_keyframe_id;  // the keyframe that created it

@@ -1,18 +1,32 @@
 #pragma once
 // The SLAM system facade (paper 004 III.C: ORB-SLAM2's framework on the static part of the image).
 //
+//   SystemConfig config;                                  // + config.vocabulary = load_vocabulary(place config)
 //   System slam(calibration, config);
 //   TrackResult r = slam.track_stereo(t_ns, left, right, dynamic_mask);   // caller's thread = tracking thread
 //   if (r.state == TrackingState::kOk) use(r.T_w_c);
 //
 // Threads: the caller's thread tracks (ORB extraction outside the dilated dynamic mask, stereo matching, pose);
-// the local mapper runs in its own thread (SystemConfig::threaded_mapping) and receives keyframes through a
-// bounded queue; the loop-closing thread and the keyframe database of issue 5 attach to the mapper's keyframe
-// sink (LocalMapping::set_keyframe_sink) and to Map / KeyFrame::bow.
+// the local mapper and the loop closer run in their own threads (SystemConfig::threaded_mapping), fed through
+// bounded queues; the loop closer's global bundle adjustment runs in a further background thread and never holds
+// the map while it solves. With threaded_mapping = false all of it runs inside track_stereo (deterministic).
 //
 // A lost frame gives state kLost and no pose (r.T_w_c is the identity and pose_valid is false), never a guessed
-// pose. request_reset() empties the map at the next frame; shutdown() stops the mapper (also done by the
-// destructor).
+// pose; the following frames relocalise with the bag-of-words keyframe database (needs config.vocabulary).
+// request_reset() empties the map at the next frame; shutdown() stops the threads (also done by the destructor).
+//
+// Saved maps (for agvslamd and agvslam-run; file format in map_io.h):
+//   slam.save_map(path);                      // any time; waits for local mapping and loop closing to settle,
+//                                             // writes atomically (temporary file + fsync + rename)
+//   slam.load_map(path, MapMode::kLocalisation);   // before or between frames (not concurrently with
+//                                             // track_stereo); replaces the map, the next frames relocalise in it
+//   slam.set_mode(MapMode::kMapping);         // switch at any time between frames
+// MapMode::kLocalisation tracks against the map without changing it (no keyframes, so no local mapping and no
+// loop closing); MapMode::kMapping extends it (new keyframes, loops closed against the loaded part). Errors:
+// save_map and load_map throw InputError(path, field, expected) for an unwritable folder, a missing, truncated or
+// corrupt file, another format version, another vocabulary or another camera; a failed load leaves the current
+// map and mode untouched, a failed save leaves the previous file untouched. The map's world frame is the saved
+// map's (its first keyframe's camera), so poses after a restart come back in the same frame.
 
 #include <cstdint>
 #include <memory>
@@ -25,8 +39,12 @@
 #include "agvslam/core/trajectory.h"
 #include "agvslam/features/orb_extractor.h"
 #include "agvslam/features/stereo_matcher.h"
+#include "agvslam/place/place_config.h"
+#include "agvslam/place/vocabulary.h"
 #include "agvslam/slam/local_mapping.h"
+#include "agvslam/slam/loop_closing.h"
 #include "agvslam/slam/map.h"
+#include "agvslam/slam/map_io.h"
 #include "agvslam/slam/place_recognition.h"
 #include "agvslam/slam/slam_config.h"
 #include "agvslam/slam/tracking.h"
@@ -38,8 +56,22 @@ struct SystemConfig {
   features::OrbExtractorConfig orb;
   features::StereoMatcherConfig stereo;
   double frame_rate_hz = 20;     // the camera's rate (keyframe spacing: at least one per second)
-  bool threaded_mapping = true;  // false: each keyframe is mapped in track_stereo before it returns (deterministic)
+  bool threaded_mapping = true;  // false: each keyframe is mapped (and loops closed) in track_stereo before it
+                                 // returns (deterministic)
+  // Bag-of-words vocabulary (load_vocabulary). Null: no relocalisation by place recognition, no loop closing,
+  // brute-force matching; maps are saved with vocabulary identity 0.
+  std::shared_ptr<const place::Vocabulary> vocabulary;
+  int direct_index_level = 2;    // params/place.yaml vocabulary.direct_index_level
 };
+
+// Loads the vocabulary that a place configuration names (InputError naming the file for a bad one).
+std::shared_ptr<const place::Vocabulary> load_vocabulary(const place::PlaceConfig& place);
+
+enum class MapMode { kMapping, kLocalisation };
+const char* to_string(MapMode mode);
+// "map" / "mapping" -> kMapping, "localise" / "localisation" / "localization" -> kLocalisation; InputError(option,
+// text, expected) otherwise.
+MapMode parse_map_mode(const std::string& text, const std::string& option = "--mode");
 
 struct TrackResult {
   int64_t t_ns = 0;
@@ -52,6 +84,20 @@ struct TrackResult {
   std::size_t keyframes = 0;     // in the map after this frame
   std::size_t map_points = 0;
   std::size_t mapping_queue = 0; // keyframes waiting for the local mapper
+  uint64_t loops_closed = 0;     // loops closed so far
+  bool global_ba_running = false;
+};
+
+struct MapSaveStats {
+  std::size_t keyframes = 0, map_points = 0, bytes = 0;
+  double wait_ms = 0;     // waiting for local mapping / loop closing to settle
+  double encode_ms = 0;   // with the map locked
+  double write_ms = 0;    // temporary file, fsync, rename
+};
+
+struct MapLoadStats {
+  std::size_t keyframes = 0, map_points = 0, bytes = 0;
+  double read_ms = 0, decode_ms = 0, bow_ms = 0;
 };
 
 class System {
@@ -67,9 +113,12 @@ class System {
 
   void request_reset();
   void shutdown();
-  // Attaches issue 5's keyframe database (before the first frame): keyframes get BowData, loss is recovered
-  // through its candidates.
-  void set_place_recognition(const std::shared_ptr<PlaceRecognition>& place);
+
+  // Saved maps (see the top of this file). hooks: fault injection for tests.
+  MapSaveStats save_map(const std::string& path, const MapWriteHooks& hooks = {});
+  MapLoadStats load_map(const std::string& path, MapMode mode);
+  void set_mode(MapMode mode);
+  MapMode mode() const { return mode_; }
 
   // The trajectory of every tracked frame, each pose expressed relative to its reference keyframe and composed
   // with that keyframe's current (bundle-adjusted) pose, as ORB-SLAM2 saves it. Frames that were not tracked are
@@ -81,19 +130,29 @@ class System {
   Map& map() { return map_; }
   LocalMapping& local_mapping() { return *mapper_; }
   LocalMappingStats mapping_stats() const { return mapper_->stats(); }
+  // Loop closing (null without a vocabulary or with slam.loop_closing.enabled = false).
+  LoopClosing* loop_closing() { return loop_.get(); }
+  LoopClosingStats loop_stats() const { return loop_ ? loop_->stats() : LoopClosingStats{}; }
+  const std::shared_ptr<PlaceRecognition>& place_recognition() const { return place_; }
   const FrameGeometryPtr& geometry() const { return geometry_; }
   const SystemConfig& config() const { return config_; }
   std::vector<std::string> describe() const;
 
  private:
   void reset_now();
+  // Waits until local mapping and loop closing are idle (threaded) or runs their queues (inline).
+  void settle();
+  MapFileContext file_context() const;
 
   SystemConfig config_;
   StereoCalibration calibration_;
   FrameGeometryPtr geometry_;
   Map map_;
+  std::shared_ptr<PlaceRecognition> place_;
   std::unique_ptr<LocalMapping> mapper_;
+  std::unique_ptr<LoopClosing> loop_;
   std::unique_ptr<Tracking> tracking_;
+  MapMode mode_ = MapMode::kMapping;
   features::OrbExtractor extractor_;
   features::StereoMatcher stereo_matcher_;
   features::KeypointSet keypoints_;

@@ -3,11 +3,15 @@
 // reference-keyframe fallback, local-map tracking with motion-only BA, the keyframe decision and keyframe
 // creation. Runs in the caller's thread; holds the Map's mutex while it works on a frame.
 //
-// Lost: when a frame cannot be tracked the state is kLost, no pose is given, and every following frame first
-// tries to recover against the last reference keyframe and its neighbours (brute-force matching from the last
-// pose) before giving up again; a map of few keyframes is reset and initialised anew after
-// tracking.reset_after_lost_frames. Relocalisation with the bag-of-words database is issue 5's (the hook is
-// Tracking::recover()).
+// Lost: when a frame cannot be tracked the state is kLost, no pose is given, and every following frame tries to
+// relocalise (ORB-SLAM2's Relocalization): bag-of-words candidates from the place recognition, BoW matching, EPnP
+// RANSAC on the candidates' map points, motion-only BA, a projection search for more matches; then the last
+// reference keyframe and its neighbours (descriptor matching from their poses) before giving up again. A map of
+// few keyframes is reset and initialised anew after tracking.reset_after_lost_frames (never a loaded map).
+//
+// Localisation only (set_localisation_only): frames are tracked against the map without changing its structure:
+// no keyframes are created, so local mapping and loop closing get nothing. start_relocalising() (after a map is
+// loaded) makes the next frame relocalise instead of initialising a new map.
 
 #include <cstdint>
 #include <memory>
@@ -49,10 +53,11 @@ struct TrackingCounts {
   int features = 0;            // keypoints in the frame
   int stereo_features = 0;     // of which with stereo depth
   int frame_matches = 0;       // matches of the motion model / reference keyframe step
-  const char* method = "";     // which step tracked the frame: init, motion_model, reference, recovery
+  const char* method = "";     // which step tracked the frame: init, motion_model, reference, relocalisation, recovery
   int inliers = 0;             // map point inliers after local-map tracking
   bool new_keyframe = false;
-  bool recovered = false;      // tracked again after being lost
+  bool recovered = false;      // tracked again after being lost (by relocalisation or recovery)
+  int relocalisation_candidates = 0;  // BoW candidates tried while lost
   bool reset = false;          // the map was reset on this frame
 };
 
@@ -71,11 +76,16 @@ class Tracking {
   // The last tracked frame's pose relative to its reference keyframe (last_frame().reference_keyframe).
   const SE3d& last_relative_pose() const { return last_T_c_r_; }
 
-  // Issue 5's keyframe database: relocalisation candidates while lost (set before the first frame).
+  // The keyframe database: relocalisation candidates while lost and BoW matching (set before the first frame).
   void set_place_recognition(std::shared_ptr<PlaceRecognition> place) { place_ = std::move(place); }
 
   // Forgets everything (the map must be cleared by the caller, with the mapper reset first).
   void reset();
+  // After a map was loaded (map mutex held by the caller or no other thread running): forgets the frames, and the
+  // next frames relocalise in the map (no initialisation, no reset of the map when lost).
+  void start_relocalising();
+  void set_localisation_only(bool value) { localisation_only_ = value; }
+  bool localisation_only() const { return localisation_only_; }
 
   // Local map (for tests and statistics).
   std::size_t local_keyframe_count() const { return local_keyframes_.size(); }
@@ -85,7 +95,9 @@ class Tracking {
   bool stereo_initialisation();
   bool track_with_motion_model(int& matches);
   bool track_reference_keyframe(const KeyFrame& kf, const SE3d& T_c_w_guess, int& matches);
-  bool recover(int& matches);
+  bool recover(int& matches, TrackingCounts& counts);
+  bool relocalise(int& matches, TrackingCounts& counts);
+  void drop_outlier_matches();
   bool track_local_map(int& inliers);
   void update_local_map();
   void search_local_points();
@@ -114,6 +126,8 @@ class Tracking {
   bool has_velocity_ = false;
   int lost_frames_ = 0;
   int inliers_ = 0;
+  bool localisation_only_ = false;
+  bool map_loaded_ = false;  // the map came from a file: never reset it
 
   // Rebuilt for every frame with the map mutex held and used only under it (raw pointers never outlive the lock).
   std::vector<KeyFrame*> local_keyframes_;
