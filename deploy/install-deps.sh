@@ -6,7 +6,8 @@ set -euo pipefail
 packages=(
   build-essential cmake ninja-build pkg-config git
   libopencv-dev libeigen3-dev libceres-dev
-  libpng-dev zlib1g-dev  # simulator PNG writer (libpng, zlib strategy constants)
+  libdeflate-dev  # simulator PNG writer (deflate of the image data)
+  zlib1g-dev  # CRC-32 of saved maps
   libyaml-cpp-dev libspdlog-dev libfmt-dev libcli11-dev nlohmann-json3-dev
   libgtest-dev libgmock-dev libbenchmark-dev
   cyclonedds-dev cyclonedds-tools can-utils iproute2 util-linux  # pose outputs: DDS (idlc), CAN tools, netns tests

@@ -282,15 +282,15 @@ void write_sequence(const Simulator& sim, const std::string& out_dir, const Writ
   io::write_tum((root / "odometry.txt").string(),
                 simulate_wheel_odometry(gt, WheelOdometryConfig{}, sim.scenario().seed));
 
-  // One fixed PNG row filter per image kind (see png_writer.h), zlib's run-length strategy.
+  // One fixed PNG row filter per image kind (see png_writer.h).
   PngWriter png(sim.config().png_compression);
   std::string objects = objects_header() + "\n";
   SimFrame frame;
   for (int k = 0; k < sim.frame_count(); ++k) {
     sim.render_frame(k, frame, options.threads);
     const std::string name = frame_name(k);
-    png.write((root / "image_0" / name).string(), frame.left, PngFilter::kSub);
-    png.write((root / "image_1" / name).string(), frame.right, PngFilter::kSub);
+    png.write((root / "image_0" / name).string(), frame.left, PngFilter::kPaeth);
+    png.write((root / "image_1" / name).string(), frame.right, PngFilter::kPaeth);
     png.write((root / "disp_0" / name).string(), frame.disparity_u16, PngFilter::kPaeth);
     png.write((root / "mask_0" / name).string(), frame.mask, PngFilter::kNone);
     objects += format_objects(k, frame.objects);
