@@ -5,6 +5,7 @@
 #include <unistd.h>
 #include <zlib.h>
 
+#include <algorithm>
 #include <cerrno>
 #include <cmath>
 #include <cstdio>
@@ -13,6 +14,7 @@
 #include <fstream>
 #include <limits>
 #include <unordered_map>
+#include <unordered_set>
 
 #include "agvslam/core/error.h"
 #include "agvslam/slam/key_frame.h"
@@ -178,8 +180,29 @@ std::string MapFileContext::describe() const {
 }
 
 std::string encode_map(const Map& map, const MapFileContext& context) {
-  const std::vector<KeyFramePtr> kfs = map.keyframes();
-  const std::vector<MapPointPtr> points = map.map_points();
+  std::vector<KeyFramePtr> kfs = map.keyframes();
+  kfs.erase(std::remove_if(kfs.begin(), kfs.end(), [](const KeyFramePtr& k) { return k->bad(); }), kfs.end());
+  std::unordered_set<const KeyFrame*> saved_kfs;
+  for (const KeyFramePtr& k : kfs) saved_kfs.insert(k.get());
+  // Only links that both sides record are saved (a keyframe may list a point at a keypoint that the point does not
+  // record, e.g. after a fusion that found the point already observed there): the file is always consistent.
+  auto observation_ok = [&](const MapPoint& p, const Observation& o) {
+    return saved_kfs.count(o.keyframe) && o.index >= 0 && static_cast<std::size_t>(o.index) < o.keyframe->size() &&
+           o.keyframe->map_point(static_cast<std::size_t>(o.index)).get() == &p;
+  };
+  std::vector<MapPointPtr> points;
+  for (const MapPointPtr& p : map.map_points()) {
+    if (p->bad()) continue;
+    for (const Observation& o : p->observations()) {
+      if (observation_ok(*p, o)) {
+        points.push_back(p);
+        break;
+      }
+    }
+  }
+  std::unordered_set<const MapPoint*> saved_points;
+  for (const MapPointPtr& p : points) saved_points.insert(p.get());
+  auto saved_kf = [&](const KeyFrame* k) { return k && saved_kfs.count(k) ? k->id : kNone; };
   std::size_t estimate = kMapHeaderBytes + 256;
   for (const KeyFramePtr& kf : kfs) estimate += 256 + kf->size() * 80;
   for (const MapPointPtr& p : points) estimate += 160 + p->observations().size() * 12;
@@ -221,28 +244,40 @@ std::string encode_map(const Map& map, const MapFileContext& context) {
     w.bytes(kf->depth.data(), n * sizeof(float));
     for (std::size_t i = 0; i < n; ++i) {
       const MapPointPtr& p = kf->map_point(i);
-      w.put<uint64_t>(p && !p->bad() ? p->id : kNone);
+      const bool linked = p && saved_points.count(p.get()) && p->index_in(kf.get()) == static_cast<int>(i);
+      w.put<uint64_t>(linked ? p->id : kNone);
     }
-    w.put<uint64_t>(kf->parent() ? kf->parent()->id : kNone);
+    w.put<uint64_t>(saved_kf(kf->parent()));
     uint8_t flags = 0;
     if (kf->is_origin()) flags |= 1;
     if (kf->not_erase()) flags |= 2;
     if (MapFileAccess::first_connection(*kf)) flags |= 4;
     w.put<uint8_t>(flags);
-    w.put<uint32_t>(static_cast<uint32_t>(kf->loop_edges().size()));
-    for (const KeyFrame* l : kf->loop_edges()) w.put<uint64_t>(l->id);
-    const auto& connections = MapFileAccess::connections(*kf);
-    w.put<uint32_t>(static_cast<uint32_t>(connections.size()));
-    for (const auto& [other, weight] : connections) {
-      w.put<uint64_t>(other->id);
+    std::vector<uint64_t> loops;
+    for (const KeyFrame* l : kf->loop_edges()) {
+      if (saved_kfs.count(l)) loops.push_back(l->id);
+    }
+    w.put<uint32_t>(static_cast<uint32_t>(loops.size()));
+    for (const uint64_t id : loops) w.put<uint64_t>(id);
+    std::vector<std::pair<uint64_t, int32_t>> links;
+    for (const auto& [other, weight] : MapFileAccess::connections(*kf)) {
+      if (saved_kfs.count(other)) links.emplace_back(other->id, weight);
+    }
+    w.put<uint32_t>(static_cast<uint32_t>(links.size()));
+    for (const auto& [id, weight] : links) {
+      w.put<uint64_t>(id);
       w.put<int32_t>(weight);
     }
+    links.clear();
     const auto& ordered = kf->covisibles();
     const auto& weights = MapFileAccess::ordered_weights(*kf);
-    w.put<uint32_t>(static_cast<uint32_t>(ordered.size()));
     for (std::size_t k = 0; k < ordered.size(); ++k) {
-      w.put<uint64_t>(ordered[k]->id);
-      w.put<int32_t>(weights[k]);
+      if (saved_kfs.count(ordered[k])) links.emplace_back(ordered[k]->id, weights[k]);
+    }
+    w.put<uint32_t>(static_cast<uint32_t>(links.size()));
+    for (const auto& [id, weight] : links) {
+      w.put<uint64_t>(id);
+      w.put<int32_t>(weight);
     }
   }
 
@@ -255,13 +290,19 @@ std::string encode_map(const Map& map, const MapFileContext& context) {
     w.bytes(p->descriptor.data(), 32);
     w.put<float>(p->min_distance_m);
     w.put<float>(p->max_distance_m);
-    w.put<uint64_t>(p->reference_keyframe ? p->reference_keyframe->id : kNone);
+    std::vector<const Observation*> obs;
+    for (const Observation& o : p->observations()) {
+      if (observation_ok(*p, o)) obs.push_back(&o);
+    }
+    uint64_t ref = saved_kf(p->reference_keyframe);
+    if (ref == kNone) ref = obs.front()->keyframe->id;
+    w.put<uint64_t>(ref);
     w.put<int32_t>(p->visible);
     w.put<int32_t>(p->found);
-    w.put<uint32_t>(static_cast<uint32_t>(p->observations().size()));
-    for (const Observation& o : p->observations()) {
-      w.put<uint64_t>(o.keyframe->id);
-      w.put<int32_t>(o.index);
+    w.put<uint32_t>(static_cast<uint32_t>(obs.size()));
+    for (const Observation* o : obs) {
+      w.put<uint64_t>(o->keyframe->id);
+      w.put<int32_t>(o->index);
     }
   }
 
