@@ -78,15 +78,17 @@ if [[ $table_only == 0 ]]; then
 fi
 [[ $generate_only == 1 ]] && exit 0
 /usr/bin/python3 - "$data" "$loop_scenarios" "$line_scenarios" $seeds <<'PY'
-import json, os, sys
-import numpy as np
+import json, math, os, sys
 data, loop_sc, line_sc, seeds = sys.argv[1], sys.argv[2].split(), sys.argv[3].split(), sys.argv[4:]
 def load(sc, seed, mode):
     p = f"{data}/loop/{sc}_{seed}_{mode}.json"
     return json.load(open(p)) if os.path.exists(p) else None
 def gt_positions(sc, seed):
     p = f"{data}/{sc}_{seed}/poses.txt"
-    return np.loadtxt(p).reshape(-1, 3, 4)[:, :, 3] if os.path.exists(p) else None
+    if not os.path.exists(p):
+        return None
+    rows = [list(map(float, line.split())) for line in open(p) if line.strip()]
+    return [(r[3], r[7], r[11]) for r in rows]
 def loop_check(j, gt):
     """Loops closed and the largest ground-truth distance between the two keyframes' cameras (frame ids count
     the frames played, lap after lap)."""
@@ -96,8 +98,10 @@ def loop_check(j, gt):
     worst = 0.0
     for e in loops:
         a, b = gt[e["frame"] % len(gt)], gt[e["loop_frame"] % len(gt)]
-        worst = max(worst, float(np.linalg.norm(a - b)))
+        worst = max(worst, math.dist(a, b))
     return len(loops), (worst if loops else float("nan"))
+def mean(v):
+    return sum(v) / len(v)
 def ate(j):
     return j["ate"]["rmse_m"] if j and "ate" in j else float("nan")
 print(f"{'sequence':<12}{'ATE on':>9}{'ATE off':>9}{'reduction':>10}{'loops':>6}{'loop gt dist':>13}{'lost on/off':>12}  verdict")
@@ -129,8 +133,8 @@ for sc in line_sc:
 print("over seeds " + " ".join(seeds) + ":")
 for sc, s in summary.items():
     if "on" in s:
-        print(f"  {sc:<8} mean ATE on {np.mean(s['on']):.4f} off {np.mean(s['off']):.4f} (mean reduction "
-              f"{np.mean(s['red']):.1f} %, min {np.min(s['red']):.1f} %), loop detected in {s['detected']}/{s['runs']} runs")
+        print(f"  {sc:<8} mean ATE on {mean(s['on']):.4f} off {mean(s['off']):.4f} (mean reduction "
+              f"{mean(s['red']):.1f} %, min {min(s['red']):.1f} %), loop detected in {s['detected']}/{s['runs']} runs")
     else:
         print(f"  {sc:<8} false loops in {s['false']}/{s['runs']} runs")
 PY
