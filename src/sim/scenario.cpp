@@ -13,7 +13,8 @@ namespace agvslam::sim {
 namespace {
 
 constexpr double kPi = 3.14159265358979323846;
-constexpr double kCameraClearanceM = 1.5;  // actor surface to the camera
+constexpr double kPersonCameraClearanceM = 1.0;   // person's surface to the camera (they come close, as in the paper)
+constexpr double kVehicleCameraClearanceM = 1.5;  // vehicle's surface to the camera
 constexpr double kActorClearanceM = 0.5;   // between actors
 constexpr double kCheckStepS = 0.05;
 
@@ -26,11 +27,19 @@ double wrap_angle(double a) { return std::atan2(std::sin(a), std::cos(a)); }
 const std::vector<ScenarioInfo>& scenario_catalogue() {
   static const std::vector<ScenarioInfo> catalogue = {
       {"static", "the 6.4 m x 8.8 m loop without people (control)", 35.0},
-      {"scene1", "AGV stationary; one person enters from the left, turns, stands, walks back and leaves", 20.0},
-      {"scene2", "AGV drives a 13.6 m straight aisle; one person crosses", 20.0},
-      {"scene3", "13.6 m straight aisle; three people crossing/walking ahead, a forklift parked then crossing", 20.0},
-      {"scene4", "6.4 m x 8.8 m loop back to the start; one person crosses; a parked forklift", 35.0},
-      {"scene5", "the loop; a person walks ahead all the way, one crosses, one stands then leaves; an AGV parked then driving",
+      {"scene1",
+       "AGV stationary; one person walks in from the left ~2 m in front, turns, stands, walks back (~1.4 m) and "
+       "leaves",
+       20.0},
+      {"scene2", "AGV drives a 13.6 m straight aisle; one person crosses 1.6-2.4 m ahead", 20.0},
+      {"scene3",
+       "13.6 m straight aisle; one person crosses 1.6-2.4 m ahead, one stands then walks 1.5-2.5 m ahead, one crosses "
+       "beyond them; a forklift parked then crossing",
+       20.0},
+      {"scene4", "6.4 m x 8.8 m loop back to the start; one person crosses 1.6-2.4 m ahead; a parked forklift", 35.0},
+      {"scene5",
+       "the loop; a person walks 1.5-2.4 m ahead all the way, one crosses beyond them, one stands then leaves; an AGV "
+       "parked then driving",
        35.0},
   };
   return catalogue;
@@ -310,8 +319,10 @@ class ScenarioBuilder {
       const std::vector<Circle> circles = actor_footprint(cand.cls, st);
       double cx, cy, cyaw, cs;
       sc_.agv.planar_pose(t, cx, cy, cyaw, cs);
+      const double camera_clearance =
+          cand.cls == ActorClass::kPerson ? kPersonCameraClearanceM : kVehicleCameraClearanceM;
       for (const Circle& c : circles) {
-        worst = std::min(worst, std::hypot(c.x - cx, c.y - cy) - c.r - kCameraClearanceM);
+        worst = std::min(worst, std::hypot(c.x - cx, c.y - cy) - c.r - camera_clearance);
         for (const Actor& other : sc_.actors) {
           const ActorState so = actor_state(other, t);
           for (const Circle& o : actor_footprint(other.cls, so))
@@ -344,7 +355,7 @@ class ScenarioBuilder {
   // Person crossing the main aisle through the cross-aisle at gap_x, at the aisle centre at t_cross.
   // side: +1 / -1 = comes from and leaves towards +x / -x along the service corridors (0: random).
   Actor line_crossing_person(int id, double gap_x, bool north_to_south, double t_cross, Rng& r, int side = 0) {
-    const double speed = r.uniform(1.1, 1.35);
+    const double speed = r.uniform(1.0, 1.3);
     const double j = r.uniform(-0.5, 0.5);
     const double a = (side != 0 ? side : (r.chance(0.5) ? 1 : -1)) * r.uniform(2.0, 4.0);
     const double b = (side != 0 ? side : (r.chance(0.5) ? 1 : -1)) * r.uniform(2.0, 4.0);
@@ -362,7 +373,7 @@ class ScenarioBuilder {
 
   // Person walking through the loop's cross-aisle (crossing both legs); at leg_y at t_cross.
   Actor loop_crossing_person(int id, bool north_to_south, double leg_y, double t_cross, Rng& r) {
-    const double speed = r.uniform(1.1, 1.3);
+    const double speed = r.uniform(1.0, 1.3);
     const double xc = L_.loop_cross_x + r.uniform(-0.25, 0.25);
     const double a = (r.chance(0.5) ? 1 : -1) * r.uniform(1.5, 3.5);
     const double b = (r.chance(0.5) ? 1 : -1) * r.uniform(1.5, 3.5);
@@ -434,41 +445,56 @@ Scenario make_scenario(const ScenarioOptions& options, const Warehouse& warehous
   const std::string& name = sc.name;
 
   if (name == "scene1") {
+    // As in the paper's scene 1: the person walks in from the left close in front of the camera (1.5-3 m), turns
+    // right of the centre, stands, then walks back past the centre (closest, ~1.5 m) and leaves to the left.
     const double x_agv = L.stage_x + options.start_offset_m;
     b.agv_stationary(x_agv, L.stage_y, 0.5 * kPi);
     Rng r = rng.fork(1);
     // Half width of the view at depth d (fx / (width / 2) = 460 / 376 for the nominal camera), plus a body.
     auto edge_x = [&](double depth) { return x_agv - depth * (376.0 / 460.0) - 0.15; };
-    const double depth_in = r.uniform(4.4, 6.0);
-    const double depth_out = depth_in + r.uniform(1.5, 3.0);
-    const double speed = r.uniform(1.1, 1.3);
+    const double depth_in = r.uniform(1.9, 2.3);
+    const double depth_turn = r.uniform(1.5, 1.8);
+    const double depth_mid = r.uniform(1.4, 1.5);
+    const double depth_out = r.uniform(2.0, 2.5);
     const double t_enter = T * (0.25 + r.uniform(-0.015, 0.015));
     const double t_turn = T * (0.45 + r.uniform(-0.015, 0.015));
-    const double t_back = t_turn + r.uniform(1.5, 2.5);
+    const double t_back = t_turn + r.uniform(2.5, 3.5);
     const double t_leave = T * (0.85 + r.uniform(-0.015, 0.015));
-    const double x_enter = edge_x(depth_in);
-    const double x_turn = x_enter + speed * (t_turn - t_enter);
-    const double x_exit = edge_x(depth_out);
-    const double y_in = L.stage_y + depth_in, y_out = std::min(20.4, L.stage_y + depth_out);
+    const double x_enter = edge_x(depth_in), y_in = L.stage_y + depth_in;
+    const double x_turn = x_agv + r.uniform(0.6, 1.0), y_turn = L.stage_y + depth_turn;
+    const double x_mid = x_agv + r.uniform(-0.6, 0.0), y_mid = L.stage_y + depth_mid;
+    const double x_exit = edge_x(depth_out), y_out = L.stage_y + depth_out;
+    // Comes from further left and back (out of view: the left edge of the view recedes faster), leaves that way.
     std::vector<Waypoint> path;
-    path.push_back({t_enter - 3.0, x_enter - 3.0 * speed, y_in});
+    const double in_len = std::hypot(x_turn - x_enter, y_turn - y_in);
+    const double in_speed = in_len / (t_turn - t_enter);
+    const double x_from = x_enter - 1.6, y_from = y_in + 0.6;
+    path.push_back({t_enter - std::hypot(x_enter - x_from, y_in - y_from) / in_speed, x_from, y_from});
     path.push_back({t_enter, x_enter, y_in});
-    path.push_back({t_turn, x_turn, y_in});
-    path.push_back({t_back, x_turn, y_in});
+    path.push_back({t_turn, x_turn, y_turn});
+    path.push_back({t_back, x_turn, y_turn});
+    const double back_a = std::hypot(x_mid - x_turn, y_mid - y_turn), back_b = std::hypot(x_exit - x_mid, y_out - y_mid);
+    const double back_speed = (back_a + back_b) / (t_leave - t_back);
+    path.push_back({t_back + back_a / back_speed, x_mid, y_mid});
     path.push_back({t_leave, x_exit, y_out});
-    const double dx = x_exit - x_turn, dy = y_out - y_in, len = std::hypot(dx, dy);
-    const double back_speed = len / (t_leave - t_back);
-    path.push_back({t_leave + 2.5, x_exit + dx / len * back_speed * 2.5, std::min(20.6, y_out + dy / len * back_speed * 2.5)});
-    sc.actors.push_back(make_actor(1, ActorClass::kPerson, "enters from the left, stands, walks back", path, r));
+    const double x_to = x_exit - 1.6, y_to = y_out + 0.6;
+    path.push_back({t_leave + std::hypot(x_to - x_exit, y_to - y_out) / back_speed, x_to, y_to});
+    sc.actors.push_back(make_actor(1, ActorClass::kPerson, "walks in from the left close ahead, stands, walks back", path, r));
   } else if (name == "scene2" || name == "scene3") {
     b.agv_line(options.start_offset_m);
     const double x_start = L.line_x_start + options.start_offset_m;
+    const double x_end = x_start + L.line_length_m;
+    // Cross-aisles that the AGV passes (it has driven >= 1 m before a crossing 1.7 m ahead of it).
     std::vector<double> gaps;
     for (double g : L.line_cross_aisles_x)
-      if (g - x_start >= 4.5) gaps.push_back(g);
+      if (g - x_start >= 2.7 && g < x_end + 1.0) gaps.push_back(g);
     if (gaps.empty()) gaps.push_back(L.line_cross_aisles_x.back());
     auto crossing_time = [&](double gap_x, double ahead_m) {
       return b.time_at_distance(gap_x - ahead_m - x_start);
+    };
+    // Close crossing: 1.6-2.4 m ahead (later candidates further), never before the AGV has driven 1 m.
+    auto close_ahead = [&](double gap_x, int i, Rng& ri) {
+      return std::min(1.6 + 0.1 * i + ri.uniform(0.0, 0.8), std::max(1.6, gap_x - x_start - 1.0) + 0.1 * i);
     };
     if (name == "scene2") {
       Rng r = rng.fork(2);
@@ -476,48 +502,54 @@ Scenario make_scenario(const ScenarioOptions& options, const Warehouse& warehous
       const bool north_to_south = r.chance(0.5);
       b.add_best(16, [&](int i) {
         Rng ri = r.fork(static_cast<uint64_t>(i));
-        const double ahead = 4.5 + 0.25 * i + ri.uniform(0.0, 1.5);
-        return b.line_crossing_person(1, gap_x, north_to_south, crossing_time(gap_x, ahead), ri);
+        return b.line_crossing_person(1, gap_x, north_to_south, crossing_time(gap_x, close_ahead(gap_x, i, ri)), ri);
       });
     } else {
-      // Person 2 first: stands in the aisle ahead, then walks ahead of the AGV and turns off at the last gap.
-      {
+      {  // Person 1 crosses the first cross-aisle close ahead.
+        Rng r = rng.fork(4);
+        const bool north_to_south = r.chance(0.5);
+        b.add_best(24, [&](int i) {
+          Rng ri = r.fork(static_cast<uint64_t>(i));
+          return b.line_crossing_person(1, gaps.front(), north_to_south,
+                                        crossing_time(gaps.front(), close_ahead(gaps.front(), i, ri)), ri, +1);
+        });
+      }
+      {  // Person 2 stands in the aisle beyond the first cross-aisle; when the AGV comes within ~2 m it walks
+         // ahead of it, 1.5-2.5 m in front, and walks on when the AGV stops.
         Rng r = rng.fork(3);
         b.add_best(12, [&](int i) {
           Rng ri = r.fork(static_cast<uint64_t>(i));
-          const double speed = ri.uniform(1.05, 1.25);
-          const double y = L.line_y + ri.uniform(0.3, 0.7);
-          const double exit_x = gaps.back() + ri.uniform(-0.4, 0.4);
-          // Standing in the aisle ahead, but not in the mouth of a cross-aisle that others walk through.
-          double x0 = x_start + 5.0 + 0.3 * i + ri.uniform(0.0, 0.5);
+          const double y = L.line_y + ri.uniform(0.3, 0.6);
+          double x0 = gaps.front() + 1.9 + 0.3 * i + ri.uniform(0.0, 0.8);
           for (double g : gaps)
             if (std::fabs(x0 - g) < 1.9) x0 = g + 1.9;
-          PathBuilder pb(x0, y);
-          pb.pts.front().t_s = 1.2 + ri.uniform(0.0, 1.0);
-          pb.walk_to(exit_x - 0.6, y, speed);
-          pb.walk_to(exit_x, y + 0.6, speed);
-          pb.walk_to(exit_x, L.north_corridor_y, speed);
-          pb.walk_to(exit_x + ri.uniform(2.0, 4.0), L.north_corridor_y, speed);
-          return make_actor(2, ActorClass::kPerson, "stands in the aisle, then walks ahead and turns off", pb.pts, ri);
+          const double gap0 = ri.uniform(1.7, 1.9), amp = ri.uniform(0.15, 0.3), period = ri.uniform(6.0, 10.0);
+          const double phase = ri.uniform(0.0, 2 * kPi);
+          const double walk_on_speed = ri.uniform(0.8, 1.0);
+          // Walks on by itself once the AGV starts braking.
+          const SpeedProfile& prof = sc.agv.profile;
+          const double t_release = prof.duration_s - prof.hold_end_s - prof.cruise_mps / prof.accel_mps2;
+          std::vector<Waypoint> path;
+          double x = x0;
+          for (double t = 0; t <= T + 1e-9; t += 0.1) {
+            double cx, cy, cyaw, cs;
+            sc.agv.planar_pose(t, cx, cy, cyaw, cs);
+            if (t < t_release)
+              x = std::max(x, cx + gap0 + amp * std::sin(2 * kPi * t / period + phase));
+            else if (!path.empty())
+              x += walk_on_speed * 0.1;
+            path.push_back({t, x, y});
+          }
+          return make_actor(2, ActorClass::kPerson, "stands in the aisle, then walks ahead of the AGV", path, ri);
         });
       }
-      {  // Person 1 crosses the first gap early.
-        Rng r = rng.fork(4);
-        const bool north_to_south = r.chance(0.5);
-        b.add_best(48, [&](int i) {
-          Rng ri = r.fork(static_cast<uint64_t>(i));
-          const double ahead = 4.0 + 0.25 * i + ri.uniform(0.0, 0.5);
-          return b.line_crossing_person(1, gaps.front(), north_to_south, crossing_time(gaps.front(), ahead), ri, +1);
-        });
-      }
-      {  // Person 3 crosses while person 2 is still ahead: a gap of its own when there are three, else the
-         // first one (after person 1); never the gap person 2 turns into.
+      {  // Person 3 crosses beyond person 2 (3.3-4 m ahead of the AGV): the second cross-aisle when there is one.
         Rng r = rng.fork(5);
-        const double gap_x = gaps.size() > 2 ? gaps[1] : gaps.front();
+        const double gap_x = gaps.size() > 1 ? gaps[1] : gaps.front();
         const bool north_to_south = r.chance(0.5);
         b.add_best(64, [&](int i) {
           Rng ri = r.fork(static_cast<uint64_t>(i));
-          const double ahead = 4.5 + 0.25 * (i / 2) + ri.uniform(0.0, 0.5);
+          const double ahead = 3.3 + 0.2 * (i / 2) + ri.uniform(0.0, 0.6);
           return b.line_crossing_person(3, gap_x, (i % 2 == 0) == north_to_south, crossing_time(gap_x, ahead), ri,
                                         -1);
         });
@@ -556,12 +588,13 @@ Scenario make_scenario(const ScenarioOptions& options, const Warehouse& warehous
       const Crossing chosen = good[static_cast<std::size_t>(r.uniform_int(0, static_cast<int>(good.size()) - 1))];
 
       if (name == "scene5") {
-        // Person 1 walks ahead of the AGV along the loop for the whole lap.
+        // Person 1 walks ahead of the AGV along the loop for the whole lap, 1.5-2.4 m in front of it.
         Rng ra = rng.fork(8);
-        const double lateral = ra.uniform(0.25, 0.45);
-        const double gap0 = ra.uniform(3.3, 3.9), amp = ra.uniform(0.3, 0.6), period = ra.uniform(9.0, 14.0);
+        const double lateral = ra.uniform(0.2, 0.4);
+        const double gap0 = ra.uniform(1.7, 1.9), amp = ra.uniform(0.15, 0.3), period = ra.uniform(9.0, 14.0);
         const double phase = ra.uniform(0.0, 2 * kPi);
         std::vector<Waypoint> path;
+        double s_person = 0;  // route position of the person relative to the AGV's start
         for (double t = 0; t <= T + 1e-9; t += 0.1) {
           double x, y, yaw, s;
           sc.agv.planar_pose(t, x, y, yaw, s);
@@ -570,20 +603,32 @@ Scenario make_scenario(const ScenarioOptions& options, const Warehouse& warehous
           sc.agv.route.sample(sc.agv.s_start + s, hx, hy, h_now);
           sc.agv.route.sample(sc.agv.s_start + s + 3.0, hx, hy, h_ahead);
           const double corner = std::min(1.0, std::fabs(wrap_angle(h_ahead - h_now)) / (0.5 * kPi));
-          const double gap = (gap0 + amp * std::sin(2 * kPi * t / period + phase)) * (1.0 - 0.15 * corner);
-          double px, py, heading;
-          sc.agv.route.sample(sc.agv.s_start + s + gap, px, py, heading);
-          path.push_back({t, px - lateral * std::sin(heading), py + lateral * std::cos(heading)});
+          // Along the route; further where the route bends (a chord is shorter than its arc) so that the person
+          // stays >= 1.5 m from the camera, and never walking backwards.
+          double gap = std::max(1.5, (gap0 + amp * std::sin(2 * kPi * t / period + phase)) * (1.0 - 0.1 * corner));
+          double px = 0, py = 0;
+          auto place = [&](double g) {
+            double rx, ry, heading;
+            sc.agv.route.sample(sc.agv.s_start + s + g, rx, ry, heading);
+            px = rx - lateral * std::sin(heading);
+            py = ry + lateral * std::cos(heading);
+          };
+          gap = std::max(gap, s_person - s);
+          place(gap);
+          while (std::hypot(px - x, py - y) < 1.5 && gap < 4.0) place(gap += 0.02);
+          s_person = s + gap;
+          path.push_back({t, px, py});
         }
         sc.actors.push_back(make_actor(1, ActorClass::kPerson, "walks ahead of the AGV around the loop", path, ra));
       }
-      // A person crossing through the loop's cross-aisle in front of the AGV.
+      // A person crossing through the loop's cross-aisle in front of the AGV: close (1.6-2.4 m) in scene4, beyond
+      // the leading person (3.3-4.1 m) in scene5.
       {
         const int id = name == "scene5" ? 2 : 1;
         const bool north_to_south = r.chance(0.5);
         b.add_best(24, [&](int i) {
           Rng ri = r.fork(static_cast<uint64_t>(i));
-          const double ahead = (name == "scene5" ? 6.0 : 4.5) + 0.35 * i + ri.uniform(0.0, 1.0);
+          const double ahead = name == "scene5" ? 3.3 + 0.2 * i + ri.uniform(0.0, 0.8) : 1.6 + 0.1 * i + ri.uniform(0.0, 0.8);
           return b.loop_crossing_person(id, north_to_south, chosen.leg_y, b.time_at_distance(chosen.distance - ahead), ri);
         });
       }

@@ -2,21 +2,27 @@
 // Built-in scenarios: the camera-carrying AGV's motion plus the people and vehicles around it.
 //
 //   static  the loop, no people (control)
-//   scene1  AGV stationary in the staging area; a person enters from the left (~25 %), turns and stands
-//           (~45 %), walks back and leaves (~85 %)
-//   scene2  AGV drives a 13.6 m straight aisle; one person crosses in front
-//   scene3  the same aisle; three people (one crossing early, one walking ahead of the AGV after standing,
-//           one crossing later) and a forklift that is parked, then drives across the aisle far ahead
-//   scene4  AGV drives a 6.4 m x 8.8 m loop (1 m corner arcs) back to its start; one person crosses; a parked
-//           forklift (never moves)
-//   scene5  the same loop; a person walks ahead of the AGV for the whole loop, one crosses, one stands picking
-//           then walks away; another AGV is parked, then drives
+// The dynamic scenes mirror the five real scenes of paper 004 (section IV.B): the people come close in front of
+// the camera and fill a large part of the view while they move (at 1.5-2.5 m a person covers ~8-15 % of the
+// image; the mean share while one is in view is ~4-11 % per scene, peaks 11-20 %).
+//   scene1  AGV stationary in the staging area; a person walks in from the left 1.9-2.3 m in front (~25 %),
+//           turns right of the centre 1.5-1.8 m away and stands (~45 %), walks back past the centre (~1.4 m)
+//           and leaves to the left (~85 %)
+//   scene2  AGV drives a 13.6 m straight aisle; one person crosses 1.6-2.4 m ahead of it
+//   scene3  the same aisle; three people (one crossing 1.6-2.4 m ahead early, one standing in the aisle who
+//           then walks 1.5-2.5 m ahead of the AGV, one crossing beyond that person, ~3.3-4 m ahead) and a
+//           forklift that is parked, then drives across the aisle far ahead
+//   scene4  AGV drives a 6.4 m x 8.8 m loop (1 m corner arcs) back to its start; one person crosses 1.6-2.4 m
+//           ahead; a parked forklift (never moves)
+//   scene5  the same loop; a person walks 1.5-2.4 m ahead of the AGV for the whole loop, one crosses beyond
+//           them (~3.3-4 m ahead), one stands picking then walks away; another AGV is parked, then drives
 //
 // Every scenario has a nominal timeline (people ~1.2 m/s, the AGV ~0.8-0.9 m/s). `--frames N` plays the whole
 // timeline over N frames, so speeds scale with default_frames / N. Actors are generated from (seed,
 // RngStream::kActors), the warehouse from the layout seed, so the layout can be kept while people change.
-// Actor timings are chosen so that every actor keeps >= 1.5 m from the camera and >= 0.5 m from other actors
-// (checked on a 50 ms grid; a warning is logged if no candidate satisfies it).
+// Actor timings are chosen so that people keep >= 1 m (vehicles >= 1.5 m) from the camera and every actor
+// >= 0.5 m from the others (checked on a 50 ms grid; a warning is logged if no candidate satisfies it); the
+// AGV never stops for them.
 
 #include <cstdint>
 #include <optional>
