@@ -8,7 +8,8 @@
 #   PREFIX/bin/                     agvslamd and the field tools (agvslam-echo, -camera, -can-decode,
 #                                   -pose-replay, -run, -eval) that were built
 #   /etc/agvslam/                   agvslamd.yaml (from params/agvslamd.yaml) with the stage files it names
-#                                   (features, slam, dynamic, stereo, camera_v4l2, the example calibration) and
+#                                   (features, slam, dynamic, stereo, place + a link to the shipped vocabulary,
+#                                   camera_v4l2, the example calibration) and
 #                                   cyclonedds-loopback.xml; files that exist are kept, the new version is put
 #                                   beside them as *.new
 #   PREFIX/share/agvslam/           agvslam.dbc (the CAN frames), params/ (all shipped params), the udev rule
@@ -74,6 +75,9 @@ for f in features.yaml slam.yaml dynamic.yaml stereo.yaml camera_v4l2.yaml agvsl
   install_config "$src/params/$f" "$etc/$f"
 done
 install_config "$src/deploy/cyclonedds-loopback.xml" "$etc/cyclonedds-loopback.xml"
+install_config "$src/params/place.yaml" "$etc/place.yaml"
+# place.yaml names vocabulary/<file> relative to its folder: the shipped vocabulary stays in the shared files.
+ln -sfn "../..$prefix/share/agvslam/params/vocabulary" "$etc/vocabulary"
 
 echo "install.sh: shared files -> $share"
 install -m 0644 "$src/deploy/agvslam.dbc" "$share/agvslam.dbc"

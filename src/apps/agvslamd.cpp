@@ -13,8 +13,8 @@
 // booting with its camera unplugged still gets a running daemon that reports state lost) and STATUS= once a
 // second; the processing (tracking) loop sends WATCHDOG=1 while every pipeline loop turns.
 // SIGTERM / SIGINT: STOPPING=1, stop capturing, process and publish what was captured, close the devices, flush
-// the trajectory, exit 0. SIGHUP: reopen the log file (logrotate). A dataset played once ends the daemon (exit 0)
-// after its last frame is published.
+// the trajectory, save the map atomically (map.file in mapping mode), exit 0. SIGHUP: reopen the log file
+// (logrotate). A dataset played once ends the daemon (exit 0, the map saved) after its last frame is published.
 // --json writes the run's statistics (counts, latency and stage times: median, p99, max) at exit.
 // Exit status: 0 stopped cleanly, 2 bad configuration, 1 any other failure (a device or output that failed).
 
@@ -181,6 +181,20 @@ int run(const Options& o) {
   notifier.stopping("stopping: " + stop_reason);
   pipeline.request_stop();
   pipeline.wait();
+  try {
+    const auto saved = pipeline.save_map();
+    if (saved) {
+      spdlog::info("agvslamd: map saved to {} ({} keyframes, {} map points, {} bytes; {:.0f} ms)", config.map.file,
+                   saved->keyframes, saved->map_points, saved->bytes, saved->wait_ms + saved->encode_ms + saved->write_ms);
+      std::printf("MAP_SAVED %s KEYFRAMES %zu MAP_POINTS %zu BYTES %zu\n", config.map.file.c_str(), saved->keyframes,
+                  saved->map_points, saved->bytes);
+    }
+  } catch (const std::exception& e) {
+    // The previous map file is intact (written to a temporary file, renamed only when complete).
+    spdlog::error("agvslamd: the map could not be saved ({}); the previous file {} is unchanged", e.what(),
+                  config.map.file);
+    exit_code = 1;
+  }
   const double run_s = std::chrono::duration<double>(Clock::now() - t_start).count();
   const daemon::PipelineStats st = pipeline.stats();
   spdlog::info("agvslamd: stopped after {:.1f} s: {}", run_s, st.one_line());

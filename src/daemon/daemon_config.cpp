@@ -186,10 +186,19 @@ void DaemonConfig::validate() const {
   if (!(systemd.ready_timeout_s > 0) || systemd.ready_timeout_s > 3600) {
     throw InputError(p, "systemd.ready_timeout_s", "expected seconds in (0, 3600]");
   }
+  if (!map.file.empty()) {
+    if (map.mode == slam::MapMode::kLocalisation && !fs::exists(map.file)) {
+      throw InputError(p, "map.file", "expected an existing map file in mode localise (" + map.file + " does not exist)");
+    }
+    if (stage_files.place.empty()) {
+      throw InputError(p, "stages.place", "expected the place params (vocabulary) when map.file is set: relocalising "
+                                          "in a saved map needs the vocabulary it was saved with");
+    }
+  }
   // Two outputs writing one file would interleave.
   const std::vector<std::pair<const char*, std::string>> files = {
       {"trajectory.file", trajectory.file}, {"trajectory.final_file", trajectory.final_file},
-      {"log.file", log.file}, {"log.pose_log", log.pose_log}};
+      {"log.file", log.file}, {"log.pose_log", log.pose_log}, {"map.file", map.file}};
   for (std::size_t i = 0; i < files.size(); ++i) {
     for (std::size_t j = i + 1; j < files.size(); ++j) {
       if (!files[i].second.empty() && files[i].second == files[j].second) {
@@ -217,7 +226,14 @@ std::vector<std::string> DaemonConfig::describe() const {
   out.push_back("calibration: " + (calibration_file.empty() ? std::string("the dataset's own") : calibration_file));
   auto file_or_default = [](const std::string& f) { return f.empty() ? std::string("(built-in defaults)") : f; };
   out.push_back("stages: features " + file_or_default(stage_files.features) + ", slam " + file_or_default(stage_files.slam) +
-                ", dynamic " + file_or_default(stage_files.dynamic) + ", stereo " + file_or_default(stage_files.stereo));
+                ", dynamic " + file_or_default(stage_files.dynamic) + ", stereo " + file_or_default(stage_files.stereo) +
+                ", place " + (stage_files.place.empty() ? std::string("(none: no relocalisation by place recognition, no loop closing)")
+                                                         : stage_files.place));
+  if (place) {
+    out.push_back("place: vocabulary " + place->vocabulary_file + ", direct index level " +
+                  std::to_string(place->direct_index_level));
+  }
+  out.push_back(map.describe());
   std::ostringstream q;
   q << "pipeline: dynamic " << to_string(pipeline.dynamic) << ", mapping " << to_string(pipeline.mapping)
     << ", capture queue " << pipeline.capture_queue
@@ -259,6 +275,15 @@ std::vector<std::string> DaemonConfig::describe() const {
   return out;
 }
 
+std::string MapConfig::describe() const {
+  if (file.empty()) return "map: none (an empty map at every start, nothing saved)";
+  return "map: " + file + ", mode " + slam::to_string(mode) +
+         (mode == slam::MapMode::kLocalisation
+              ? std::string(" (the file must exist; tracked in without changing it; nothing saved)")
+              : std::string(" (loaded when it exists, else built; ") +
+                    (save_on_stop ? "saved atomically at stop)" : "not saved: map.save_on_stop false)"));
+}
+
 drivers::dds::DdsConfig load_dds_config(const std::string& path, const std::string& section) {
   const ParamsReader in(path);
   drivers::dds::DdsConfig c;
@@ -277,7 +302,7 @@ DaemonConfig load_daemon_config(const std::string& path) {
   const ParamsReader in(path);
   const fs::path dir = fs::absolute(fs::path(path)).parent_path();
   in.check_sections({"source", "camera", "calibration", "stages", "pipeline", "base_link", "covariance", "dds", "can",
-                     "trajectory", "log", "systemd"});
+                     "trajectory", "log", "systemd", "map"});
   DaemonConfig c;
   c.path = path;
 
@@ -305,12 +330,14 @@ DaemonConfig load_daemon_config(const std::string& path) {
   in.read("calibration", "file", c.calibration_file, "a calibration file (KITTI calib.txt, ORB-SLAM YAML, Kalibr)");
   c.calibration_file = resolve(dir, c.calibration_file);
 
-  in.check_keys("stages", {"features", "slam", "dynamic", "stereo"});
+  in.check_keys("stages", {"features", "slam", "dynamic", "stereo", "place"});
   in.read("stages", "features", c.stage_files.features, "a params file (params/features.yaml)");
   in.read("stages", "slam", c.stage_files.slam, "a params file (params/slam.yaml)");
   in.read("stages", "dynamic", c.stage_files.dynamic, "a params file (params/dynamic.yaml)");
   in.read("stages", "stereo", c.stage_files.stereo, "a params file (params/stereo.yaml)");
-  for (std::string* f : {&c.stage_files.features, &c.stage_files.slam, &c.stage_files.dynamic, &c.stage_files.stereo}) {
+  in.read("stages", "place", c.stage_files.place, "a params file (params/place.yaml: the vocabulary)");
+  for (std::string* f : {&c.stage_files.features, &c.stage_files.slam, &c.stage_files.dynamic, &c.stage_files.stereo,
+                         &c.stage_files.place}) {
     *f = resolve(dir, *f);
   }
 
@@ -401,6 +428,21 @@ DaemonConfig load_daemon_config(const std::string& path) {
   }
   in.read("systemd", "ready_timeout_s", c.systemd.ready_timeout_s, "seconds");
 
+  in.check_keys("map", {"file", "mode", "save_on_stop"});
+  in.read("map", "file", c.map.file, "a map file name");
+  c.map.file = resolve(dir, c.map.file);
+  std::string map_mode = "map";
+  in.read("map", "mode", map_mode, "localise or map");
+  if (map_mode == "map" || map_mode == "mapping") {
+    c.map.mode = slam::MapMode::kMapping;
+  } else if (map_mode == "localise" || map_mode == "localisation" || map_mode == "localize" || map_mode == "localization") {
+    c.map.mode = slam::MapMode::kLocalisation;
+  } else {
+    throw InputError(path, "map.mode", "expected localise (track in the saved map without changing it) or map (extend "
+                                       "it) (got '" + map_mode + "')");
+  }
+  in.read("map", "save_on_stop", c.map.save_on_stop, "true or false");
+
   c.validate();
 
   // The stage files (their own errors name them and their fields).
@@ -411,6 +453,14 @@ DaemonConfig load_daemon_config(const std::string& path) {
     c.system.stereo = f.stereo_matching;
   }
   c.system.threaded_mapping = c.pipeline.mapping == MappingMode::kThread;
+  if (!c.stage_files.place.empty()) {
+    c.place = place::load_place_config(c.stage_files.place);
+    if (!fs::is_regular_file(c.place->vocabulary_file)) {
+      throw InputError(c.stage_files.place, "vocabulary.file", "expected an existing vocabulary file (" +
+                                                                  c.place->vocabulary_file + " does not exist)");
+    }
+    c.system.direct_index_level = c.place->direct_index_level;
+  }
   if (c.pipeline.dynamic == DynamicMode::kDetector) {
     if (!c.stage_files.dynamic.empty()) c.detector = dynamic::load_dynamic_config(c.stage_files.dynamic);
     if (!c.stage_files.stereo.empty()) c.stereo = stereo::load_stereo_config(c.stage_files.stereo);

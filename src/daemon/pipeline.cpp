@@ -1,6 +1,10 @@
 #include "agvslam/daemon/pipeline.h"
 
 #include <algorithm>
+#include <filesystem>
+#include <unistd.h>
+#include <cstring>
+#include <cerrno>
 #include <cmath>
 #include <cstdio>
 #include <spdlog/spdlog.h>
@@ -84,7 +88,41 @@ Pipeline::Pipeline(const DaemonConfig& config, const SourceSetup& setup, std::un
       recent_frames_mono_ns_(kFpsRing, INT64_MIN) {
   slam::SystemConfig system_config = config.system;
   system_config.frame_rate_hz = setup.slam_rate_hz;
+  if (config.place) {
+    const auto t0 = std::chrono::steady_clock::now();
+    system_config.vocabulary = slam::load_vocabulary(*config.place);
+    spdlog::info("agvslamd: vocabulary {} loaded in {:.1f} ms", config.place->vocabulary_file,
+                 std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - t0).count());
+  }
   system_ = std::make_unique<slam::System>(setup.calibration, system_config);
+  if (!config.map.file.empty()) {
+    if (std::filesystem::exists(config.map.file)) {
+      // A file that cannot be loaded is an InputError naming it (agvslamd exits 2); it is never overwritten.
+      const slam::MapLoadStats st = system_->load_map(config.map.file, config.map.mode);
+      spdlog::info("agvslamd: map {} loaded ({} keyframes, {} map points, {} bytes, {:.0f} ms), mode {}: the first "
+                   "frames relocalise in it and poses are in its frame",
+                   config.map.file, st.keyframes, st.map_points, st.bytes, st.read_ms + st.decode_ms + st.bow_ms,
+                   slam::to_string(config.map.mode));
+    } else {
+      spdlog::info("agvslamd: map {} does not exist yet: building a new map (saved at stop)", config.map.file);
+    }
+    if (config.map.mode == slam::MapMode::kMapping && config.map.save_on_stop) {
+      // Learn now, not at the end of a shift, that the map cannot be written: the folder must exist (created if
+      // it can be) and take a new file.
+      const std::filesystem::path folder = std::filesystem::absolute(config.map.file).parent_path();
+      std::error_code ec;
+      std::filesystem::create_directories(folder, ec);
+      const std::filesystem::path probe = folder / (".agvslamd-write-test-" + std::to_string(::getpid()));
+      std::FILE* f = std::fopen(probe.c_str(), "wb");
+      if (!f) {
+        throw InputError(config.path, "map.file", "expected a file in a writable folder (" + folder.string() +
+                                                      ": " + std::strerror(errno) + ")");
+      }
+      std::fclose(f);
+      std::filesystem::remove(probe, ec);
+    }
+    system_->set_mode(config.map.mode);
+  }
   if (config.pipeline.dynamic == DynamicMode::kDetector) {
     detector_ = std::make_unique<dynamic::DynamicDetector>(setup.calibration, config.detector, config.stereo);
     detected_queue_ = std::make_unique<BoundedQueue<DetectedFrame>>(1, QueuePolicy::kLossless);
@@ -107,6 +145,17 @@ void Pipeline::start() {
 }
 
 void Pipeline::request_stop() { stop_.store(true); }
+
+std::optional<slam::MapSaveStats> Pipeline::save_map() {
+  if (config_.map.file.empty() || config_.map.mode != slam::MapMode::kMapping || !config_.map.save_on_stop) {
+    return std::nullopt;
+  }
+  if (system_->map().keyframe_count() == 0) {
+    spdlog::warn("agvslamd: the map is empty (nothing was tracked): {} not written", config_.map.file);
+    return std::nullopt;
+  }
+  return system_->save_map(config_.map.file);
+}
 
 void Pipeline::wait() {
   for (std::thread* t : {&capture_thread_, &detector_thread_, &tracking_thread_, &outputs_thread_}) {

@@ -63,6 +63,7 @@ stages:
   slam: $src/params/slam.yaml
   dynamic: $src/params/dynamic.yaml
   stereo: $src/params/stereo.yaml
+  place: $src/params/place.yaml
 pipeline:
   dynamic: detector
   mapping: thread

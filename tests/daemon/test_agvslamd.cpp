@@ -40,7 +40,7 @@ const std::string kParams = std::string(AGVSLAM_SOURCE_DIR) + "/params/";
 
 std::string stages_yaml() {
   return "stages:\n  features: " + kParams + "features.yaml\n  slam: " + kParams + "slam.yaml\n  dynamic: " + kParams +
-         "dynamic.yaml\n  stereo: " + kParams + "stereo.yaml\n";
+         "dynamic.yaml\n  stereo: " + kParams + "stereo.yaml\n  place: " + kParams + "place.yaml\n";
 }
 
 // The base_link mount used by the tests (the pose conversion is part of what is checked).
@@ -456,6 +456,108 @@ TEST(Agvslamd, AMissingCameraKeepsTheStatusGoingAndReadyComesAfterTheTimeout) {
             1)
       << out;
   EXPECT_NE(out.find("video-left"), std::string::npos) << out;
+  fs::remove_all(dir);
+}
+
+// Saved maps (map section): a run in mapping mode saves the map when the dataset ends; a second run in localise
+// mode loads it, relocalises within 10 frames, publishes poses in the saved map's frame (the first run's camera
+// positions within 5 cm, no alignment) and leaves the file byte-identical; a bit-flipped map or a missing one in
+// localise mode stops the daemon at start-up (exit 2, naming the file / field) and the file is not touched;
+// SIGTERM in mapping mode saves the map.
+std::string map_config(const std::string& seq, const std::string& dir, const std::string& map_file, const std::string& mode,
+                       const std::string& tag) {
+  return "source:\n  type: dataset\n  dataset: " + seq + "\n  rate: 0\n" + stages_yaml() + "pipeline:\n  mapping: inline\n" + kMount + "dds:\n  enabled: false\ntrajectory:\n  file: " + dir +
+         "/" + tag + ".tum\n  frame: camera\nlog:\n  pose_log: " + dir + "/" + tag + ".jsonl\nmap:\n  file: " +
+         map_file + "\n  mode: " + mode + "\n";
+}
+
+TEST(Agvslamd, SavesTheMapAtTheEndAndALaterRunLocalisesInItsFrame) {
+  const std::string seq = test::daemon_sim_sequence();
+  const std::string dir = test::make_temp_dir("agvslamd-map");
+  const std::string map_file = dir + "/maps/warehouse.agvmap";  // the folder is created by the daemon
+  write_text(dir + "/map.yaml", map_config(seq, dir, map_file, "map", "first"));
+  std::string out;
+  ASSERT_EQ(test::run_command(test::tool_path("agvslamd") + " --config " + dir + "/map.yaml 2>&1", &out), 0) << out;
+  EXPECT_NE(out.find("does not exist yet: building a new map"), std::string::npos) << out;
+  ASSERT_NE(out.find("MAP_SAVED " + map_file), std::string::npos) << out;
+  ASSERT_TRUE(fs::exists(map_file));
+  const std::string saved_bytes = read_text(map_file);
+  const Trajectory first = io::read_tum(dir + "/first.tum");
+  ASSERT_GT(first.size(), 70U);
+
+  // Localise in it: same warehouse, same sequence played again; poses come back in the first run's frame.
+  write_text(dir + "/loc.yaml", map_config(seq, dir, map_file, "localise", "second"));
+  ASSERT_EQ(test::run_command(test::tool_path("agvslamd") + " --config " + dir + "/loc.yaml 2>&1", &out), 0) << out;
+  EXPECT_NE(out.find("map " + map_file + " loaded"), std::string::npos) << out;
+  EXPECT_EQ(out.find("MAP_SAVED"), std::string::npos) << "localise mode must not write the map";
+  EXPECT_EQ(read_text(map_file), saved_bytes) << "localise mode changed the map file";
+  const auto log = read_json_lines(dir + "/second.jsonl");
+  ASSERT_EQ(log.size(), 80U);
+  int first_tracked = -1;
+  for (std::size_t k = 0; k < log.size(); ++k) {
+    if (log[k].at("sample").at("tracking_state").get<int>() == 1) {
+      first_tracked = static_cast<int>(k);
+      break;
+    }
+  }
+  ASSERT_GE(first_tracked, 0) << "never relocalised in the saved map";
+  EXPECT_LE(first_tracked, 10) << "relocalised after " << first_tracked << " frames";
+  // Frame by frame (the dataset source stamps frames with their capture time, which differs between the runs).
+  auto positions = [](const std::vector<json>& lines) {
+    std::map<int64_t, Eigen::Vector3d> p;  // source frame -> base_link position in the map frame
+    for (const json& l : lines) {
+      if (l.at("sample").at("tracking_state").get<int>() != 1) continue;
+      p[l.at("source_index").get<int64_t>()] = pose_from_sample(l.at("sample")).translation();
+    }
+    return p;
+  };
+  const auto first_positions = positions(read_json_lines(dir + "/first.jsonl"));
+  std::size_t compared = 0;
+  double worst = 0;
+  for (const auto& [frame, p] : positions(log)) {
+    const auto it = first_positions.find(frame);
+    if (it == first_positions.end()) continue;
+    worst = std::max(worst, (it->second - p).norm());
+    ++compared;
+  }
+  EXPECT_GT(compared, 60U);
+  EXPECT_LT(worst, 0.05) << "localised poses are not in the saved map's frame";
+  std::printf("map: %zu bytes; localise: first pose after %d frames, %zu poses within %.4f m of the mapping run\n",
+              saved_bytes.size(), first_tracked, compared, worst);
+
+  // A bit-flipped copy is refused at start-up, naming the file, and left as it was.
+  std::string flipped = saved_bytes;
+  flipped[flipped.size() / 2] = static_cast<char>(flipped[flipped.size() / 2] ^ 0x10);
+  const std::string bad_file = dir + "/maps/flipped.agvmap";
+  write_text(bad_file, flipped);
+  write_text(dir + "/bad.yaml", map_config(seq, dir, bad_file, "map", "bad"));
+  EXPECT_EQ(test::run_command(test::tool_path("agvslamd") + " --config " + dir + "/bad.yaml 2>&1", &out), 2) << out;
+  EXPECT_NE(out.find(bad_file), std::string::npos) << out;
+  EXPECT_EQ(out.find("running"), std::string::npos) << "nothing may start with a map that does not load";
+  EXPECT_EQ(read_text(bad_file), flipped) << "a map that did not load was overwritten";
+  // Localise needs an existing map.
+  write_text(dir + "/missing.yaml", map_config(seq, dir, dir + "/maps/none.agvmap", "localise", "missing"));
+  EXPECT_EQ(test::run_command(test::tool_path("agvslamd") + " --config " + dir + "/missing.yaml 2>&1", &out), 2) << out;
+  EXPECT_NE(out.find("map.file"), std::string::npos) << out;
+  fs::remove_all(dir);
+}
+
+TEST(Agvslamd, SigtermSavesTheMapAtomically) {
+  const std::string seq = test::daemon_sim_sequence();
+  const std::string dir = test::make_temp_dir("agvslamd-map-sigterm");
+  write_text(dir + "/d.yaml", looping_config(seq, dir, "map:\n  file: " + dir + "/m.agvmap\n  mode: map\n") );
+  test::ChildProcess d({test::tool_path("agvslamd"), "--config", dir + "/d.yaml"}, dir + "/out.txt", dir + "/err.txt");
+  ASSERT_TRUE(d.started());
+  ASSERT_TRUE(test::wait_until([&] { return test::count_data_lines(dir + "/poses.jsonl") >= 40; }, 120s))
+      << read_text(dir + "/err.txt");
+  d.signal(SIGTERM);
+  ASSERT_EQ(d.wait(60s), 0) << read_text(dir + "/err.txt");
+  EXPECT_NE(read_text(dir + "/out.txt").find("MAP_SAVED " + dir + "/m.agvmap"), std::string::npos) << read_text(dir + "/err.txt");
+  EXPECT_TRUE(fs::exists(dir + "/m.agvmap"));
+  // Nothing but the map is left in its folder (the temporary file was renamed, the write probe removed).
+  std::size_t files = 0;
+  for (const auto& e : fs::directory_iterator(dir)) files += e.path().filename().string().rfind("m.agvmap", 0) == 0 ? 1 : 0;
+  EXPECT_EQ(files, 1U);
   fs::remove_all(dir);
 }
 

@@ -5,7 +5,8 @@
 //   source       type v4l2 | dataset; dataset folder, playback rate, loop, frame range; wait for a camera
 //   camera       the V4L2 stereo camera (the keys of params/camera_v4l2.yaml's `camera` section)
 //   calibration  file: any format agvslam::io reads (KITTI calib.txt, ORB-SLAM YAML, Kalibr camchain)
-//   stages       the params files of the other stages: features, slam, dynamic, stereo ("" = built-in defaults)
+//   stages       the params files of the other stages: features, slam, dynamic, stereo, place (the vocabulary;
+//                "" = built-in defaults, place "" = no vocabulary: no relocalisation by place recognition, no loops)
 //   pipeline     dynamic detector | off, mapping thread | inline, queue size, SLAM frame rate, heartbeat
 //   base_link    camera-to-base_link extrinsic T_base_cam (x, y, z, roll, pitch, yaw of the camera)
 //   covariance   the documented heuristic for the pose and twist covariance (the tracker gives none)
@@ -13,7 +14,7 @@
 //   trajectory   the published poses as a TUM file, and the keyframe-refined trajectory at stop
 //   log          log file (reopened on SIGHUP), level, per-sample JSON log, statistics period
 //   systemd      when READY=1 is sent
-// (The map file and mode, save/load and localise/map, are issue 5's: a `map` section will hold them.)
+//   map          the saved map: file, mode (localise | map), what to do when the file does not exist yet, save at stop
 //
 // load_daemon_config() reads the file and every file it names (stage params, calibration, the dataset's index)
 // and validates everything: a bad value is an InputError naming the file, the field ("source.rate") and what was
@@ -30,6 +31,7 @@
 #include "agvslam/drivers/dds/dds_config.h"
 #include "agvslam/drivers/v4l2/camera_config.h"
 #include "agvslam/dynamic/detector.h"
+#include "agvslam/place/place_config.h"
 #include "agvslam/slam/system.h"
 #include "agvslam/stereo/stereo_config.h"
 
@@ -56,6 +58,22 @@ struct SourceConfig {
 
 struct StageFiles {
   std::string features, slam, dynamic, stereo;  // resolved paths; "" = built-in defaults
+  std::string place;                            // resolved; "" = no vocabulary (no place recognition)
+};
+
+// The saved map (slam::System::save_map / load_map; file format in agvslam/slam/map_io.h).
+struct MapConfig {
+  // "" = no map file: start with an empty map every time, save nothing.
+  std::string file;
+  // localise: track in the loaded map without changing it (the file must exist); map: extend it (or build one
+  // when the file does not exist yet) and save it at stop.
+  slam::MapMode mode = slam::MapMode::kMapping;
+  // At stop (SIGTERM / SIGINT / end of a dataset), in mapping mode: write the map atomically (temporary file,
+  // fsync, rename): a crash or power cut during the save leaves the previous file intact.
+  bool save_on_stop = true;
+  // A map file that exists but cannot be loaded (corrupt, truncated, another version, vocabulary or camera) stops
+  // the daemon at start-up (exit 2) and is never overwritten; this is always so, there is no setting to ignore it.
+  std::string describe() const;
 };
 
 enum class DynamicMode { kDetector, kOff };
@@ -157,11 +175,13 @@ struct DaemonConfig {
   TrajectoryConfig trajectory;
   LogConfig log;
   SystemdConfig systemd;
+  MapConfig map;
 
   // Loaded from the stage files (defaults when a file is not given).
   slam::SystemConfig system;
   dynamic::DynamicDetectorConfig detector;
   stereo::StereoConfig stereo;
+  std::optional<place::PlaceConfig> place;  // set when stages.place names a file
 
   // Throws InputError(path, "section.key", "expected ...").
   void validate() const;

@@ -89,6 +89,10 @@ class Pipeline {
   // Asks every thread to finish after draining what was captured; returns at once. wait() joins them.
   void request_stop();
   void wait();
+  // After wait(), in mapping mode with map.file and map.save_on_stop: writes the map atomically (temporary file,
+  // fsync, rename). nullopt when there is nothing to save (no file, localisation mode, an empty map). Throws
+  // InputError naming the file when it cannot be written (the previous file is then intact).
+  std::optional<slam::MapSaveStats> save_map();
   // True once the source reported its end (dataset played once) and everything was published.
   bool finished() const { return finished_.load(); }
   // True when a thread failed (its exception is in error()).

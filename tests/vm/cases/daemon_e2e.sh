@@ -62,6 +62,7 @@ calibration:
 stages:
   features: $params/features_kitti.yaml
   slam: $params/slam.yaml
+  place: $params/place.yaml
 pipeline:
   dynamic: off
   mapping: thread
