@@ -54,6 +54,7 @@ struct Options {
   int overlay_every = 10;
   int min_object_pixels = 400;
   double min_iou = 0.5;
+  bool json_points = false;
 };
 
 std::string frame_name(std::size_t i) {
@@ -409,6 +410,22 @@ int run(const Options& o) {
           depth += p.dynamic_depth ? 1 : 0;
           multi += p.dynamic_multiframe ? 1 : 0;
         }
+        if (o.json_points) {
+          nlohmann::json jp = nlohmann::json::array();
+          for (const auto& p : result.points) {
+            if (!p.tracked) continue;
+            const cv::Point q(cvRound(p.cur_px.x), cvRound(p.cur_px.y));
+            const int on_gt = gt_mask.empty() ? -1 : (gt_mask.at<uint8_t>(q) ? 1 : 0);
+            jp.push_back({{"x", p.cur_px.x}, {"y", p.cur_px.y}, {"d", p.cur_disparity_px}, {"age", p.age},
+                          {"densified", p.densified}, {"d_epi", p.d_epi_px}, {"t_epi", p.t_epi_px},
+                          {"reproj", p.reprojection_px}, {"disp_res", p.disparity_residual_px},
+                          {"mf", p.multiframe_px}, {"mf_disp", p.multiframe_disparity_residual_px},
+                          {"epipolar", p.dynamic_epipolar}, {"depth", p.dynamic_depth},
+                          {"multiframe", p.dynamic_multiframe}, {"dynamic", p.dynamic}, {"group", p.group},
+                          {"on_gt", on_gt}});
+          }
+          jf["tracked_points"] = jp;
+        }
         jf["points"] = {{"tracked", tracked}, {"epipolar", epi}, {"depth", depth}, {"multiframe", multi}};
         jf["multiframe"] = {{"valid", result.multiframe.valid}, {"frames_back", result.multiframe.frames_back},
                             {"translation_m", result.multiframe.translation_m}, {"candidates", result.multiframe.candidates}, {"flagged", result.multiframe.flagged}, {"confirmed", result.multiframe.confirmed},
@@ -527,6 +544,8 @@ int main(int argc, char** argv) {
   app.add_option("--params-dynamic", o.params_dynamic, "detector settings (params/dynamic.yaml; default: built-in)");
   app.add_option("--params-stereo", o.params_stereo, "stereo settings (params/stereo.yaml; default: built-in)");
   app.add_option("--calib", o.calib, "calibration file overriding the dataset's");
+  app.add_flag("--json-points", o.json_points, "add every tracked point (position, disparity, age, tests, residuals) "
+               "of every frame to the --json output (large)");
   app.add_option("--overlay-every", o.overlay_every, "write an overlay every N frames (0 = none)")->check(CLI::NonNegativeNumber);
   app.add_option("--min-object-pixels", o.min_object_pixels,
                  "ground-truth objects with fewer visible moving pixels are don't-care")->check(CLI::NonNegativeNumber);

@@ -32,6 +32,8 @@ void DetectorOptions::validate(const std::string& source) const {
   require(densify_max_points >= 0 && densify_max_points <= 1000, "densify_max_points", "expected an integer in [0, 1000]");
   require(densify_min_distance_px >= 0 && densify_min_distance_px <= 100, "densify_min_distance_px",
           "expected a number in [0, 100] px");
+  require(continue_min_points >= 1 && continue_min_points <= 1000, "continue_min_points", "expected an integer in [1, 1000]");
+  require(half_scale_min_area_px >= 0, "half_scale_min_area_px", "expected an integer >= 0 px");
   require(extend_to_height_m >= 0 && extend_to_height_m <= 20, "extend_to_height_m", "expected a number in [0, 20] m");
   require(roi_disparity_margin_px >= 0 && roi_disparity_margin_px <= 1024, "roi_disparity_margin_px",
           "expected a number in [0, 1024] px (a large value searches the whole configured range)");
@@ -43,15 +45,19 @@ std::string DetectorOptions::describe() const {
     std::snprintf(densify_text, sizeof(densify_text), "<= %d points within %.0f + %.2f d px, %.0f px apart",
                   densify_max_points, densify_radius_px, densify_radius_disparity_factor, densify_min_distance_px);
   }
-  char buf[480];
+  char objects_text[80] = "off";
+  if (track_objects) std::snprintf(objects_text, sizeof(objects_text), "on (>= %d points continue one)", continue_min_points);
+  char buf[700];
   std::snprintf(buf, sizeof(buf),
                 "detector: epipolar test %s, depth test %s, disparity %s, <= %d ROIs searched up to max point "
-                "disparity + %.1f px at scale %.1f, ROIs extended to the floor %s and %.2f m above it, side-by-side "
-                "pieces split %s, mask dilation %d px, densification %s",
+                "disparity + %.1f px at scale %.1f (half scale above %d px, 0 = never), left border padded %s, ROIs "
+                "extended to the floor %s and %.2f m above it, side-by-side pieces split %s, stacked regions merged "
+                "%s, mask dilation %d px, densification %s, objects over frames %s",
                 use_epipolar_test ? "on" : "off", use_depth_test ? "on" : "off",
                 full_frame_disparity ? "whole frame (debug)" : "points + ROIs", max_rois, roi_disparity_margin_px,
-                roi_scale, extend_to_floor ? "on" : "off", extend_to_height_m, split_side_by_side ? "on" : "off",
-                mask_dilation_px, densify_text);
+                roi_scale, half_scale_min_area_px, pad_left_border ? "on" : "off", extend_to_floor ? "on" : "off",
+                extend_to_height_m, split_side_by_side ? "on" : "off", merge_stacked_regions ? "on" : "off",
+                mask_dilation_px, densify_text, objects_text);
   return buf;
 }
 
@@ -94,6 +100,7 @@ std::string to_string(OutlineVerdict verdict) {
     case OutlineVerdict::kNoSeed: return "no seed";
     case OutlineVerdict::kTooSmall: return "too small";
     case OutlineVerdict::kMostlyStaticTracks: return "mostly static tracks";
+    case OutlineVerdict::kTooTall: return "too tall";
     case OutlineVerdict::kMovesWithBackground: return "moves with the background";
   }
   return "unknown";
@@ -124,6 +131,12 @@ DynamicDetector::DynamicDetector(const StereoCalibration& calibration, const Dyn
       }()),
       sgbm_(stereo_config.sgbm),
       sparse_(stereo_config.sparse),
+      check_sparse_([&] {
+        stereo::SparseStereoConfig c = stereo_config.sparse;
+        c.half_window = std::max(1, config.multiframe.check_half_window);
+        c.uniqueness_margin = config.multiframe.check_uniqueness_margin;
+        return c;
+      }()),
       outliner_(config.outline) {
   config_.validate("DynamicDetectorConfig");
   stereo_config_.validate("StereoConfig");
@@ -140,6 +153,7 @@ void DynamicDetector::reset() {
   prev_disparity_px_.clear();
   history_.clear();
   multiframe_.reset();
+  track_object_.clear();
 }
 
 DetectorResult DynamicDetector::detect(const StereoFrame& frame) {
@@ -260,6 +274,10 @@ void DynamicDetector::detect(const StereoFrame& frame, DetectorResult& result) {
           const float dq = sparse_.match(frame.left, frame.right, q);
           edge = dq > 0 && std::abs(dq - d) > tol;
         }
+        if (!edge && mf.check_half_window > 0) {
+          const float dc = check_sparse_.match(frame.left, frame.right, cur_pts_[i]);
+          edge = !(dc > 0) || std::abs(dc - d) > tol;
+        }
         if (edge) result.multiframe.test.dynamic[i] = 0;
       }
     }
@@ -310,8 +328,50 @@ void DynamicDetector::detect(const StereoFrame& frame, DetectorResult& result) {
 
     // Dynamic ROIs.
     t = Clock::now();
-    std::vector<DynamicGroup> groups = group_dynamic_points(dyn_pts_, dyn_disp_, size, config_.grouping);
-    if (static_cast<int>(groups.size()) > opt.max_rois) groups.resize(static_cast<std::size_t>(opt.max_rois));
+    const bool objects = opt.track_objects && config_.regions.mask_mode == MaskMode::kDisparity;
+    RoiGroupingConfig grouping = config_.grouping;
+    if (objects) grouping.min_points = std::min(grouping.min_points, opt.continue_min_points);
+    std::vector<DynamicGroup> groups = group_dynamic_points(dyn_pts_, dyn_disp_, size, grouping);
+    // A group smaller than grouping.min_points is a ROI only when continue_min_points of it belong to one object
+    // of the previous frame; each group takes over the object most of its points belong to.
+    group_object_.clear();
+    {
+      std::vector<DynamicGroup> kept;
+      for (DynamicGroup& g : groups) {
+        int object = -1, votes = 0;
+        if (objects) {
+          for (int m : g.members) {
+            const int idx = dyn_index_[static_cast<std::size_t>(m)];
+            const int o = static_cast<std::size_t>(idx) < track_object_.size() ? track_object_[static_cast<std::size_t>(idx)] : -1;
+            if (o < 0) continue;
+            int count = 0;
+            for (int m2 : g.members) {
+              const int idx2 = dyn_index_[static_cast<std::size_t>(m2)];
+              count += static_cast<std::size_t>(idx2) < track_object_.size() && track_object_[static_cast<std::size_t>(idx2)] == o;
+            }
+            if (count > votes) {
+              votes = count;
+              object = o;
+            }
+          }
+        }
+        if (static_cast<int>(g.members.size()) < config_.grouping.min_points && votes < opt.continue_min_points) continue;
+        if (votes < opt.continue_min_points) object = -1;
+        // Groups are largest first: a smaller group continuing an object that a larger one continues already is
+        // a part of it (its flood reaches the same connected pixels), not a second object.
+        if (object >= 0 && std::find(group_object_.begin(), group_object_.end(), object) != group_object_.end() &&
+            static_cast<int>(g.members.size()) < config_.grouping.min_points) {
+          continue;
+        }
+        group_object_.push_back(object);
+        kept.push_back(std::move(g));
+      }
+      groups = std::move(kept);
+    }
+    if (static_cast<int>(groups.size()) > opt.max_rois) {
+      groups.resize(static_cast<std::size_t>(opt.max_rois));
+      group_object_.resize(groups.size());
+    }
     tm.grouping_ms = ms_since(t);
 
     // The floor in disparity space, from the static points below the principal point (ground veto).
@@ -328,6 +388,8 @@ void DynamicDetector::detect(const StereoFrame& frame, DetectorResult& result) {
 
     result.rois.resize(groups.size());
     int next_instance = 1;
+    instance_object_.assign(1, -1);
+    kept_regions_.clear();
     for (std::size_t g = 0; g < groups.size(); ++g) {
       RoiSegmentation& seg = result.rois[g];
       const DynamicGroup& group = groups[g];
@@ -363,6 +425,7 @@ void DynamicDetector::detect(const StereoFrame& frame, DetectorResult& result) {
         group_pts_.push_back(dyn_pts_[static_cast<std::size_t>(m)]);
         group_disp_.push_back(dyn_disp_[static_cast<std::size_t>(m)]);
       }
+      seg.object_id = group_object_[g];
       if (seg.roi.empty()) continue;
 
       t = Clock::now();
@@ -371,8 +434,12 @@ void DynamicDetector::detect(const StereoFrame& frame, DetectorResult& result) {
       } else {
         float max_d = 0;
         for (float dd : group_disp_) max_d = std::max(max_d, dd);
-        sgbm_.compute_roi(frame.left, frame.right, seg.roi, seg.disparity_px,
-                          static_cast<int>(std::ceil(max_d + opt.roi_disparity_margin_px)), opt.roi_scale);
+        roi_disparity(frame, seg.roi, static_cast<int>(std::ceil(max_d + opt.roi_disparity_margin_px)),
+                      config_.regions.mask_mode == MaskMode::kDisparity && opt.half_scale_min_area_px > 0 &&
+                              seg.roi.area() > opt.half_scale_min_area_px
+                          ? 0.5
+                          : opt.roi_scale,
+                      seg.disparity_px);
       }
       tm.roi_disparity_ms += ms_since(t);
 
@@ -492,6 +559,17 @@ void DynamicDetector::detect(const StereoFrame& frame, DetectorResult& result) {
     prev_disparity_px_.push_back(new_disp_[i]);
     history_.add(new_pts_[i], new_disp_[i]);
   }
+  // Each track's object for the next frame: the region it lies in now.
+  track_object_.assign(prev_pts_.size(), -1);
+  if (opt.track_objects && result.has_previous && !result.mask.regions.empty()) {
+    const cv::Mat& inst = result.mask.instances;
+    for (std::size_t i = 0; i < prev_pts_.size(); ++i) {
+      const cv::Point q(cvRound(prev_pts_[i].x), cvRound(prev_pts_[i].y));
+      if (q.x < 0 || q.y < 0 || q.x >= inst.cols || q.y >= inst.rows) continue;
+      const int k = inst.at<uint8_t>(q);
+      if (k > 0 && static_cast<std::size_t>(k) < instance_object_.size()) track_object_[i] = instance_object_[static_cast<std::size_t>(k)];
+    }
+  }
   tm.point_disparity_ms += ms_since(t);
 
   std::swap(prev_pyramid_, cur_pyramid_);
@@ -545,6 +623,9 @@ void DynamicDetector::outline_region(const StereoFrame& frame, DetectorResult& r
   } else if (st.tracked_inside >= oc.min_tracked_for_fraction &&
              st.dynamic_inside < oc.min_dynamic_fraction * st.tracked_inside) {
     seg.outline_verdict = OutlineVerdict::kMostlyStaticTracks;
+  } else if (oc.max_height_m > 0 && st.median_disparity_px > 0 &&
+             cv::boundingRect(seg.outline).height * calibration_.baseline_m / st.median_disparity_px > oc.max_height_m) {
+    seg.outline_verdict = OutlineVerdict::kTooTall;
   } else {
     seg.outline_verdict = OutlineVerdict::kKept;
   }
@@ -566,13 +647,61 @@ void DynamicDetector::outline_region(const StereoFrame& frame, DetectorResult& r
     if (moves_with_background) seg.outline_verdict = OutlineVerdict::kMovesWithBackground;
   }
   if (seg.outline_verdict != OutlineVerdict::kKept) return;
+  // The object over frames: the continued one, unless a region of this frame took it already.
+  for (int o : instance_object_) {
+    if (o == seg.object_id) seg.object_id = -1;
+  }
+  if (seg.object_id < 0) seg.object_id = next_object_id_++;
   const cv::Rect local = cv::boundingRect(seg.outline);
   seg.region.rectangle = cv::Rect(local.tl() + seg.roi.tl(), local.size());
   seg.region.started_points = st.object_seeds;
   const cv::Rect rect = seg.region.rectangle & cv::Rect(cv::Point(0, 0), frame.left.size());
+  // A region stacked on an earlier one of this frame at agreeing depth is a part of that object.
+  if (config_.detector.merge_stacked_regions && st.median_disparity_px > 0) {
+    const RoiGroupingConfig& gc = config_.grouping;
+    for (KeptRegion& k : kept_regions_) {
+      const double d = std::max(k.median_disparity_px, st.median_disparity_px);
+      if (std::abs(k.median_disparity_px - st.median_disparity_px) > gc.t_disp_px + gc.t_disp_rel * d) continue;
+      const int overlap = std::min(rect.br().x, k.rect.br().x) - std::max(rect.x, k.rect.x);
+      if (2 * overlap < std::min(rect.width, k.rect.width)) continue;
+      const int gap = std::max(rect.y, k.rect.y) - std::min(rect.br().y, k.rect.br().y);
+      if (gap > gc.a_s_px + gc.b_s * d) continue;
+      result.mask.instances(rect).setTo(static_cast<uint8_t>(std::min(k.instance, 255)),
+                                        seg.outline(cv::Rect(rect.tl() - seg.roi.tl(), rect.size())));
+      k.rect |= rect;
+      result.mask.regions[k.region_index] = k.rect;
+      seg.object_id = k.instance < static_cast<int>(instance_object_.size())
+                          ? instance_object_[static_cast<std::size_t>(k.instance)]
+                          : seg.object_id;
+      return;
+    }
+  }
+  kept_regions_.push_back({rect, st.median_disparity_px, next_instance, result.mask.regions.size()});
   result.mask.regions.push_back(rect);
+  const int first_instance = next_instance;
   next_instance = label_region_objects(seg.outline(cv::Rect(rect.tl() - seg.roi.tl(), rect.size())),
                                        config_.detector.split_side_by_side, next_instance, result.mask.instances(rect));
+  instance_object_.resize(static_cast<std::size_t>(std::min(next_instance, 256)), -1);
+  for (int k = first_instance; k < next_instance && k < 256; ++k) instance_object_[static_cast<std::size_t>(k)] = seg.object_id;
+}
+
+void DynamicDetector::roi_disparity(const StereoFrame& frame, const cv::Rect& roi, int max_disparity_px, double scale,
+                                    cv::Mat& out) {
+  const stereo::SgbmConfig& sc = stereo_config_.sgbm;
+  const cv::Rect r = roi & cv::Rect(cv::Point(0, 0), frame.left.size());
+  // What compute_roi reaches left of the ROI (search range, context margin, half block) and a little more.
+  const int reach = sc.min_disparity + sc.num_disparities + sc.roi_margin_px + sc.block_size + 2;
+  if (!config_.detector.pad_left_border || r.empty() || r.x >= reach) {
+    sgbm_.compute_roi(frame.left, frame.right, r, out, max_disparity_px, scale);
+    return;
+  }
+  const int pad = reach - r.x;
+  // The columns compute_roi reads right of the ROI, and the 16 it may add for a minimum width.
+  const int width = std::min(frame.left.cols, r.br().x + sc.roi_margin_px + sc.block_size + sc.num_disparities + 16);
+  const cv::Rect strip(0, 0, width, frame.left.rows);
+  cv::copyMakeBorder(frame.left(strip), padded_left_, 0, 0, pad, 0, cv::BORDER_REPLICATE);
+  cv::copyMakeBorder(frame.right(strip), padded_right_, 0, 0, pad, 0, cv::BORDER_REPLICATE);
+  sgbm_.compute_roi(padded_left_, padded_right_, r + cv::Point(pad, 0), out, max_disparity_px, scale);
 }
 
 void DynamicDetector::densify(const StereoFrame& frame, DetectorResult& result) {

@@ -67,7 +67,8 @@ DynamicDetectorConfig load_dynamic_config(const std::string& path) {
   in.check_keys("multiframe", {"enabled", "max_frames", "min_frames", "min_translation_m", "max_rotation_deg",
                                "min_points", "min_disparity_px", "ransac_reprojection_px", "a_reproj_px", "b_reproj",
                                "a_disp_px", "b_disp", "adaptive_k", "max_scale", "verify_levels", "verify_fb_px",
-                               "verify_max_shift_px", "edge_check_px", "edge_tolerance_px", "edge_tolerance_rel"});
+                               "verify_max_shift_px", "edge_check_px", "edge_tolerance_px", "edge_tolerance_rel",
+                               "check_half_window", "check_uniqueness_margin"});
   MultiFrameTestConfig& m = c.multiframe;
   in.read("multiframe", "enabled", m.enabled, flag);
   in.read("multiframe", "max_frames", m.max_frames, integer);
@@ -89,6 +90,8 @@ DynamicDetectorConfig load_dynamic_config(const std::string& path) {
   in.read("multiframe", "edge_check_px", m.edge_check_px, "an integer (px)");
   in.read("multiframe", "edge_tolerance_px", m.edge_tolerance_px, px);
   in.read("multiframe", "edge_tolerance_rel", m.edge_tolerance_rel, num);
+  in.read("multiframe", "check_half_window", m.check_half_window, integer);
+  in.read("multiframe", "check_uniqueness_margin", m.check_uniqueness_margin, num);
 
   in.check_keys("grouping", {"a_s_px", "b_s", "t_disp_px", "t_disp_rel", "min_points", "margin_px",
                              "margin_disparity_factor", "merge_overlapping"});
@@ -156,7 +159,7 @@ DynamicDetectorConfig load_dynamic_config(const std::string& path) {
   in.check_keys("outline", {"seed_radius_px", "seed_tolerance_px", "seed_tolerance_rel", "step_tolerance_px",
                             "step_tolerance_rel", "depth_band_m", "ground_tolerance_px", "ground_tolerance_rel",
                             "static_competition", "max_hole_invalid_fraction", "min_hole_fill_px", "erode_px", "min_pixels",
-                            "min_dynamic_fraction", "min_tracked_for_fraction"});
+                            "min_dynamic_fraction", "min_tracked_for_fraction", "max_height_m"});
   OutlineConfig& o = c.outline;
   in.read("outline", "seed_radius_px", o.seed_radius_px, "an integer (px)");
   in.read("outline", "seed_tolerance_px", o.seed_tolerance_px, px);
@@ -173,6 +176,7 @@ DynamicDetectorConfig load_dynamic_config(const std::string& path) {
   in.read("outline", "min_pixels", o.min_pixels, "an integer (px)");
   in.read("outline", "min_dynamic_fraction", o.min_dynamic_fraction, num);
   in.read("outline", "min_tracked_for_fraction", o.min_tracked_for_fraction, integer);
+  in.read("outline", "max_height_m", o.max_height_m, "a number (m)");
 
   in.check_keys("photometric", {"enabled", "max_motion_px", "min_gradient", "sample_step_px", "min_samples",
                                 "multiframe_max_motion_px", "region_inset_px"});
@@ -185,15 +189,17 @@ DynamicDetectorConfig load_dynamic_config(const std::string& path) {
   in.read("photometric", "region_inset_px", c.photometric.region_inset_px, "an integer (px)");
 
   in.check_keys("detector", {"use_epipolar_test", "use_depth_test", "full_frame_disparity", "max_rois",
-                             "roi_disparity_margin_px", "roi_scale", "extend_to_floor", "extend_to_height_m", "split_side_by_side", "mask_dilation_px", "densify",
+                             "roi_disparity_margin_px", "roi_scale", "half_scale_min_area_px", "extend_to_floor", "extend_to_height_m", "split_side_by_side", "mask_dilation_px", "densify",
                              "densify_radius_px",
-                             "densify_radius_disparity_factor", "densify_max_points", "densify_min_distance_px"});
+                             "densify_radius_disparity_factor", "densify_max_points", "densify_min_distance_px",
+                             "track_objects", "continue_min_points", "pad_left_border", "merge_stacked_regions"});
   in.read("detector", "use_epipolar_test", c.detector.use_epipolar_test, flag);
   in.read("detector", "use_depth_test", c.detector.use_depth_test, flag);
   in.read("detector", "full_frame_disparity", c.detector.full_frame_disparity, flag);
   in.read("detector", "max_rois", c.detector.max_rois, integer);
   in.read("detector", "roi_disparity_margin_px", c.detector.roi_disparity_margin_px, px);
   in.read("detector", "roi_scale", c.detector.roi_scale, "1 or 0.5");
+  in.read("detector", "half_scale_min_area_px", c.detector.half_scale_min_area_px, "an integer (px)");
   in.read("detector", "extend_to_floor", c.detector.extend_to_floor, flag);
   in.read("detector", "extend_to_height_m", c.detector.extend_to_height_m, "a number (m)");
   in.read("detector", "split_side_by_side", c.detector.split_side_by_side, flag);
@@ -203,6 +209,10 @@ DynamicDetectorConfig load_dynamic_config(const std::string& path) {
   in.read("detector", "densify_radius_disparity_factor", c.detector.densify_radius_disparity_factor, num);
   in.read("detector", "densify_max_points", c.detector.densify_max_points, integer);
   in.read("detector", "densify_min_distance_px", c.detector.densify_min_distance_px, px);
+  in.read("detector", "track_objects", c.detector.track_objects, flag);
+  in.read("detector", "continue_min_points", c.detector.continue_min_points, integer);
+  in.read("detector", "pad_left_border", c.detector.pad_left_border, flag);
+  in.read("detector", "merge_stacked_regions", c.detector.merge_stacked_regions, flag);
 
   c.validate(path);
   return c;

@@ -33,19 +33,23 @@ void MultiFrameTestConfig::validate(const std::string& source) const {
   require(edge_check_px >= 0 && edge_check_px <= 50, "edge_check_px", "expected an integer in [0, 50] px");
   require(edge_tolerance_px >= 0 && edge_tolerance_px <= 100, "edge_tolerance_px", "expected a number in [0, 100] px");
   require(edge_tolerance_rel >= 0 && edge_tolerance_rel <= 10, "edge_tolerance_rel", "expected a number in [0, 10]");
+  require(check_half_window >= 0 && check_half_window <= 20, "check_half_window", "expected an integer in [0, 20]");
+  require(check_uniqueness_margin >= 0 && check_uniqueness_margin <= 10, "check_uniqueness_margin",
+          "expected a number in [0, 10]");
 }
 
 std::string MultiFrameTestConfig::describe() const {
-  char buf[700];
+  char buf[800];
   std::snprintf(buf, sizeof(buf),
                 "multiframe: %s; reference %d..%d frames back, the newest >= %.2f m away, rotation <= %.1f deg, >= %d "
                 "tracks with d >= %.1f px in both; PnP %.2f px; dynamic if offset > %.2f + %.3f d px or disparity "
                 "residual > %.2f + %.3f d px (adaptive k %.1f, <= %.1fx); verified by LK into the reference (%d levels, "
                 "fb <= %.2f px, same point within %.2f px); not at depth edges (disparity %d px away within %.2f + "
-                "%.3f d px)",
+                "%.3f d px); disparity confirmed with a %dx%d window, uniqueness %.2f",
                 enabled ? "on" : "off", min_frames, max_frames, min_translation_m, max_rotation_deg, min_points,
                 min_disparity_px, ransac_reprojection_px, a_reproj_px, b_reproj, a_disp_px, b_disp, adaptive_k, max_scale,
-                verify_levels, verify_fb_px, verify_max_shift_px, edge_check_px, edge_tolerance_px, edge_tolerance_rel);
+                verify_levels, verify_fb_px, verify_max_shift_px, edge_check_px, edge_tolerance_px, edge_tolerance_rel,
+                2 * check_half_window + 1, 2 * check_half_window + 1, check_uniqueness_margin);
   return buf;
 }
 

@@ -27,6 +27,7 @@ void OutlineConfig::validate(const std::string& source) const {
   require(erode_px >= 0 && erode_px <= 10, "erode_px", "expected an integer in [0, 10] px");
   require(min_pixels >= 0 && min_pixels <= 1000000, "min_pixels", "expected an integer in [0, 1000000] px");
   require(min_dynamic_fraction >= 0 && min_dynamic_fraction <= 1, "min_dynamic_fraction", "expected a number in [0, 1]");
+  require(max_height_m >= 0 && max_height_m <= 100, "max_height_m", "expected a number in [0, 100] m");
   require(min_tracked_for_fraction >= 1 && min_tracked_for_fraction <= 100000, "min_tracked_for_fraction",
           "expected an integer in [1, 100000]");
 }
@@ -37,11 +38,11 @@ std::string OutlineConfig::describe() const {
                 "outline: seeds within %d px agreeing to %.2f + %.3f d px; flood steps <= %.2f + %.3f d px within "
                 "%.2f m of the seed's depth; floor within %.2f + %.3f d px of the ground plane; static competition %s; "
                 "enclosed parts join when >= %.0f %% without disparity or < %d px; eroded by %d px; kept when >= %d px "
-                "and (< %d tracks inside or >= %.0f %% of them dynamic)",
+                "and (< %d tracks inside or >= %.0f %% of them dynamic) and <= %.1f m tall",
                 seed_radius_px, seed_tolerance_px, seed_tolerance_rel, step_tolerance_px, step_tolerance_rel, depth_band_m,
                 ground_tolerance_px, ground_tolerance_rel, static_competition ? "on" : "off",
                 100 * max_hole_invalid_fraction, min_hole_fill_px, erode_px, min_pixels, min_tracked_for_fraction,
-                100 * min_dynamic_fraction);
+                100 * min_dynamic_fraction, max_height_m);
   return buf;
 }
 
@@ -177,6 +178,20 @@ OutlineStats ObjectOutliner::outline(const cv::Mat& disparity_px, cv::Point orig
     std::swap(mask, eroded_);
   }
   stats.object_pixels = cv::countNonZero(mask);
+  // Median disparity of the outline's pixels (0 without any).
+  disparities_.clear();
+  for (int y = 0; y < h; ++y) {
+    const uint8_t* m = mask.ptr<uint8_t>(y);
+    const float* d = disparity_px.ptr<float>(y);
+    for (int x = 0; x < w; ++x) {
+      if (m[x] && d[x] > 0) disparities_.push_back(d[x]);
+    }
+  }
+  if (!disparities_.empty()) {
+    auto mid = disparities_.begin() + static_cast<std::ptrdiff_t>(disparities_.size() / 2);
+    std::nth_element(disparities_.begin(), mid, disparities_.end());
+    stats.median_disparity_px = *mid;
+  }
   return stats;
 }
 

@@ -110,7 +110,7 @@ int Slic::segment(const cv::Mat& grey, cv::Mat& labels, bool incremental, SlicSt
   flag_.assign(P, 0);
   unstable_.clear();
   const float inf = std::numeric_limits<float>::infinity();
-  int64_t total_evals = 0;
+  int64_t total_evals = 0, candidates = 0, visits = 0;
   int iterations_run = 0;
   for (int it = 0; it < config_.iterations; ++it) {
     // The first round is a full assignment in both variants (before it no pixel has a cluster, so "edge
@@ -122,6 +122,7 @@ int Slic::segment(const cv::Mat& grey, cv::Mat& labels, bool incremental, SlicSt
     if (full) {
       std::fill(dist_.begin(), dist_.end(), inf);
       std::memcpy(old_label_.data(), lab, P * sizeof(int32_t));
+      visits += 2 * static_cast<int64_t>(P);  // the distance and label buffers
       for (int k = 0; k < K; ++k) {
         const Centre& c = centres_[static_cast<std::size_t>(k)];
         const int x0 = std::max(0, static_cast<int>(std::floor(c.x)) - win);
@@ -146,58 +147,61 @@ int Slic::segment(const cv::Mat& grey, cv::Mat& labels, bool incremental, SlicSt
           evals += x1 - x0 + 1;
         }
       }
+      candidates += evals;  // every pixel of every window is evaluated
     } else {
-      // Only the unstable pixels, each against the centres whose 2S x 2S window contains it (the same
-      // candidates as in the plain variant), found through a bucket grid of the centres: a centre within
-      // win + 1 of a pixel lies in the pixel's bucket or one of the 8 around it.
+      // Only the unstable pixels, each against the centres whose 2S x 2S window contains it (as in the plain
+      // variant). Centres stay within about half a grid cell of their seed, so those are among the 3 x 3 seeds
+      // around the pixel's grid cell: 9 window tests instead of a search.
       window_.resize(static_cast<std::size_t>(K));
-      const int bucket = win + 1;
-      const int bx = W / bucket + 1, by = H / bucket + 1;
-      bucket_start_.assign(static_cast<std::size_t>(bx * by + 1), 0);
-      bucket_of_.resize(static_cast<std::size_t>(K));
       for (int k = 0; k < K; ++k) {
         const Centre& c = centres_[static_cast<std::size_t>(k)];
-        Window& w = window_[static_cast<std::size_t>(k)];  // integer windows, as in the plain variant
-        w = {static_cast<int>(std::floor(c.x)) - win, static_cast<int>(std::ceil(c.x)) + win,
-             static_cast<int>(std::floor(c.y)) - win, static_cast<int>(std::ceil(c.y)) + win};
-        const int cbx = std::clamp((w.x0 + w.x1) / 2 / bucket, 0, bx - 1);
-        const int cby = std::clamp((w.y0 + w.y1) / 2 / bucket, 0, by - 1);
-        bucket_of_[static_cast<std::size_t>(k)] = cby * bx + cbx;
-        ++bucket_start_[static_cast<std::size_t>(cby * bx + cbx + 1)];
+        window_[static_cast<std::size_t>(k)] = {static_cast<int>(std::floor(c.x)) - win, static_cast<int>(std::ceil(c.x)) + win,
+                                                static_cast<int>(std::floor(c.y)) - win, static_cast<int>(std::ceil(c.y)) + win};
       }
-      for (std::size_t b = 1; b < bucket_start_.size(); ++b) bucket_start_[b] += bucket_start_[b - 1];
-      bucket_items_.resize(static_cast<std::size_t>(K));
-      bucket_fill_.assign(bucket_start_.begin(), bucket_start_.end() - 1);
-      for (int k = 0; k < K; ++k) {
-        int& slot = bucket_fill_[static_cast<std::size_t>(bucket_of_[static_cast<std::size_t>(k)])];
-        bucket_items_[static_cast<std::size_t>(slot++)] = k;
+      // Per grid cell, the centres (of the 3 x 3 seeds around it) whose window overlaps the cell: usually 4.
+      cell_candidates_.resize(static_cast<std::size_t>(K) * 9);
+      cell_count_.assign(static_cast<std::size_t>(K), 0);
+      for (int cj = 0; cj < ny; ++cj) {
+        const int cy0 = static_cast<int>(std::ceil(cj * sy - 0.5)), cy1 = static_cast<int>(std::floor((cj + 1) * sy - 0.5));
+        for (int ci = 0; ci < nx; ++ci) {
+          const int cx0 = static_cast<int>(std::ceil(ci * sx - 0.5)), cx1 = static_cast<int>(std::floor((ci + 1) * sx - 0.5));
+          const int cell = cj * nx + ci;
+          int n_cell = 0;
+          for (int j = std::max(0, cj - 1); j <= std::min(ny - 1, cj + 1); ++j) {
+            for (int i = std::max(0, ci - 1); i <= std::min(nx - 1, ci + 1); ++i) {
+              const Window& w = window_[static_cast<std::size_t>(j * nx + i)];
+              if (w.x1 < cx0 || w.x0 > cx1 || w.y1 < cy0 || w.y0 > cy1) continue;
+              cell_candidates_[static_cast<std::size_t>(cell) * 9 + static_cast<std::size_t>(n_cell++)] = j * nx + i;
+            }
+          }
+          cell_count_[static_cast<std::size_t>(cell)] = n_cell;
+        }
       }
+      candidates += 9 * static_cast<int64_t>(K);
       for (int32_t q : unstable_) old_label_[static_cast<std::size_t>(q)] = lab[q];
+      visits += static_cast<int64_t>(unstable_.size());  // the label copy
       for (int32_t q : unstable_) {
         const int y = q / W;
         const int x = q - y * W;
         const float g = static_cast<float>(img[q]);
-        const int qbx = x / bucket, qby = y / bucket;
+        const int cell = cell_y[static_cast<std::size_t>(y)] * nx + cell_x[static_cast<std::size_t>(x)];
+        const int32_t* cand = cell_candidates_.data() + static_cast<std::size_t>(cell) * 9;
+        const int n_cand = cell_count_[static_cast<std::size_t>(cell)];
+        candidates += n_cand;
         float best = inf;
         int32_t best_k = lab[q];
-        for (int vy = std::max(0, qby - 1); vy <= std::min(by - 1, qby + 1); ++vy) {
-          for (int vx = std::max(0, qbx - 1); vx <= std::min(bx - 1, qbx + 1); ++vx) {
-            const int b = vy * bx + vx;
-            const int end_b = bucket_start_[static_cast<std::size_t>(b + 1)];
-            for (int item = bucket_start_[static_cast<std::size_t>(b)]; item < end_b; ++item) {
-              const int k = bucket_items_[static_cast<std::size_t>(item)];
-              const Window& w = window_[static_cast<std::size_t>(k)];
-              if (x < w.x0 || x > w.x1 || y < w.y0 || y > w.y1) continue;
-              ++evals;
-              const Centre& c = centres_[static_cast<std::size_t>(k)];
-              const float dg = g - c.g;
-              const float dx = static_cast<float>(x) - c.x, dy = static_cast<float>(y) - c.y;
-              const float D = dg * dg * inv_nc2 + (dx * dx + dy * dy) * inv_ns2;  // eq. 5, squared
-              if (D < best || (D == best && k < best_k)) {
-                best = D;
-                best_k = k;
-              }
-            }
+        for (int c = 0; c < n_cand; ++c) {
+          const int k = cand[c];
+          const Window& w = window_[static_cast<std::size_t>(k)];
+          if (x < w.x0 || x > w.x1 || y < w.y0 || y > w.y1) continue;
+          ++evals;
+          const Centre& ce = centres_[static_cast<std::size_t>(k)];
+          const float dg = g - ce.g;
+          const float dx = static_cast<float>(x) - ce.x, dy = static_cast<float>(y) - ce.y;
+          const float D = dg * dg * inv_nc2 + (dx * dx + dy * dy) * inv_ns2;  // eq. 5, squared
+          if (D < best || (D == best && k < best_k)) {
+            best = D;
+            best_k = k;
           }
         }
         lab[q] = best_k;
@@ -208,6 +212,7 @@ int Slic::segment(const cv::Mat& grey, cv::Mat& labels, bool incremental, SlicSt
     int changed = 0;
     if (full) {
       for (std::size_t p = 0; p < P; ++p) changed += lab[p] != old_label_[p];
+      visits += 2 * static_cast<int64_t>(P);  // the change count and the sums
       sums_.assign(static_cast<std::size_t>(K), Sums{});
       for (int y = 0; y < H; ++y) {
         for (int x = 0; x < W; ++x) {
@@ -219,6 +224,7 @@ int Slic::segment(const cv::Mat& grey, cv::Mat& labels, bool incremental, SlicSt
         }
       }
     } else {
+      visits += static_cast<int64_t>(unstable_.size());
       for (int32_t q : unstable_) {
         const int32_t now = lab[q], before = old_label_[static_cast<std::size_t>(q)];
         if (now == before) continue;
@@ -256,6 +262,7 @@ int Slic::segment(const cv::Mat& grey, cv::Mat& labels, bool incremental, SlicSt
     if (incremental && it == 0) {
       // Step (1): the edge pixels of the clustering are unstable.
       unstable_.clear();
+      visits += static_cast<int64_t>(P);
       for (int y = 0; y < H; ++y) {
         for (int x = 0; x < W; ++x) {
           const int32_t l = lab[y * W + x];
@@ -290,6 +297,7 @@ int Slic::segment(const cv::Mat& grey, cv::Mat& labels, bool incremental, SlicSt
       }
       for (int32_t q : unstable_) flag_[static_cast<std::size_t>(q)] &= static_cast<uint8_t>(~1u);
       for (int32_t p : next_unstable_) flag_[static_cast<std::size_t>(p)] = 1;
+      visits += 2 * static_cast<int64_t>(unstable_.size()) + static_cast<int64_t>(next_unstable_.size());
       unstable_.swap(next_unstable_);
     }
   }
@@ -298,6 +306,8 @@ int Slic::segment(const cv::Mat& grey, cv::Mat& labels, bool incremental, SlicSt
   const int count = enforce_connectivity(labels, min_size);
   if (stats) {
     stats->distance_evaluations = total_evals;
+    stats->candidate_checks = candidates;
+    stats->pixel_visits = visits;
     stats->iterations = iterations_run;
     stats->step_px = static_cast<int>(std::lround(step));
     stats->seeds = K;

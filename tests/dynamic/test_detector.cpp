@@ -218,5 +218,35 @@ TEST(DynamicDetector, MultiFrameTestFindsABoxKeepingItsDistanceAhead) {
   std::printf("%s\nbox ahead: %d multi-frame points, IoU %.3f\n", summary(with).c_str(), multi, overlap);
 }
 
+TEST(DynamicDetector, BoxAtTheLeftBorderGetsItsOutlineThere) {
+  // A box 2.5 m away (d = 22 px) cut by the left image border, moving sideways. StereoSGBM gives no disparity in
+  // the leftmost num_disparities columns of the crop it matches, so without padding the outline (and the mask)
+  // starts at x ~ 32; matched in left-padded images, the box's pixels from x = d on get their disparity.
+  CorridorScene scene;
+  scene.box.origin = {-2.3, -1.1, 2.5};
+  scene.box.width_m = 0.8;
+  const Eigen::Vector3d motion(0.08, 0, 0);
+  DynamicDetectorConfig padded;
+  DynamicDetectorConfig unpadded;
+  unpadded.detector.pad_left_border = false;
+  const RunOutcome with = run_two_frames(padded, camera_pose(0.0, 0, 0.10, 0.0), motion, true, scene);
+  const RunOutcome without = run_two_frames(unpadded, camera_pose(0.0, 0, 0.10, 0.0), motion, true, scene);
+  // Columns 24..31: matchable (x > d), left of what SGBM covers without padding.
+  const cv::Rect band(24, 0, 8, 480);
+  const int gt_band = cv::countNonZero(with.gt_mask(band));
+  ASSERT_GT(gt_band, 8 * 150);
+  const int with_band = cv::countNonZero(with.result.mask.image(band) & with.gt_mask(band));
+  const int without_band = cv::countNonZero(without.result.mask.image(band) & without.gt_mask(band));
+  EXPECT_GT(with_band, gt_band / 2) << summary(with.result);
+  EXPECT_LT(without_band, gt_band / 10) << summary(without.result);
+  const double iou_with = iou(with.result.mask.image, with.gt_mask);
+  const double iou_without = iou(without.result.mask.image, without.gt_mask);
+  // (Columns left of x = d have no match in the right image: the outline misses most of them either way.)
+  EXPECT_GE(iou_with, 0.6) << summary(with.result);
+  EXPECT_GT(iou_with, iou_without + 0.1) << summary(without.result);
+  std::printf("box at the left border: band %d / %d px with padding, %d without; IoU %.3f with, %.3f without\n",
+              with_band, gt_band, without_band, iou_with, iou_without);
+}
+
 }  // namespace
 }  // namespace agvslam::dynamic

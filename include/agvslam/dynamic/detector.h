@@ -57,6 +57,18 @@ struct DetectorOptions {
   double roi_disparity_margin_px = 8; // ROI SGBM searches [0, max point disparity + margin] (<= configured range)
   double roi_scale = 1.0;             // 1 or 0.5: SGBM and SLIC of the ROIs at this resolution (planes, boundaries
                                       // and regions stay at full resolution)
+  // mask_mode disparity: ROIs larger than this (px) get their SGBM at half resolution anyway (near objects: the
+  // half-resolution block's fattening is small against their width; 0 = never).
+  int half_scale_min_area_px = 0;
+  // StereoSGBM leaves the leftmost num_disparities columns of what it matches without disparity, so a ROI at the
+  // left image border (a person entering or leaving there, or passing close in a turn) lost its outline left of
+  // x ~ 32-64. With this, such a ROI is matched in images padded on the left (edge replicated): its pixels get a
+  // disparity from x = d on, as far as the right image sees them.
+  bool pad_left_border = true;
+  // Regions of one frame that are stacked (their columns overlap by half the narrower, the vertical gap is within
+  // T_s = a_s + b_s d of grouping) at agreeing median disparity (grouping t_disp) are one object: the later one
+  // takes the earlier one's instance (torso and legs found from separate groups, a ROI extended to the floor).
+  bool merge_stacked_regions = true;
   int mask_dilation_px = 0;           // grow the final mask by this many pixels
   // Beyond the paper: objects stand on the floor. A ROI whose lowest point lies above the floor row at the
   // group's disparity (from the frame's ground plane; legs often have no corners) is extended down to it.
@@ -77,6 +89,13 @@ struct DetectorOptions {
   double densify_radius_disparity_factor = 1.0;
   int densify_max_points = 24;
   double densify_min_distance_px = 5;  // from existing tracks and from each other
+  // Objects over frames (beyond the paper, mask_mode disparity): the tracks inside a region's outline belong to
+  // its object in the next frame. A group of dynamic points of which at least continue_min_points belong to one
+  // object of the previous frame is a ROI even when it is smaller than grouping.min_points (a person who showed
+  // only two moving corners this frame is still the person of the last frame). (Seeding the outline with the
+  // object's other tracks as well was tried: more false regions on scene2/3/5 than it gained.)
+  bool track_objects = true;
+  int continue_min_points = 2;
 
   void validate(const std::string& source) const;
   std::string describe() const;
@@ -130,6 +149,7 @@ enum class OutlineVerdict {
   kNoSeed,              // no point found a pixel of agreeing disparity
   kTooSmall,            // fewer than outline.min_pixels
   kMostlyStaticTracks,  // the tracks inside it are mostly static (outline.min_dynamic_fraction)
+  kTooTall,             // taller than outline.max_height_m
   kMovesWithBackground  // the photometric check found it static (photometric)
 };
 std::string to_string(OutlineVerdict verdict);
@@ -150,6 +170,7 @@ struct RoiSegmentation {
   OutlineStats outline_stats;
   SuperpixelMotion outline_motion, outline_motion_multiframe;  // photometric check of the outline (when run)
   OutlineVerdict outline_verdict = OutlineVerdict::kNoSeed;   // kKept: the outline is a dynamic region
+  int object_id = -1;                      // the object over frames (detector.track_objects): continued or new
   DynamicRegion region;
 };
 
@@ -207,6 +228,8 @@ class DynamicDetector {
  private:
   void densify(const StereoFrame& frame, DetectorResult& result);
   void outline_region(const StereoFrame& frame, DetectorResult& result, RoiSegmentation& seg, int& next_instance);
+  // SGBM of one ROI (detector.pad_left_border: in left-padded images near the left border).
+  void roi_disparity(const StereoFrame& frame, const cv::Rect& roi, int max_disparity_px, double scale, cv::Mat& out);
   void measure_point_disparities(const StereoFrame& frame, const std::vector<cv::Point2f>& pts, std::vector<float>& out,
                                  const cv::Mat& full_disparity_px);
 
@@ -223,6 +246,7 @@ class DynamicDetector {
   Slic slic_half_;  // superpixel size halved, for roi_scale 0.5
   stereo::StereoSgbm sgbm_;
   stereo::SparseStereoMatcher sparse_;
+  stereo::SparseStereoMatcher check_sparse_;  // larger window, stricter uniqueness (multiframe.check_*)
   SuperpixelGraph graph_;
   ObjectOutliner outliner_;
 
@@ -252,7 +276,19 @@ class DynamicDetector {
   std::vector<float> seed_disp_;
   std::vector<int> seed_index_;
   std::vector<char> background_flags_;
+  std::vector<int> track_object_;           // per track (row of prev_pts_): object of the previous frame, -1 none
+  std::vector<int> group_object_;           // per group: the previous frame's object it continues, -1 none
+  std::vector<int> instance_object_;        // per instance id of this frame's mask: object id
+  int next_object_id_ = 0;
   cv::Mat region_mask_;
+  cv::Mat padded_left_, padded_right_;
+  struct KeptRegion {
+    cv::Rect rect;
+    double median_disparity_px;
+    int instance;
+    std::size_t region_index;  // in result.mask.regions
+  };
+  std::vector<KeptRegion> kept_regions_;  // this frame's regions (merge_stacked_regions)
 };
 
 }  // namespace agvslam::dynamic

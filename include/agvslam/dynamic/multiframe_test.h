@@ -69,6 +69,13 @@ struct MultiFrameTestConfig {
   int edge_check_px = 6;
   double edge_tolerance_px = 1.0;
   double edge_tolerance_rel = 0.1;
+  // Stereo check (also by the detector): a static point whose disparity is consistently wrong (the matcher locked
+  // onto the wrong period of repetitive racking) moves over the longer baseline exactly like an object keeping its
+  // distance. A confirmed track's disparity is measured again with a (2 h + 1)^2 window, h = check_half_window,
+  // and a uniqueness margin of check_uniqueness_margin; a differing (by > edge_tolerance_px + rel * d) or missing
+  // match makes it not dynamic by this test. 0 = off.
+  int check_half_window = 8;
+  double check_uniqueness_margin = 0.2;
 
   void validate(const std::string& source) const;
   std::string describe() const;

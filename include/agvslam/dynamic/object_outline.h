@@ -51,6 +51,9 @@ struct OutlineConfig {
   int min_pixels = 150;
   double min_dynamic_fraction = 0.2;
   int min_tracked_for_fraction = 10;
+  // ... or one taller than max_height_m at its median disparity (people, forklifts and AGVs are lower; a rack
+  // upright flooded from a few false tracks at its edge is not). 0 = no limit.
+  double max_height_m = 3.0;
 
   void validate(const std::string& source) const;
   std::string describe() const;
@@ -60,6 +63,7 @@ struct OutlineStats {
   int object_seeds = 0, static_seeds = 0;
   int object_pixels = 0;
   int tracked_inside = 0, dynamic_inside = 0;  // tracked points inside the outline, and the dynamic ones (detector)
+  double median_disparity_px = 0;              // of the outline's pixels with a disparity
 };
 
 // Reusable buffers (no allocation per call once sizes have settled).
@@ -87,6 +91,7 @@ class ObjectOutliner {
   std::vector<int32_t> seed_of_;   // per claimed pixel: its seed
   std::vector<Seed> seeds_;
   std::vector<uint8_t> fill_;
+  std::vector<float> disparities_;
   cv::Mat holes_, hole_labels_, hole_stats_, hole_centroids_, eroded_;
   std::vector<int> invalid_count_;
 };

@@ -8,7 +8,8 @@
 //                unstable and, after each assignment, per eq. 7, a 4-neighbour p
 //                of an evaluated pixel q becomes unstable when cluster(p) != cluster(q) or q is still
 //                unstable (its cluster changed); everything else becomes stable. An unstable pixel is
-//                compared with every centre whose 2S x 2S window contains it, as in the plain variant. Cluster centres are kept as
+//                compared with every centre whose 2S x 2S window contains it, as in the plain variant (found
+//                among the 3 x 3 seeds around its grid cell: centres stay near their seeds). Cluster centres are kept as
 //                running sums, updated only for the pixels that changed.
 // Both stop after `iterations` rounds or when a round changes fewer than min_change_fraction of the pixels
 // (0: only when no label changes); both end with the connectivity
@@ -37,8 +38,16 @@ struct SlicConfig {
   std::string describe() const;
 };
 
+// Work counters. distance_evaluations alone flatters the incremental variant: it also spends work finding each
+// unstable pixel's candidate centres and keeping the unstable set. candidate_checks counts every (pixel, centre)
+// pair considered (a rejected window test too; in the plain variant every one is evaluated), pixel_visits every
+// pixel touched by the bookkeeping (buffer resets, change counts, centre sums, the unstable set); work() is their
+// sum, one unit each (it tracks callgrind instruction counts: see tests/bench/bench_dynamic.cpp BM_DynamicSlic).
 struct SlicStats {
   int64_t distance_evaluations = 0;                  // D_SLIC computations in total
+  int64_t candidate_checks = 0;
+  int64_t pixel_visits = 0;
+  int64_t work() const { return candidate_checks + pixel_visits; }
   std::vector<int64_t> evaluations_per_iteration;
   std::vector<int> changed_per_iteration;           // pixels whose cluster changed
   int iterations = 0;
@@ -80,7 +89,8 @@ class Slic {
   std::vector<int32_t> unstable_, next_unstable_;
   std::vector<int32_t> relabel_, queue_;
   std::vector<Window> window_;
-  std::vector<int> bucket_start_, bucket_fill_, bucket_items_, bucket_of_;
+  std::vector<int32_t> cell_candidates_;  // incremental: per grid cell, up to 9 centres whose window overlaps it
+  std::vector<int> cell_count_;
 };
 
 }  // namespace agvslam::dynamic
