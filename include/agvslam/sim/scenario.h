@@ -17,7 +17,7 @@
 //   scene5  the same loop; a person walks 1.5-2.4 m ahead of the AGV for the whole loop, one crosses beyond
 //           them (~3.3-4 m ahead), one stands picking then walks away; another AGV is parked, then drives
 //
-// Every scenario has a nominal timeline (people ~1.2 m/s, the AGV ~0.8-0.9 m/s). `--frames N` plays the whole
+// Every scenario has a nominal timeline (people 0.6-1.3 m/s, the AGV ~0.8-0.9 m/s). `--frames N` plays the whole
 // timeline over N frames, so speeds scale with default_frames / N. Actors are generated from (seed,
 // RngStream::kActors), the warehouse from the layout seed, so the layout can be kept while people change.
 // Actor timings are chosen so that people keep >= 1 m (vehicles >= 1.5 m) from the camera and every actor
