@@ -219,6 +219,9 @@ void LocalMapping::process_new_keyframe(KeyFrame& kf) {
       p->add_observation(&kf, static_cast<int>(i));
       p->update_normal_and_depth();
       p->compute_distinctive_descriptor();
+    } else if (p->index_in(&kf) != static_cast<int>(i)) {
+      // The frame matched this point at two keypoints: the keyframe keeps the one the point records.
+      kf.erase_map_point_match(i);
     } else if (p->first_keyframe_id == kf.id) {
       // Created by tracking for this keyframe (close stereo points): watch it in the culling test.
       recent_points_.push_back(p);

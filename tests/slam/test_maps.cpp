@@ -207,6 +207,7 @@ TEST(SavedMap, RoundTripKeepsEveryKeyframeAndMapPointAndLocalisesInTheSameFrame)
   const MapSnapshot saved = snapshot(a.map());
   ASSERT_GE(saved.keyframes.size(), 10u);
   ASSERT_GE(saved.points.size(), 1000u);
+  EXPECT_EQ(saved.one_sided_links, 0) << "keyframe and map point links disagree";
   std::printf("KITTI 06 0-50 map: %zu keyframes, %zu map points, %zu bytes (save: wait %.1f ms, encode %.1f ms, "
               "write+fsync+rename %.1f ms), %d one-sided links left out\n",
               saved.keyframes.size(), saved.points.size(), ss.bytes, ss.wait_ms, ss.encode_ms, ss.write_ms,
