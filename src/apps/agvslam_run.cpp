@@ -48,6 +48,7 @@
 
 #include <algorithm>
 #include <chrono>
+#include <filesystem>
 #include <fstream>
 #include <cmath>
 #include <condition_variable>
@@ -308,6 +309,15 @@ int run(const Options& o) {
   if (!o.map_dataset.empty() && o.load_map.empty()) throw InputError("--map-dataset", o.map_dataset, "expected only with --load-map");
   std::optional<std::pair<std::size_t, std::size_t>> blank;
   if (!o.blank.empty()) blank = parse_blank(o.blank);
+  if (!o.save_map.empty()) {
+    // Checked now rather than after the whole run.
+    std::filesystem::path folder = std::filesystem::path(o.save_map).parent_path();
+    if (folder.empty()) folder = ".";
+    std::error_code ec;
+    if (!std::filesystem::is_directory(folder, ec)) {
+      throw InputError("--save-map", o.save_map, "expected a file in an existing folder (" + folder.string() + " is not one)");
+    }
+  }
 
   const auto dataset = agvslam::io::open_dataset(o.dataset, o.calib);
   std::size_t first = 0, last = 0;
