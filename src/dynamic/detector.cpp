@@ -659,13 +659,20 @@ void DynamicDetector::outline_region(const StereoFrame& frame, DetectorResult& r
   // A region stacked on an earlier one of this frame at agreeing depth is a part of that object.
   if (config_.detector.merge_stacked_regions && st.median_disparity_px > 0) {
     const RoiGroupingConfig& gc = config_.grouping;
+    const double max_height_m = config_.outline.max_height_m > 0 ? config_.outline.max_height_m : 3.0;
     for (KeptRegion& k : kept_regions_) {
       const double d = std::max(k.median_disparity_px, st.median_disparity_px);
       if (std::abs(k.median_disparity_px - st.median_disparity_px) > gc.t_disp_px + gc.t_disp_rel * d) continue;
+      const double px_per_m = std::min(k.median_disparity_px, st.median_disparity_px) / calibration_.baseline_m;
+      // Columns overlap by half the narrower, or by a quarter when one lies wholly above the other (a near
+      // person's torso and striding legs, split where the thighs have no texture) ...
       const int overlap = std::min(rect.br().x, k.rect.br().x) - std::max(rect.x, k.rect.x);
-      if (2 * overlap < std::min(rect.width, k.rect.width)) continue;
       const int gap = std::max(rect.y, k.rect.y) - std::min(rect.br().y, k.rect.br().y);
-      if (gap > gc.a_s_px + gc.b_s * d) continue;
+      const int narrower = std::min(rect.width, k.rect.width);
+      if (2 * overlap < narrower && !(gap >= 0 && 4 * overlap >= narrower)) continue;
+      // ... the vertical gap is within T_s or 0.8 m, and together they are no taller than an object can be.
+      if (gap > std::max(gc.a_s_px + gc.b_s * d, 0.8 * px_per_m)) continue;
+      if ((k.rect | rect).height > max_height_m * px_per_m) continue;
       result.mask.instances(rect).setTo(static_cast<uint8_t>(std::min(k.instance, 255)),
                                         seg.outline(cv::Rect(rect.tl() - seg.roi.tl(), rect.size())));
       k.rect |= rect;

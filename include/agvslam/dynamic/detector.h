@@ -65,9 +65,10 @@ struct DetectorOptions {
   // x ~ 32-64. With this, such a ROI is matched in images padded on the left (edge replicated): its pixels get a
   // disparity from x = d on, as far as the right image sees them.
   bool pad_left_border = true;
-  // Regions of one frame that are stacked (their columns overlap by half the narrower, the vertical gap is within
-  // T_s = a_s + b_s d of grouping) at agreeing median disparity (grouping t_disp) are one object: the later one
-  // takes the earlier one's instance (torso and legs found from separate groups, a ROI extended to the floor).
+  // Regions of one frame that are stacked (their columns overlap by half the narrower, or by a quarter with one
+  // wholly above the other; the vertical gap within T_s = a_s + b_s d of grouping or 0.8 m; together no taller
+  // than outline.max_height_m) at agreeing median disparity (grouping t_disp) are one object: the later one takes
+  // the earlier one's instance (torso and legs found from separate groups, a ROI extended to the floor).
   bool merge_stacked_regions = true;
   int mask_dilation_px = 0;           // grow the final mask by this many pixels
   // Beyond the paper: objects stand on the floor. A ROI whose lowest point lies above the floor row at the
