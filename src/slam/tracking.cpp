@@ -129,6 +129,7 @@ TrackingState Tracking::track(Frame& frame, TrackTimings& timings, TrackingCount
     if (last_frame_.has_pose() && !was_lost) {
       velocity_ = current_.T_c_w() * last_frame_.T_w_c();
       has_velocity_ = true;
+      velocity_dt_ns_ = current_.t_ns - last_frame_.t_ns;
     } else {
       has_velocity_ = false;
     }
@@ -242,12 +243,22 @@ int Tracking::discard_outliers() {
   return in_map;
 }
 
+SE3d Tracking::predicted_motion() const {
+  const int64_t dt_ns = current_.t_ns - last_frame_.t_ns;
+  if (velocity_dt_ns_ <= 0 || dt_ns <= 0) return velocity_;
+  const double ratio = static_cast<double>(dt_ns) / static_cast<double>(velocity_dt_ns_);
+  if (std::abs(ratio - 1.0) < 0.05) return velocity_;  // the usual case: one camera period each
+  // Constant velocity in time, not per frame: a frame the pipeline dropped (or a camera that skipped one) leaves
+  // twice the motion to the next. At most 5 periods ahead (a longer gap is not constant velocity any more).
+  return se3_exp(std::min(ratio, 5.0) * se3_log(velocity_));
+}
+
 bool Tracking::track_with_motion_model(int& matches) {
   // The last frame's pose relative to its reference keyframe follows local BA's corrections of that keyframe
   // (ORB-SLAM2's UpdateLastFrame).
   const KeyFramePtr& last_ref = last_frame_.reference_keyframe;
   if (last_ref && !last_ref->bad()) last_frame_.set_pose(last_T_c_r_ * last_ref->T_c_w());
-  current_.set_pose(velocity_ * last_frame_.T_c_w());
+  current_.set_pose(predicted_motion() * last_frame_.T_c_w());
   std::fill(current_.map_points.begin(), current_.map_points.end(), nullptr);
   const float radius = static_cast<float>(config_.tracking.motion_model_radius_px);
   matches = matcher_.search_last_frame(current_, last_frame_, radius, true);
@@ -268,7 +279,7 @@ bool Tracking::track_with_motion_model(int& matches) {
   if (in_map < last_tracked / 2) {
     const SE3d T_first = current_.T_c_w();
     const std::vector<MapPointPtr> matches_first = current_.map_points;
-    current_.set_pose(velocity_ * last_frame_.T_c_w());
+    current_.set_pose(predicted_motion() * last_frame_.T_c_w());
     std::fill(current_.map_points.begin(), current_.map_points.end(), nullptr);
     const int wide = matcher_.search_last_frame(current_, last_frame_, 4 * radius, true, 0.8f);
     int in_map_wide = 0;

@@ -124,6 +124,10 @@ class Tracking {
   SE3d last_T_c_r_ = SE3d::Identity();
   SE3d velocity_ = SE3d::Identity();  // T_c_l: last camera -> current camera
   bool has_velocity_ = false;
+  int64_t velocity_dt_ns_ = 0;        // the time between the two frames velocity_ was measured on (0: unknown)
+  // velocity_ scaled to the time since the last frame (a dropped frame doubles the motion to predict); velocity_
+  // itself when either time is unknown.
+  SE3d predicted_motion() const;
   int lost_frames_ = 0;
   int inliers_ = 0;
   bool localisation_only_ = false;
