@@ -96,7 +96,7 @@ struct DetectorOptions {
   // only two moving corners this frame is still the person of the last frame). (Seeding the outline with the
   // object's other tracks as well was tried: more false regions on scene2/3/5 than it gained.)
   bool track_objects = true;
-  int continue_min_points = 2;
+  int continue_min_points = 3;
 
   void validate(const std::string& source) const;
   std::string describe() const;
