@@ -31,6 +31,15 @@ done
 [ $# -ge 1 ] || { echo "vm-run.sh: expected -- COMMAND [ARG...]" >&2; exit 2; }
 [ -n "$build" ] || { echo "vm-run.sh: expected --build DIR (or AGVSLAM_BUILD)" >&2; exit 2; }
 vm_paths "$build"
+# The VM mounts tmpfs on /tmp, /run and /var/tmp over the host root: a build or source tree there would be hidden.
+for p in "$VM_BUILD" "$source_dir"; do
+  case "$p/" in
+    /tmp/*|/run/*|/var/tmp/*)
+      echo "vm-run.sh: $p is under /tmp, /run or /var/tmp, which the VM mounts as empty tmpfs; check out and build" \
+           "elsewhere (e.g. under \$HOME or /work) to run the VM tests" >&2
+      exit 2 ;;
+  esac
+done
 command -v qemu-system-x86_64 >/dev/null || vm_skip "qemu-system-x86_64 not found (package qemu-system-x86)"
 [ -f "$VM_IMAGE_DIR/vmlinuz" ] && [ -f "$VM_IMAGE_DIR/initramfs.cpio.gz" ] && [ -f "$VM_CACHE/kver" ] ||
   vm_skip "VM not prepared under $VM_CACHE (tests/vm/vm-prepare.sh $VM_BUILD; needs the Debian package downloads)"
