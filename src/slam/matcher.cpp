@@ -3,6 +3,8 @@
 #include <algorithm>
 #include <cmath>
 #include <unordered_set>
+#include <utility>
+#include <vector>
 
 #include "agvslam/slam/map.h"
 
@@ -15,6 +17,30 @@ float angle_diff_deg(float a, float b) {
   if (d < 0) d += 360.f;
   return d;
 }
+
+// The candidate keypoint of `image` (a Frame or KeyFrame) whose descriptor is nearest to `descriptor`, among those
+// at pyramid level `level` - 1 or `level` (any level for level < 0) that `skip` does not reject:
+// {distance, index}, {256, -1} when there is none.
+template <class Image, class Skip>
+std::pair<int, int> nearest_candidate(const uint8_t* descriptor, const Image& image, const std::vector<int>& candidates,
+                                      int level, const Skip& skip) {
+  int best = 256, best_j = -1;
+  for (const int j : candidates) {
+    const std::size_t sj = static_cast<std::size_t>(j);
+    if (skip(sj)) continue;
+    if (level >= 0) {
+      const int kp_level = image.keypoints[sj].octave;
+      if (kp_level < level - 1 || kp_level > level) continue;
+    }
+    const int d = hamming_distance(descriptor, image.descriptor(sj));
+    if (d < best) {
+      best = d;
+      best_j = j;
+    }
+  }
+  return {best, best_j};
+}
+constexpr auto kSkipNone = [](std::size_t) { return false; };
 
 }  // namespace
 
@@ -502,15 +528,8 @@ int Matcher::search_keyframe_projection(Frame& frame, const KeyFrame& kf, float 
     const float radius = radius_px * g.scale_factors[static_cast<std::size_t>(level)];
     frame.grid.features_in_area(frame.keypoints, g, static_cast<float>(u), static_cast<float>(v), radius,
                                 std::max(0, level - 1), level + 1, candidates_);
-    int best = 256, best_j = -1;
-    for (const int j : candidates_) {
-      if (frame.map_points[static_cast<std::size_t>(j)]) continue;
-      const int d = hamming_distance(point->descriptor.data(), frame.descriptor(static_cast<std::size_t>(j)));
-      if (d < best) {
-        best = d;
-        best_j = j;
-      }
-    }
+    const auto [best, best_j] = nearest_candidate(point->descriptor.data(), frame, candidates_, -1,
+                                                  [&](std::size_t j) { return frame.map_points[j] != nullptr; });
     if (best_j < 0 || best > max_distance) continue;
     frame.map_points[static_cast<std::size_t>(best_j)] = point;
     found.insert(point.get());
@@ -563,18 +582,8 @@ int Matcher::search_loop_projection(const KeyFrame& kf, const SE3d& T_c_w, const
     if (!project_checked(g, T_c_w, center, *point, u, v, level)) continue;
     const float radius = radius_px * g.scale_factors[static_cast<std::size_t>(level)];
     kf.grid.features_in_area(kf.keypoints, g, static_cast<float>(u), static_cast<float>(v), radius, 0, -1, candidates_);
-    int best = 256, best_j = -1;
-    for (const int j : candidates_) {
-      const std::size_t sj = static_cast<std::size_t>(j);
-      if (matched[sj]) continue;
-      const int kp_level = kf.keypoints[sj].octave;
-      if (kp_level < level - 1 || kp_level > level) continue;
-      const int d = hamming_distance(point->descriptor.data(), kf.descriptor(sj));
-      if (d < best) {
-        best = d;
-        best_j = j;
-      }
-    }
+    const auto [best, best_j] = nearest_candidate(point->descriptor.data(), kf, candidates_, level,
+                                                  [&](std::size_t j) { return matched[j] != nullptr; });
     if (best_j < 0 || best > kMatchThresholdLow) continue;
     matched[static_cast<std::size_t>(best_j)] = point;
     already.insert(point.get());
@@ -613,17 +622,7 @@ int Matcher::search_by_se3(const KeyFrame& kf1, const KeyFrame& kf2, const SE3d&
       const int level = point->predict_scale_level(dist, g);
       const float radius = radius_px * g.scale_factors[static_cast<std::size_t>(level)];
       to.grid.features_in_area(to.keypoints, g, static_cast<float>(u), static_cast<float>(v), radius, 0, -1, candidates_);
-      int best = 256, best_j = -1;
-      for (const int j : candidates_) {
-        const std::size_t sj = static_cast<std::size_t>(j);
-        const int kp_level = to.keypoints[sj].octave;
-        if (kp_level < level - 1 || kp_level > level) continue;
-        const int d = hamming_distance(point->descriptor.data(), to.descriptor(sj));
-        if (d < best) {
-          best = d;
-          best_j = j;
-        }
-      }
+      const auto [best, best_j] = nearest_candidate(point->descriptor.data(), to, candidates_, level, kSkipNone);
       if (best_j >= 0 && best <= kMatchThresholdHigh) match[i] = best_j;
     }
   };
@@ -656,17 +655,7 @@ int Matcher::fuse_with_pose(KeyFrame& kf, const SE3d& T_c_w, const std::vector<M
     if (!project_checked(g, T_c_w, center, *point, u, v, level)) continue;
     const float radius = radius_px * g.scale_factors[static_cast<std::size_t>(level)];
     kf.grid.features_in_area(kf.keypoints, g, static_cast<float>(u), static_cast<float>(v), radius, 0, -1, candidates_);
-    int best = 256, best_j = -1;
-    for (const int j : candidates_) {
-      const std::size_t sj = static_cast<std::size_t>(j);
-      const int kp_level = kf.keypoints[sj].octave;
-      if (kp_level < level - 1 || kp_level > level) continue;
-      const int d = hamming_distance(point->descriptor.data(), kf.descriptor(sj));
-      if (d < best) {
-        best = d;
-        best_j = j;
-      }
-    }
+    const auto [best, best_j] = nearest_candidate(point->descriptor.data(), kf, candidates_, level, kSkipNone);
     if (best_j < 0 || best > kMatchThresholdLow) continue;
     const std::size_t sb = static_cast<std::size_t>(best_j);
     const MapPointPtr& existing = kf.map_point(sb);
