@@ -31,6 +31,7 @@
 #include "agvslam/drivers/dds/publisher.h"
 #include "agvslam/drivers/dds/subscriber.h"
 #include "agvslam/drivers/pose_sample.h"
+#include "agvslam/drivers/pose_sample_json.h"
 #include "agvslam/io/trajectory_io.h"
 
 namespace {
@@ -58,30 +59,6 @@ struct Options {
   double can_rate_hz = 0.0;
   bool json = false;
 };
-
-nlohmann::json sample_json(const drv::PoseSample& s) {
-  const Eigen::Vector3d& t = s.T_map_base.translation();
-  const Eigen::Matrix3d& R = s.T_map_base.linear();
-  nlohmann::json r = nlohmann::json::array();
-  for (int i = 0; i < 3; ++i) {
-    for (int j = 0; j < 3; ++j) r.push_back(R(i, j));
-  }
-  nlohmann::json cov = nlohmann::json::array();
-  for (int i = 0; i < 36; ++i) cov.push_back(s.cov_pose(i / 6, i % 6));
-  return {{"t_ns", s.t_ns},
-          {"t", {t.x(), t.y(), t.z()}},
-          {"R", r},
-          {"cov_pose", cov},
-          {"v_base_mps", {s.v_base_mps.x(), s.v_base_mps.y(), s.v_base_mps.z()}},
-          {"w_base_radps", {s.w_base_radps.x(), s.w_base_radps.y(), s.w_base_radps.z()}},
-          {"tracking_state", static_cast<int>(s.tracking_state)},
-          {"frame_index", s.frame_index},
-          {"frames_processed", s.frames_processed},
-          {"frames_dropped", s.frames_dropped},
-          {"fps", s.fps},
-          {"dynamic_pixel_fraction", s.dynamic_pixel_fraction},
-          {"latency_ns", s.latency_ns}};
-}
 
 uint32_t parse_id(const std::string& text) {
   try {
@@ -157,7 +134,7 @@ int run(const Options& o) {
     }
     if (o.stamp == "now") s.t_ns = dds::realtime_now_ns();
     nlohmann::json line;
-    if (o.json) line = {{"i", i}, {"t_ns", s.t_ns}, {"sample", sample_json(s)}};
+    if (o.json) line = {{"i", i}, {"t_ns", s.t_ns}, {"sample", drv::pose_sample_to_json(s)}};
     if (dds_pub) {
       if (o.sync) {
         dds_pub->write_now(s);

@@ -8,34 +8,11 @@
 
 #include "agvslam/core/error.h"
 #include "agvslam/drivers/dds/subscriber.h"
+#include "agvslam/drivers/pose_sample_json.h"
 
 namespace agvslam::daemon {
 
 namespace dds = drivers::dds;
-
-nlohmann::json sample_to_json(const drivers::PoseSample& s) {
-  const Eigen::Vector3d& t = s.T_map_base.translation();
-  const Eigen::Matrix3d& R = s.T_map_base.linear();
-  nlohmann::json r = nlohmann::json::array();
-  for (int i = 0; i < 3; ++i) {
-    for (int j = 0; j < 3; ++j) r.push_back(R(i, j));
-  }
-  nlohmann::json cov = nlohmann::json::array();
-  for (int i = 0; i < 36; ++i) cov.push_back(s.cov_pose(i / 6, i % 6));
-  return {{"t_ns", s.t_ns},
-          {"t", {t.x(), t.y(), t.z()}},
-          {"R", r},
-          {"cov_pose", cov},
-          {"v_base_mps", {s.v_base_mps.x(), s.v_base_mps.y(), s.v_base_mps.z()}},
-          {"w_base_radps", {s.w_base_radps.x(), s.w_base_radps.y(), s.w_base_radps.z()}},
-          {"tracking_state", static_cast<int>(s.tracking_state)},
-          {"frame_index", s.frame_index},
-          {"frames_processed", s.frames_processed},
-          {"frames_dropped", s.frames_dropped},
-          {"fps", s.fps},
-          {"dynamic_pixel_fraction", s.dynamic_pixel_fraction},
-          {"latency_ns", s.latency_ns}};
-}
 
 TextFile::TextFile(const std::string& path, const std::string& source, const std::string& field) : path_(path) {
   file_ = std::fopen(path.c_str(), "w");
@@ -132,7 +109,7 @@ void PoseOutputs::publish(OutputItem& item) {
                         {"heartbeat", item.heartbeat},
                         {"source_index", item.source_index},
                         {"source_t_ns", item.source_t_ns},
-                        {"sample", sample_to_json(s)},
+                        {"sample", drivers::pose_sample_to_json(s)},
                         {"times_ms", {{"capture_queue", item.times.capture_queue_ms}, {"detector", item.times.detector_ms},
                                       {"detector_cpu", item.times.detector_cpu_ms},
                                       {"detected_queue", item.times.detected_queue_ms}, {"tracking", item.times.tracking_ms},

@@ -13,6 +13,7 @@
 #include "agvslam/core/error.h"
 #include "agvslam/daemon/pose_builder.h"
 #include "agvslam/drivers/dds/subscriber.h"
+#include "agvslam/drivers/pose_sample_json.h"
 #include "agvslam/io/trajectory_io.h"
 #include "daemon_test_util.h"
 
@@ -90,7 +91,7 @@ TEST(PoseOutputs, PoseOnlyWhileTrackingStatusAlwaysFilesAsPublished) {
   EXPECT_EQ(lines[5].at("heartbeat"), true);
   EXPECT_EQ(lines[2].at("source_index"), 2);
   EXPECT_EQ(lines[2].at("can").at("sent"), false);
-  EXPECT_EQ(lines[1].at("sample"), sample_to_json([&] {
+  EXPECT_EQ(lines[1].at("sample"), drivers::pose_sample_to_json([&] {
               auto s = drivers::synthetic_pose_sample(1, t0 + 50000000LL);
               s.tracking_state = drivers::TrackingState::kTracking;
               s.latency_ns = lines[1].at("sample").at("latency_ns").get<int64_t>();

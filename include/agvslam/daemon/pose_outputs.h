@@ -22,9 +22,6 @@
 
 namespace agvslam::daemon {
 
-// The sample's SI values as JSON, the field names agvslam-pose-replay --json uses ("t", "R", "cov_pose", ...).
-nlohmann::json sample_to_json(const drivers::PoseSample& s);
-
 // Where one frame's time went (ms): waiting in the capture queue, in the detector (wall and the thread's CPU time),
 // waiting for tracking, in tracking, waiting for the outputs thread. -1: not applicable.
 struct StageTimes {
