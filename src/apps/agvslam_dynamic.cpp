@@ -65,34 +65,6 @@ std::string frame_name(std::size_t i) {
   return buf;
 }
 
-// "A:B" (inclusive, either side may be empty) -> [first, last] clipped to the sequence.
-void parse_frames(const std::string& text, std::size_t size, std::size_t& first, std::size_t& last) {
-  first = 0;
-  last = size == 0 ? 0 : size - 1;
-  if (text.empty()) return;
-  const auto colon = text.find(':');
-  if (colon == std::string::npos) throw InputError("--frames", text, "expected A:B (inclusive frame range, e.g. 0:199)");
-  auto parse = [&](const std::string& s, std::size_t& value) {
-    if (s.empty()) return;
-    std::size_t used = 0;
-    long long v = -1;
-    try {
-      v = std::stoll(s, &used);
-    } catch (const std::exception&) {
-      used = 0;
-    }
-    if (used != s.size() || v < 0) throw InputError("--frames", text, "expected non-negative integers in A:B");
-    value = static_cast<std::size_t>(v);
-  };
-  parse(text.substr(0, colon), first);
-  parse(text.substr(colon + 1), last);
-  if (size == 0 || first >= size) {
-    throw InputError("--frames", text, "expected a range inside the sequence's " + std::to_string(size) + " frames");
-  }
-  last = std::min(last, size - 1);
-  if (last < first) throw InputError("--frames", text, "expected A <= B");
-}
-
 void write_png(const std::string& path, const cv::Mat& image) {
   bool ok = false;
   try {
@@ -353,7 +325,7 @@ std::string fmt(double v, const char* format = "%.4f") {
 int run(const Options& o) {
   const auto dataset = agvslam::io::open_dataset(o.dataset, o.calib);
   std::size_t first = 0, last = 0;
-  parse_frames(o.frames, dataset->size(), first, last);
+  agvslam::io::parse_frame_range(o.frames, dataset->size(), "--frames", o.frames, first, last);
 
   const dyn::DynamicDetectorConfig dynamic_config =
       o.params_dynamic.empty() ? dyn::DynamicDetectorConfig{} : dyn::load_dynamic_config(o.params_dynamic);

@@ -154,35 +154,6 @@ agvslam::SE3d simulator_world_offset(const std::string& map_dir, const std::stri
   return T_map_c1.inverse() * T_map_c2;
 }
 
-// "A:B" (inclusive, either side may be empty) -> [first, last] clipped to the sequence.
-void parse_frames(const std::string& text, std::size_t size, std::size_t& first, std::size_t& last) {
-  first = 0;
-  last = size == 0 ? 0 : size - 1;
-  if (size == 0) throw InputError("--dataset", "", "expected a sequence with at least one frame");
-  if (text.empty()) return;
-  const auto colon = text.find(':');
-  if (colon == std::string::npos) throw InputError("--frames", text, "expected A:B (inclusive frame range, e.g. 0:199)");
-  auto parse = [&](const std::string& s, std::size_t& value) {
-    if (s.empty()) return;
-    std::size_t used = 0;
-    long long v = -1;
-    try {
-      v = std::stoll(s, &used);
-    } catch (const std::exception&) {
-      used = 0;
-    }
-    if (used != s.size() || v < 0) throw InputError("--frames", text, "expected non-negative integers in A:B");
-    value = static_cast<std::size_t>(v);
-  };
-  parse(text.substr(0, colon), first);
-  parse(text.substr(colon + 1), last);
-  if (first >= size) {
-    throw InputError("--frames", text, "expected a range inside the sequence's " + std::to_string(size) + " frames");
-  }
-  last = std::min(last, size - 1);
-  if (last < first) throw InputError("--frames", text, "expected A <= B");
-}
-
 struct Series {
   std::vector<double> v;
   void add(double x) { v.push_back(x); }
@@ -321,7 +292,7 @@ int run(const Options& o) {
 
   const auto dataset = agvslam::io::open_dataset(o.dataset, o.calib);
   std::size_t first = 0, last = 0;
-  parse_frames(o.frames, dataset->size(), first, last);
+  agvslam::io::parse_frame_range(o.frames, dataset->size(), "--frames", o.frames, first, last);
   if (mode == DynamicMode::kGroundTruth && dataset->ground_truth_mask(first).empty()) {
     throw InputError("--dynamic", "gt", "expected a dataset with ground-truth masks (mask_0/, as agvslam-sim writes); " +
                                             dataset->root() + " has none");

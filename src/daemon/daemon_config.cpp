@@ -468,35 +468,4 @@ DaemonConfig load_daemon_config(const std::string& path) {
   return c;
 }
 
-void parse_frame_range(const std::string& text, std::size_t size, const std::string& source, const std::string& field,
-                       std::size_t& first, std::size_t& last) {
-  if (size == 0) throw InputError(source, field, "expected a sequence with at least one frame");
-  first = 0;
-  last = size - 1;
-  if (text.empty()) return;
-  const auto colon = text.find(':');
-  if (colon == std::string::npos) {
-    throw InputError(source, field, "expected A:B (inclusive frame range, e.g. 0:199), got '" + text + "'");
-  }
-  auto parse = [&](const std::string& s, std::size_t& value) {
-    if (s.empty()) return;
-    std::size_t used = 0;
-    long long v = -1;
-    try {
-      v = std::stoll(s, &used);
-    } catch (const std::exception&) {
-      used = 0;
-    }
-    if (used != s.size() || v < 0) throw InputError(source, field, "expected non-negative integers in A:B, got '" + text + "'");
-    value = static_cast<std::size_t>(v);
-  };
-  parse(text.substr(0, colon), first);
-  parse(text.substr(colon + 1), last);
-  if (first >= size) {
-    throw InputError(source, field, "expected a range inside the sequence's " + std::to_string(size) + " frames, got '" + text + "'");
-  }
-  last = std::min(last, size - 1);
-  if (last < first) throw InputError(source, field, "expected A <= B, got '" + text + "'");
-}
-
 }  // namespace agvslam::daemon

@@ -36,7 +36,7 @@ SourceSetup prepare_source(const DaemonConfig& config) {
                                          : "expected a dataset folder (KITTI layout, agvslam-sim output or EuRoC ASL): ") +
                            e.what());
     }
-    parse_frame_range(config.source.frames, s.dataset->size(), config.path, "source.frames", s.first, s.last);
+    io::parse_frame_range(config.source.frames, s.dataset->size(), config.path, "source.frames", s.first, s.last);
     s.calibration = s.dataset->calibration();
     s.rate_hz = s.dataset->rate_hz();
     s.summary = s.dataset->kind() + " dataset " + s.dataset->root() + ": " + std::to_string(s.dataset->size()) +

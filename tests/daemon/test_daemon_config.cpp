@@ -1,6 +1,7 @@
 // agvslamd's configuration: the shipped files load and echo every section; relative paths follow the file; each
 // kind of bad value is an InputError naming the file and the field; the camera-to-base_link extrinsic.
 #include "agvslam/daemon/daemon_config.h"
+#include "agvslam/io/dataset.h"
 
 #include <gtest/gtest.h>
 
@@ -159,16 +160,16 @@ TEST(BaseLinkConfig, ForwardLookingCameraMapsTheOpticalAxesToReps103) {
 
 TEST(FrameRange, ParsesInclusiveRangesAndRejectsBadOnes) {
   std::size_t a = 0, b = 0;
-  parse_frame_range("", 10, "f", "source.frames", a, b);
+  io::parse_frame_range("", 10, "f", "source.frames", a, b);
   EXPECT_EQ(a, 0U);
   EXPECT_EQ(b, 9U);
-  parse_frame_range("3:", 10, "f", "source.frames", a, b);
+  io::parse_frame_range("3:", 10, "f", "source.frames", a, b);
   EXPECT_EQ(a, 3U);
   EXPECT_EQ(b, 9U);
-  parse_frame_range("2:20", 10, "f", "source.frames", a, b);
+  io::parse_frame_range("2:20", 10, "f", "source.frames", a, b);
   EXPECT_EQ(b, 9U);
   for (const char* bad : {"5", "a:b", "7:3", "10:", "-1:2"}) {
-    EXPECT_THROW(parse_frame_range(bad, 10, "f", "source.frames", a, b), InputError) << bad;
+    EXPECT_THROW(io::parse_frame_range(bad, 10, "f", "source.frames", a, b), InputError) << bad;
   }
 }
 

@@ -196,9 +196,4 @@ DaemonConfig load_daemon_config(const std::string& path);
 drivers::dds::DdsConfig load_dds_config(const std::string& path, const std::string& section = "dds");
 drivers::can::CanConfig load_can_config(const std::string& path, const std::string& section = "can");
 
-// "A:B" (inclusive, either side may be empty) -> [first, last] clipped to `size` frames; throws
-// InputError(source, field, ...) for a malformed or empty range.
-void parse_frame_range(const std::string& text, std::size_t size, const std::string& source, const std::string& field,
-                       std::size_t& first, std::size_t& last);
-
 }  // namespace agvslam::daemon

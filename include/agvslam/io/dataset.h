@@ -113,4 +113,10 @@ class EurocDataset final : public StereoDataset {
 // folder and what was expected when neither is found.
 std::unique_ptr<StereoDataset> open_dataset(const std::string& root, const std::string& calib_override = "");
 
+// "A:B" (inclusive, either side may be empty) -> [first, last] clipped to `size` frames; throws
+// InputError(source, field, ...) for a malformed or empty range (agvslam-run / agvslam-dynamic --frames,
+// agvslamd source.frames).
+void parse_frame_range(const std::string& text, std::size_t size, const std::string& source, const std::string& field,
+                       std::size_t& first, std::size_t& last);
+
 }  // namespace agvslam::io
