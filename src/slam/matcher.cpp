@@ -55,6 +55,12 @@ void Matcher::add_to_histogram(float diff_deg, int index) {
   histogram_[bin].push_back(index);
 }
 
+int Matcher::drop_rotation_outliers(std::vector<MapPointPtr>& matches) {
+  rotation_outliers(rejected_);
+  for (const int j : rejected_) matches[static_cast<std::size_t>(j)].reset();
+  return static_cast<int>(rejected_.size());
+}
+
 void Matcher::rotation_outliers(std::vector<int>& out) const {
   out.clear();
   int m1 = 0, m2 = 0, m3 = 0;
@@ -147,11 +153,7 @@ int Matcher::search_last_frame(Frame& current, const Frame& last, float radius_p
     }
   }
   if (check_orientation) {
-    rotation_outliers(rejected_);
-    for (const int j : rejected_) {
-      current.map_points[static_cast<std::size_t>(j)].reset();
-      --matches;
-    }
+    matches -= drop_rotation_outliers(current.map_points);
   }
   return matches;
 }
@@ -229,11 +231,7 @@ int Matcher::search_keyframe_brute_force(const KeyFrame& kf, const Frame& frame,
     add_to_histogram(angle_diff_deg(kf.keypoints[i].angle, frame.keypoints[j].angle), static_cast<int>(j));
     ++n;
   }
-  rotation_outliers(rejected_);
-  for (const int j : rejected_) {
-    matches[static_cast<std::size_t>(j)].reset();
-    --n;
-  }
+  n -= drop_rotation_outliers(matches);
   return n;
 }
 
@@ -450,11 +448,7 @@ int Matcher::search_by_bow(const KeyFrame& kf, const Frame& frame, float ratio, 
           ++n;
         }
       });
-  rotation_outliers(rejected_);
-  for (const int j : rejected_) {
-    matches[static_cast<std::size_t>(j)].reset();
-    --n;
-  }
+  n -= drop_rotation_outliers(matches);
   return n;
 }
 
@@ -495,11 +489,7 @@ int Matcher::search_by_bow(const KeyFrame& kf1, const KeyFrame& kf2, float ratio
           ++n;
         }
       });
-  rotation_outliers(rejected_);
-  for (const int i1 : rejected_) {
-    matches12[static_cast<std::size_t>(i1)].reset();
-    --n;
-  }
+  n -= drop_rotation_outliers(matches12);
   return n;
 }
 
@@ -536,11 +526,7 @@ int Matcher::search_keyframe_projection(Frame& frame, const KeyFrame& kf, float 
     add_to_histogram(angle_diff_deg(kf.keypoints[i].angle, frame.keypoints[static_cast<std::size_t>(best_j)].angle), best_j);
     ++n;
   }
-  rotation_outliers(rejected_);
-  for (const int j : rejected_) {
-    frame.map_points[static_cast<std::size_t>(j)].reset();
-    --n;
-  }
+  n -= drop_rotation_outliers(frame.map_points);
   return n;
 }
 

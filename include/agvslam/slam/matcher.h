@@ -101,6 +101,8 @@ class Matcher {
   void add_to_histogram(float angle_diff_deg, int index);
   // Indices of matches outside the three most populated bins.
   void rotation_outliers(std::vector<int>& out) const;
+  // Clears the matches at the rotation outliers; returns how many it cleared.
+  int drop_rotation_outliers(std::vector<MapPointPtr>& matches);
 
   static constexpr int kHistogramBins = 30;
   std::vector<int> histogram_[kHistogramBins];
