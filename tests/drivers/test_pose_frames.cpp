@@ -8,6 +8,7 @@
 #include "agvslam/drivers/can/candump_log.h"
 #include "agvslam/drivers/can/dbc.h"
 #include "agvslam/drivers/can/pose_frames.h"
+#include "agvslam/drivers/pose_sample_json.h"
 #include "can_log_checker.h"
 
 namespace {
@@ -28,25 +29,8 @@ uint8_t reference_crc(const std::vector<uint8_t>& bytes) {
 }
 
 nlohmann::json sample_line(std::size_t i, const PoseSample& s, uint8_t counter) {
-  const Eigen::Matrix3d& R = s.T_map_base.linear();
-  nlohmann::json r = nlohmann::json::array(), cov = nlohmann::json::array();
-  for (int k = 0; k < 9; ++k) r.push_back(R(k / 3, k % 3));
-  for (int k = 0; k < 36; ++k) cov.push_back(s.cov_pose(k / 6, k % 6));
-  const Eigen::Vector3d& t = s.T_map_base.translation();
   return {{"i", i},
-          {"sample",
-           {{"t_ns", s.t_ns},
-            {"t", {t.x(), t.y(), t.z()}},
-            {"R", r},
-            {"cov_pose", cov},
-            {"v_base_mps", {s.v_base_mps.x(), s.v_base_mps.y(), s.v_base_mps.z()}},
-            {"w_base_radps", {s.w_base_radps.x(), s.w_base_radps.y(), s.w_base_radps.z()}},
-            {"tracking_state", static_cast<int>(s.tracking_state)},
-            {"frame_index", s.frame_index},
-            {"frames_dropped", s.frames_dropped},
-            {"fps", s.fps},
-            {"dynamic_pixel_fraction", s.dynamic_pixel_fraction},
-            {"latency_ns", s.latency_ns}}},
+          {"sample", pose_sample_to_json(s)},
           {"can", {{"due", true}, {"sent", true}, {"counter", counter}, {"frames_sent", 1}}}};
 }
 
