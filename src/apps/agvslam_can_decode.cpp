@@ -21,6 +21,7 @@
 #include "agvslam/core/error.h"
 #include "agvslam/drivers/can/candump_log.h"
 #include "agvslam/drivers/can/dbc.h"
+#include "tool_main.h"
 
 namespace {
 
@@ -147,18 +148,5 @@ int main(int argc, char** argv) {
   app.add_option("--base-id", o.base_id, "the daemon's can.base_id")->capture_default_str();
   app.add_flag("--json", o.json, "one JSON object per frame and a summary");
   app.add_flag("--all", o.all, "also print frames the DBC does not describe");
-  try {
-    app.parse(argc, argv);
-  } catch (const CLI::ParseError& e) {
-    return app.exit(e) == 0 ? 0 : 2;
-  }
-  try {
-    return run(o);
-  } catch (const agvslam::InputError& e) {
-    spdlog::error("{}", e.what());
-    return 2;
-  } catch (const std::exception& e) {
-    spdlog::error("{}", e.what());
-    return 1;
-  }
+  return agvslam::apps::parse_and_run(app, argc, argv, [&] { return run(o); });
 }

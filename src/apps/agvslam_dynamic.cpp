@@ -42,6 +42,7 @@
 #include "agvslam/io/trajectory_io.h"
 #include "agvslam/stereo/sgbm.h"
 #include "agvslam/stereo/stereo_config.h"
+#include "tool_main.h"
 
 namespace {
 
@@ -539,18 +540,5 @@ int main(int argc, char** argv) {
   app.add_option("--min-object-pixels", o.min_object_pixels,
                  "ground-truth objects with fewer visible moving pixels are don't-care")->check(CLI::NonNegativeNumber);
   app.add_option("--min-iou", o.min_iou, "IoU for a detection to match an object (paper: 0.5)")->check(CLI::Range(0.01, 1.0));
-  try {
-    app.parse(argc, argv);
-  } catch (const CLI::ParseError& e) {
-    return app.exit(e) == 0 ? 0 : 2;
-  }
-  try {
-    return run(o);
-  } catch (const InputError& e) {
-    spdlog::error("{}", e.what());
-    return 2;
-  } catch (const std::exception& e) {
-    spdlog::error("agvslam-dynamic failed: {}", e.what());
-    return 1;
-  }
+  return agvslam::apps::parse_and_run(app, argc, argv, [&] { return run(o); });
 }

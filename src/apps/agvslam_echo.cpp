@@ -27,6 +27,7 @@
 
 #include "agvslam/core/error.h"
 #include "agvslam/drivers/dds/subscriber.h"
+#include "tool_main.h"
 
 namespace {
 
@@ -163,18 +164,5 @@ int main(int argc, char** argv) {
   app.add_option("--timeout", o.timeout_s, "give up after S seconds (0: never)")->capture_default_str();
   app.add_flag("--json", o.json, "one JSON object per sample, then a summary line");
   app.add_option("--summary", o.summary_path, "also write the summary (counts, latency) to this JSON file");
-  try {
-    app.parse(argc, argv);
-  } catch (const CLI::ParseError& e) {
-    return app.exit(e) == 0 ? 0 : 2;
-  }
-  try {
-    return run(o);
-  } catch (const agvslam::InputError& e) {
-    spdlog::error("{}", e.what());
-    return 2;
-  } catch (const std::exception& e) {
-    spdlog::error("{}", e.what());
-    return 1;
-  }
+  return agvslam::apps::parse_and_run(app, argc, argv, [&] { return run(o); });
 }

@@ -33,6 +33,7 @@
 #include "agvslam/drivers/pose_sample.h"
 #include "agvslam/drivers/pose_sample_json.h"
 #include "agvslam/io/trajectory_io.h"
+#include "tool_main.h"
 
 namespace {
 
@@ -225,18 +226,5 @@ int main(int argc, char** argv) {
   app.add_flag("--can-fd", o.can_fd, "one 48-byte CAN FD frame per pose instead of the classic frames");
   app.add_option("--can-rate", o.can_rate_hz, "highest CAN pose rate (0: every sample)")->capture_default_str();
   app.add_flag("--json", o.json, "print every sample and what each output did, one JSON object per line");
-  try {
-    app.parse(argc, argv);
-  } catch (const CLI::ParseError& e) {
-    return app.exit(e) == 0 ? 0 : 2;
-  }
-  try {
-    return run(o);
-  } catch (const agvslam::InputError& e) {
-    spdlog::error("{}", e.what());
-    return 2;
-  } catch (const std::exception& e) {
-    spdlog::error("{}", e.what());
-    return 1;
-  }
+  return agvslam::apps::parse_and_run(app, argc, argv, [&] { return run(o); });
 }

@@ -74,6 +74,7 @@
 #include "agvslam/sim/simulator.h"
 #include "agvslam/slam/system.h"
 #include "agvslam/stereo/stereo_config.h"
+#include "tool_main.h"
 
 namespace {
 
@@ -710,18 +711,5 @@ int main(int argc, char** argv) {
   app.add_option("--blank", o.blank, "black out frames A:B (inclusive): a covered camera, forced loss");
   app.add_option("--repeat", o.repeat, "play the frame range this many times in a row (laps of a loop)");
   app.add_option("--map-dataset", o.map_dataset, "with --load-map on simulator folders: the folder the map was made from (MAP_FRAME_ATE_M)");
-  try {
-    app.parse(argc, argv);
-  } catch (const CLI::ParseError& e) {
-    return app.exit(e) == 0 ? 0 : 2;
-  }
-  try {
-    return run(o);
-  } catch (const InputError& e) {
-    spdlog::error("{}", e.what());
-    return 2;
-  } catch (const std::exception& e) {
-    spdlog::error("{}", e.what());
-    return 1;
-  }
+  return agvslam::apps::parse_and_run(app, argc, argv, [&] { return run(o); });
 }

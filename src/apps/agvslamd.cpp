@@ -37,6 +37,7 @@
 #include "agvslam/daemon/systemd_notifier.h"
 #include "agvslam/drivers/v4l2/device.h"
 #include "agvslam/io/trajectory_io.h"
+#include "tool_main.h"
 
 namespace {
 
@@ -222,18 +223,5 @@ int main(int argc, char** argv) {
   app.add_option("--config", o.config, "the daemon's YAML file (params/agvslamd.yaml)")->required();
   app.add_flag("--check", o.check, "validate the configuration and the files it names, then exit");
   app.add_option("--json", o.json, "write the run's statistics to this JSON file at exit");
-  try {
-    app.parse(argc, argv);
-  } catch (const CLI::ParseError& e) {
-    return app.exit(e) == 0 ? 0 : 2;
-  }
-  try {
-    return run(o);
-  } catch (const InputError& e) {
-    spdlog::error("{}", e.what());
-    return 2;
-  } catch (const std::exception& e) {
-    spdlog::error("{}", e.what());
-    return 1;
-  }
+  return agvslam::apps::parse_and_run(app, argc, argv, [&] { return run(o); });
 }

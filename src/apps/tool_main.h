@@ -1,0 +1,33 @@
+#pragma once
+// The end of every tool's main(): parse the command line, run, and turn the outcome into the exit status the tools
+// document: 0 done (also --help), 2 a bad option or input (CLI11's parse errors; agvslam::InputError, whose message
+// names the option, file or field and what was expected), 1 any other failure. Errors go to the log.
+
+#include <CLI/CLI.hpp>
+#include <spdlog/spdlog.h>
+
+#include <exception>
+
+#include "agvslam/core/error.h"
+
+namespace agvslam::apps {
+
+template <class Run>
+int parse_and_run(CLI::App& app, int argc, char** argv, Run&& run) {
+  try {
+    app.parse(argc, argv);
+  } catch (const CLI::ParseError& e) {
+    return app.exit(e) == 0 ? 0 : 2;
+  }
+  try {
+    return run();
+  } catch (const InputError& e) {
+    spdlog::error("{}", e.what());
+    return 2;
+  } catch (const std::exception& e) {
+    spdlog::error("{}", e.what());
+    return 1;
+  }
+}
+
+}  // namespace agvslam::apps
