@@ -5,7 +5,10 @@
 #include <cstdlib>
 #include <filesystem>
 #include <random>
+#include <mutex>
 #include <sys/wait.h>
+#include <unistd.h>
+#include <vector>
 
 namespace agvslam::test {
 namespace fs = std::filesystem;
@@ -31,12 +34,55 @@ std::string binary_dir() { return AGVSLAM_BINARY_DIR; }
 
 std::string tool_path(const std::string& name) { return (fs::path(binary_dir()) / "bin" / name).string(); }
 
+namespace {
+
+// The folders make_temp_dir made in this process, removed when it exits unless a test failed (then they stay for
+// inspection) or AGVSLAM_KEEP_TEST_DIRS is set. Only the process that made them removes them: a forked child that
+// exits normally leaves them alone.
+struct TempDirRegistry {
+  std::mutex mutex;
+  std::vector<fs::path> dirs;
+  pid_t owner = 0;
+};
+
+TempDirRegistry& temp_dir_registry() {
+  static TempDirRegistry* registry = new TempDirRegistry;  // never destroyed: the atexit handler uses it
+  return *registry;
+}
+
+void remove_temp_dirs_at_exit() {
+  TempDirRegistry& reg = temp_dir_registry();
+  if (getpid() != reg.owner) return;
+  const char* keep = std::getenv("AGVSLAM_KEEP_TEST_DIRS");
+  if ((keep && *keep) || ::testing::UnitTest::GetInstance()->Failed()) return;
+  std::lock_guard<std::mutex> lock(reg.mutex);
+  for (const fs::path& p : reg.dirs) {
+    std::error_code ec;
+    fs::remove_all(p, ec);
+  }
+}
+
+void register_temp_dir(const fs::path& p) {
+  TempDirRegistry& reg = temp_dir_registry();
+  std::lock_guard<std::mutex> lock(reg.mutex);
+  if (reg.owner == 0) {
+    reg.owner = getpid();
+    std::atexit(remove_temp_dirs_at_exit);  // registered after gtest's singleton exists, so it runs before its end
+  }
+  reg.dirs.push_back(p);
+}
+
+}  // namespace
+
 std::string make_temp_dir(const std::string& prefix) {
   std::random_device rd;
   for (int attempt = 0; attempt < 100; ++attempt) {
     const fs::path p = fs::temp_directory_path() / (prefix + "-" + std::to_string(rd()));
     std::error_code ec;
-    if (fs::create_directory(p, ec)) return p.string();
+    if (fs::create_directory(p, ec)) {
+      register_temp_dir(p);
+      return p.string();
+    }
   }
   throw std::runtime_error("make_temp_dir: could not create a folder under " + fs::temp_directory_path().string());
 }

@@ -19,7 +19,8 @@ bool running_in_ci();
 // The build folder (tools live in <build>/bin).
 std::string binary_dir();
 std::string tool_path(const std::string& name);
-// A new empty temporary folder, removed by the caller (or left for inspection on failure).
+// A new empty temporary folder; removed when the test process exits, unless a test failed (left for inspection)
+// or AGVSLAM_KEEP_TEST_DIRS is set.
 std::string make_temp_dir(const std::string& prefix);
 // Runs a shell command, returns its exit status; stdout+stderr go to `output` when given.
 int run_command(const std::string& cmd, std::string* output = nullptr);
