@@ -176,6 +176,7 @@ struct Job {
   std::size_t index = 0;
   agvslam::StereoFrame frame;
   cv::Mat mask;
+  cv::Mat gt_mask;           // the dataset's ground-truth moving-object mask when it has one (scores inlier leakage)
   double detector_ms = -1;   // -1: no detector
   double detector_cpu_ms = -1;
   double read_ms = 0;
@@ -362,6 +363,8 @@ int run(const Options& o) {
   }
 
   // Reader (+ detector) thread, one frame ahead.
+  // With ground-truth masks (simulator folders) every mode scores the pose's inliers against them.
+  const bool has_gt_masks = !dataset->ground_truth_mask(first).empty();
   JobQueue queue(2);
   std::thread worker([&] {
     std::optional<dyn::DynamicDetector> detector;
@@ -394,9 +397,9 @@ int run(const Options& o) {
           job.detector_ms = ms_since(t1);
           job.detector_cpu_ms = slam::thread_cpu_ms() - cpu1;
           job.mask = result.mask.image.clone();
-        } else if (mode == DynamicMode::kGroundTruth) {
-          job.mask = dataset->ground_truth_mask(i);
         }
+        if (has_gt_masks && !job.blank) job.gt_mask = dataset->ground_truth_mask(i);
+        if (mode == DynamicMode::kGroundTruth) job.mask = job.gt_mask.empty() ? dataset->ground_truth_mask(i) : job.gt_mask;
         queue.push(std::move(job));
       }
     } catch (const std::exception& e) {
@@ -430,6 +433,9 @@ int run(const Options& o) {
   long blank_end_step = -1;         // step of the last blanked frame (first lap)
   long blank_recovered_after = -1;  // frames after the blank until a pose
   std::vector<std::size_t> laps_keyframes, laps_points;
+  // Inliers of the pose on ground-truth moving objects (what the dynamic masks are there to prevent).
+  std::vector<double> moving_inlier_fraction;
+  std::size_t moving_inliers_total = 0, inliers_total = 0;
   const auto t_run = Clock::now();
   auto t_prev_output = Clock::now();
   const double period_s = o.speed > 0 ? 1.0 / (dataset->rate_hz() * o.speed) : 0;
@@ -479,6 +485,18 @@ int run(const Options& o) {
       series["frontend_cpu"].add(job.detector_cpu_ms + r.timings.total_cpu_ms);
     }
     if (frames > 1) series["frame_interval"].add(interval);
+    int moving_inliers = -1;
+    if (!job.gt_mask.empty() && r.pose_valid && !r.inlier_keypoints_px.empty()) {
+      moving_inliers = 0;
+      for (const cv::Point2f& pt : r.inlier_keypoints_px) {
+        const int x = std::clamp(static_cast<int>(std::lround(pt.x)), 0, job.gt_mask.cols - 1);
+        const int y = std::clamp(static_cast<int>(std::lround(pt.y)), 0, job.gt_mask.rows - 1);
+        if (job.gt_mask.at<uint8_t>(y, x) != 0) ++moving_inliers;
+      }
+      moving_inliers_total += static_cast<std::size_t>(moving_inliers);
+      inliers_total += r.inlier_keypoints_px.size();
+      moving_inlier_fraction.push_back(static_cast<double>(moving_inliers) / static_cast<double>(r.inlier_keypoints_px.size()));
+    }
     per_frame.push_back({{"frame", job.index},
                          {"lap", job.lap},
                          {"blank", job.blank},
@@ -495,6 +513,7 @@ int run(const Options& o) {
                          {"map_points", r.map_points},
                          {"mapping_queue", r.mapping_queue},
                          {"mask_pixels", job.mask.empty() ? 0 : cv::countNonZero(job.mask)},
+                         {"moving_inliers", moving_inliers},
                          {"p_w_c", r.pose_valid ? nlohmann::json::array({r.T_w_c.translation().x(), r.T_w_c.translation().y(),
                                                                          r.T_w_c.translation().z()})
                                                 : nlohmann::json()},
@@ -573,6 +592,18 @@ int run(const Options& o) {
     }
   }
   std::printf("DRIFT_M %.5f (largest distance from the first tracked position)\n", drift_m);
+  if (!moving_inlier_fraction.empty()) {
+    Series f;
+    f.v = moving_inlier_fraction;
+    const double mean = inliers_total ? static_cast<double>(moving_inliers_total) / static_cast<double>(inliers_total) : 0;
+    const std::size_t over10 = static_cast<std::size_t>(
+        std::count_if(f.v.begin(), f.v.end(), [](double x) { return x > 0.10; }));
+    std::printf("MOVING_INLIERS %.4f (of the pose inliers on ground-truth moving objects; p95 %.4f, max %.4f, %zu of %zu "
+                "frames over 10%%)\n",
+                mean, f.quantile(0.95), f.max(), over10, f.v.size());
+    j["moving_inliers"] = {{"fraction", mean}, {"p95_fraction", f.quantile(0.95)}, {"max_fraction", f.max()},
+                           {"frames_over_10pct", over10}, {"frames_scored", f.v.size()}, {"total", moving_inliers_total}};
+  }
   if (gt && T_w1_w2 && !trajectory.empty()) {
     // Positions in the saved map's frame, without alignment.
     agvslam::Trajectory gt_map;

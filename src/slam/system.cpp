@@ -226,6 +226,9 @@ TrackResult System::track_stereo(int64_t t_ns, const cv::Mat& left, const cv::Ma
     const Frame& f = tracking_->last_frame();
     r.pose_valid = true;
     r.T_w_c = f.T_w_c();
+    r.inlier_keypoints_px.reserve(f.size());
+    for (std::size_t i = 0; i < f.size(); ++i)
+      if (f.map_points[i] && !f.outlier[i]) r.inlier_keypoints_px.push_back(f.keypoints[i].pt);
     if (f.reference_keyframe) {
       trajectory_.push_back({t_ns, f.reference_keyframe->id, tracking_->last_relative_pose()});
     }

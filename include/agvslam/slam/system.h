@@ -86,6 +86,10 @@ struct TrackResult {
   std::size_t mapping_queue = 0; // keyframes waiting for the local mapper
   uint64_t loops_closed = 0;     // loops closed so far
   bool global_ba_running = false;
+  // Level-0 pixel positions (left image) of the keypoints the pose rests on: the map point inliers of this frame
+  // (empty unless the state is ok). Tools score them against ground-truth masks: how much of the pose leaned on
+  // moving objects.
+  std::vector<cv::Point2f> inlier_keypoints_px;
 };
 
 struct MapSaveStats {
