@@ -571,9 +571,43 @@ bool Tracking::need_new_keyframe() {
   const bool c1c = inliers_ < ref_matches * 0.25 || need_close;
   const bool c2 = (inliers_ < ref_matches * ref_ratio || need_close) && inliers_ > 15;
   if (!((c1a || c1b || c1c) && c2)) return false;
+  const bool weak = inliers_ < ref_matches * 0.25;
+  if (KeyFrame* old_kf = weak ? nullptr : revisited_keyframe()) {
+    // The place is already in the map from an earlier pass: track against that keyframe instead of adding one.
+    reference_kf_ = old_kf->shared_from_this();
+    current_.reference_keyframe = reference_kf_;
+    return false;
+  }
   if (mapper_idle) return true;
   mapper_.interrupt_ba();
   return mapper_.queue_length() < static_cast<std::size_t>(config_.mapping.queue_capacity);
+}
+
+KeyFrame* Tracking::revisited_keyframe() const {
+  const TrackingConfig& tc = config_.tracking;
+  if (tc.keyframe_revisit_distance_m <= 0 || inliers_ <= 0) return nullptr;
+  const int64_t min_age_ns = static_cast<int64_t>(tc.keyframe_revisit_min_age_s * 1e9);
+  const SE3d& T_w_c = current_.T_w_c();
+  const Eigen::Vector3d axis = T_w_c.linear().col(2);
+  const double cos_max = std::cos(tc.keyframe_revisit_angle_deg * M_PI / 180.0);
+  KeyFrame* best = nullptr;
+  int best_shared = 0;
+  for (KeyFrame* k : local_keyframes_) {
+    if (k->bad() || current_.t_ns - k->t_ns < min_age_ns) continue;
+    const SE3d& T_w_k = k->T_w_c();
+    if ((T_w_k.translation() - T_w_c.translation()).norm() > tc.keyframe_revisit_distance_m) continue;
+    if (T_w_k.linear().col(2).dot(axis) < cos_max) continue;
+    int shared = 0;
+    for (std::size_t i = 0; i < current_.size(); ++i) {
+      const MapPointPtr& p = current_.map_points[i];
+      if (p && !current_.outlier[i] && p->is_in(k)) ++shared;
+    }
+    if (shared > best_shared) {
+      best_shared = shared;
+      best = k;
+    }
+  }
+  return best && best_shared >= tc.keyframe_revisit_shared * inliers_ ? best : nullptr;
 }
 
 void Tracking::create_new_keyframe() {

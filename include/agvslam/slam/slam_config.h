@@ -31,6 +31,14 @@ struct TrackingConfig {
   int keyframe_close_tracked = 100;      // close points: fewer tracked than this and ...
   int keyframe_close_untracked = 70;     // ... more untracked than this -> insert
   int keyframe_max_new_points = 100;     // a new keyframe creates at least this many of its closest stereo points
+  // Revisits: no new keyframe where an older keyframe (made >= keyframe_revisit_min_age_s before the frame)
+  // already sees the place from within keyframe_revisit_distance_m and keyframe_revisit_angle_deg and observes at
+  // least keyframe_revisit_shared of the frame's inliers; tracking takes it as the reference instead. This keeps the
+  // map bounded when the vehicle drives the same route again. keyframe_revisit_distance_m = 0 turns it off.
+  double keyframe_revisit_distance_m = 0.2;
+  double keyframe_revisit_angle_deg = 10.0;
+  double keyframe_revisit_shared = 0.5;
+  double keyframe_revisit_min_age_s = 1.0;
   // Loss: after this many consecutive failed frames with a map of fewer than reset_max_keyframes keyframes, the
   // map is reset and initialised again (ORB-SLAM2 does the same with <= 5 keyframes).
   int reset_max_keyframes = 5;

@@ -104,6 +104,8 @@ class Tracking {
   int optimize_current_pose();
   int discard_outliers();
   bool need_new_keyframe();
+  // An older keyframe that already covers the current view (the revisit rule of TrackingConfig), or null.
+  KeyFrame* revisited_keyframe() const;
   void create_new_keyframe();
   void check_replaced_in_last_frame();
 
