@@ -41,6 +41,10 @@ const std::vector<ScenarioInfo>& scenario_catalogue() {
        "the loop; a person walks 1.5-2.4 m ahead all the way, one crosses beyond them, one stands then leaves; an AGV "
        "parked then driving",
        35.0},
+      {"scene6",
+       "AGV waits at a cross-aisle while a forklift crosses 1.6-2.4 m ahead, stopping in front of it (it fills most "
+       "of the view), then drives the aisle; a person crosses ahead",
+       24.0},
   };
   return catalogue;
 }
@@ -64,6 +68,9 @@ void ScenarioOptions::validate(const WarehouseLayout& layout) const {
     throw InputError("--start-offset", std::to_string(start_offset_m),
                      "expected a distance in [0, " + std::to_string(layout.line_max_start_offset_m) +
                          "] m along the aisle for " + name);
+  if (name == "scene6" && (start_offset_m < -2.0 || start_offset_m > 0.0))
+    throw InputError("--start-offset", std::to_string(start_offset_m),
+                     "expected a distance in [-2, 0] m (further back from the cross-aisle) for scene6");
   if (name == "scene1" && std::fabs(start_offset_m) > 2.0)
     throw InputError("--start-offset", std::to_string(start_offset_m),
                      "expected a sideways shift in [-2, 2] m of the stationary AGV for scene1");
@@ -249,14 +256,16 @@ class ScenarioBuilder {
     sc_.agv.yaw_rad = yaw;
   }
 
-  void agv_line(double offset) {
+  void agv_line(double offset) { agv_line_from(L_.line_x_start + offset, L_.line_length_m, 0.5); }
+
+  // Along the main aisle from x0 for length_m, standing still for the first hold_start_s.
+  void agv_line_from(double x0, double length_m, double hold_start_s) {
     AgvMotion& m = sc_.agv;
     m.stationary = false;
-    const double x0 = L_.line_x_start + offset;
-    m.route.add_line(x0, L_.line_y, x0 + L_.line_length_m, L_.line_y);
+    m.route.add_line(x0, L_.line_y, x0 + length_m, L_.line_y);
     m.s_start = 0;
-    m.profile.distance_m = L_.line_length_m;
-    finish_profile();
+    m.profile.distance_m = length_m;
+    finish_profile(hold_start_s);
   }
 
   // Counter-clockwise rounded rectangle, starting 1 m into the south leg (+ offset), one full lap.
@@ -407,10 +416,10 @@ class ScenarioBuilder {
   }
 
  private:
-  void finish_profile() {
+  void finish_profile(double hold_start_s = 0.5) {
     SpeedProfile& p = sc_.agv.profile;
     p.duration_s = sc_.nominal_duration_s;
-    p.hold_start_s = 0.5;
+    p.hold_start_s = hold_start_s;
     p.hold_end_s = 0.5;
     p.accel_mps2 = 0.4;
     p.solve();
@@ -566,6 +575,45 @@ Scenario make_scenario(const ScenarioOptions& options, const Warehouse& warehous
           return make_actor(4, ActorClass::kForklift, "parked, drives across the aisle ahead, parks", pb.pts, ri);
         });
       }
+    }
+  } else if (name == "scene6") {
+    // The AGV waits 2.0-2.6 m before the first cross-aisle (its stop line) while a forklift crosses the main aisle
+    // through it, close enough to fill most of the view, stopping 2-3.5 s in the middle of the aisle (a parked-then-
+    // moving object: what a plain SLAM maps and then follows); when it has gone the AGV drives on along the aisle
+    // and a person crosses the second cross-aisle ahead of it.
+    std::vector<double> gaps;
+    for (double g : L.line_cross_aisles_x)
+      if (g - L.line_x_start >= 2.6) gaps.push_back(g);
+    if (gaps.empty()) gaps.push_back(L.line_cross_aisles_x.back());
+    Rng r = rng.fork(12);
+    const double gap_x = gaps.front();
+    const double wait_s = r.uniform(11.0, 12.0);
+    const double x0 = gap_x - r.uniform(2.0, 2.6) + options.start_offset_m;
+    b.agv_line_from(x0, std::min(L.line_length_m, L.line_exit_x - 1.5 - x0), wait_s);
+    const bool north_to_south = r.chance(0.5);
+    b.add_best(16, [&](int i) {
+      Rng ri = r.fork(static_cast<uint64_t>(i));
+      const double speed = ri.uniform(1.1, 1.5);
+      const double x = gap_x + ri.uniform(-0.2, 0.2);
+      const double y_from = north_to_south ? L.north_corridor_y - 0.4 : L.south_corridor_y + 0.4;
+      const double y_to = north_to_south ? L.south_corridor_y + 0.4 : L.north_corridor_y - 0.4;
+      PathBuilder pb(x, y_from);
+      const std::size_t mid = pb.walk_to(x, L.line_y, speed);
+      pb.wait(ri.uniform(2.0, 3.5));  // stops in the aisle (the driver looks both ways), then drives on
+      pb.walk_to(x, y_to, speed);
+      // In the aisle 4.5-5.5 s into the wait (it comes into view after ~2.5 s), then away along the corridor.
+      pb.align(mid, ri.uniform(4.5, 5.5) + 0.3 * i);
+      pb.walk_to(x - 6.0, y_to, speed);  // back along the corridor, away from the later crossing
+      return make_actor(1, ActorClass::kForklift, "crosses the aisle close ahead while the AGV waits", pb.pts, ri);
+    });
+    if (gaps.size() > 1) {
+      Rng rp = rng.fork(13);
+      const bool ns = rp.chance(0.5);
+      b.add_best(16, [&](int i) {
+        Rng ri = rp.fork(static_cast<uint64_t>(i));
+        const double ahead = 2.4 + 0.1 * i + ri.uniform(0.0, 0.6);
+        return b.line_crossing_person(2, gaps[1], ns, b.time_at_distance(gaps[1] - ahead - x0), ri);
+      });
     }
   } else {  // loops
     b.agv_loop(options.start_offset_m);

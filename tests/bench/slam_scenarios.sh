@@ -1,7 +1,7 @@
 #!/usr/bin/env bash
 # Runs the SLAM on simulator scenarios in the three --dynamic modes and tabulates the ATE (issue 4 figures):
 #   tests/bench/slam_scenarios.sh [--build DIR] [--data DIR] [--seeds "101 102 103 104 105"]
-#                                 [--scenarios "static scene1 scene2 scene3 scene4 scene5"]
+#                                 [--scenarios "static scene1 scene2 scene3 scene4 scene5 scene6"]
 #                                 [--modes "detector gt off"] [--mapping inline|thread] [--threads N]
 #                                 [--generate-only] [--table-only]
 # Generates each <scenario>_<seed> sequence under --data once (agvslam-sim, full default length; ~0.2-0.35 s per
@@ -15,7 +15,7 @@ set -euo pipefail
 build=build/release
 data=${TMPDIR:-/tmp}/agvslam-slam-scenarios
 seeds="101 102 103 104 105"
-scenarios="static scene1 scene2 scene3 scene4 scene5"
+scenarios="static scene1 scene2 scene3 scene4 scene5 scene6"
 modes="detector gt off"
 mapping=inline
 threads=$(nproc)

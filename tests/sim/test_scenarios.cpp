@@ -121,7 +121,7 @@ TEST(Scenario, PosesStartAtIdentityAndFollowTheRoutes) {
 }
 
 TEST(Scenario, ActorsKeepClearOfTheCameraOnManySeeds) {
-  for (const char* name : {"scene1", "scene2", "scene3", "scene4", "scene5"}) {
+  for (const char* name : {"scene1", "scene2", "scene3", "scene4", "scene5", "scene6"}) {
     for (uint64_t seed : {1u, 2u, 3u, 17u}) {
       ScenarioOptions o;
       o.name = name;

@@ -104,10 +104,10 @@ TEST(SimConfig, ScaledKeepsTheFieldOfView) {
   EXPECT_NEAR(c.width / c.fx, 752 / 460.0, 1e-12);
 }
 
-TEST(ScenarioCatalogue, ListsTheSixScenariosWithRealisticDefaults) {
+TEST(ScenarioCatalogue, ListsTheSevenScenariosWithRealisticDefaults) {
   const auto& cat = scenario_catalogue();
-  ASSERT_EQ(cat.size(), 6u);
-  const char* names[] = {"static", "scene1", "scene2", "scene3", "scene4", "scene5"};
+  ASSERT_EQ(cat.size(), 7u);
+  const char* names[] = {"static", "scene1", "scene2", "scene3", "scene4", "scene5", "scene6"};
   for (std::size_t i = 0; i < cat.size(); ++i) {
     EXPECT_EQ(cat[i].name, names[i]);
     const double frames = cat[i].nominal_duration_s * 20.0;
