@@ -20,96 +20,45 @@ double ms_since(Clock::time_point t0) {
 }  // namespace
 
 LocalMapping::LocalMapping(const SlamConfig& config, Map& map, const StereoIntrinsics& intrinsics)
-    : config_(config), map_(map), intrinsics_(intrinsics) {}
+    : config_(config),
+      map_(map),
+      intrinsics_(intrinsics),
+      worker_(static_cast<std::size_t>(config.mapping.queue_capacity), KeyframeWorker::WhenFull::kRefuseNew,
+              [this](const KeyFramePtr& kf) { process(kf); }) {}
 
 LocalMapping::~LocalMapping() { stop(); }
 
-void LocalMapping::start() {
-  if (thread_.joinable()) return;
-  {
-    std::lock_guard<std::mutex> lock(queue_mutex_);
-    stop_ = false;
-  }
-  thread_ = std::thread([this] { run(); });
-}
+void LocalMapping::start() { worker_.start(); }
 
 void LocalMapping::stop() {
-  {
-    std::lock_guard<std::mutex> lock(queue_mutex_);
-    stop_ = true;
-  }
   abort_ba_.store(true);
-  queue_cv_.notify_all();
-  if (thread_.joinable()) thread_.join();
+  worker_.stop();
 }
 
 bool LocalMapping::try_insert(const KeyFramePtr& kf) {
-  {
-    std::lock_guard<std::mutex> lock(queue_mutex_);
-    if (queue_.size() >= static_cast<std::size_t>(config_.mapping.queue_capacity)) {
-      std::lock_guard<std::mutex> stats_lock(stats_mutex_);
-      ++stats_.keyframes_skipped;
-      return false;
-    }
-    queue_.push_back(kf);
+  if (worker_.push(kf) == KeyframeWorker::Pushed::kRefused) {
+    std::lock_guard<std::mutex> stats_lock(stats_mutex_);
+    ++stats_.keyframes_skipped;
+    return false;
   }
   abort_ba_.store(true);
-  queue_cv_.notify_one();
   return true;
 }
 
-std::size_t LocalMapping::queue_length() const {
-  std::lock_guard<std::mutex> lock(queue_mutex_);
-  return queue_.size();
-}
+std::size_t LocalMapping::queue_length() const { return worker_.size(); }
 
-bool LocalMapping::idle() const {
-  std::lock_guard<std::mutex> lock(queue_mutex_);
-  return !busy_ && queue_.empty();
-}
+bool LocalMapping::idle() const { return worker_.idle(); }
 
-void LocalMapping::process_pending() {
-  if (thread_.joinable()) return;
-  for (;;) {
-    KeyFramePtr kf;
-    {
-      std::lock_guard<std::mutex> lock(queue_mutex_);
-      if (queue_.empty()) return;
-      kf = queue_.front();
-      queue_.pop_front();
-      busy_ = true;
-    }
-    abort_ba_.store(false);
-    {
-      std::lock_guard<std::mutex> work(work_mutex_);
-      process(kf);
-    }
-    {
-      std::lock_guard<std::mutex> lock(queue_mutex_);
-      busy_ = false;
-    }
-  }
-}
+void LocalMapping::process_pending() { worker_.process_pending(); }
 
-void LocalMapping::wait_until_idle() {
-  if (!thread_.joinable()) {
-    process_pending();
-    return;
-  }
-  std::unique_lock<std::mutex> lock(queue_mutex_);
-  idle_cv_.wait(lock, [&] { return (!busy_ && queue_.empty()) || stop_; });
-}
+void LocalMapping::wait_until_idle() { worker_.wait_until_idle(); }
 
 void LocalMapping::reset() {
-  {
-    std::lock_guard<std::mutex> lock(queue_mutex_);
-    queue_.clear();
-  }
+  worker_.clear();
   abort_ba_.store(true);
-  std::lock_guard<std::mutex> work(work_mutex_);  // the keyframe in progress finishes
+  std::lock_guard<std::mutex> work(worker_.work_mutex());  // the keyframe in progress finishes
   recent_points_.clear();
-  std::lock_guard<std::mutex> lock(queue_mutex_);
-  queue_.clear();
+  worker_.clear();
 }
 
 LocalMappingStats LocalMapping::stats() const {
@@ -122,41 +71,11 @@ std::vector<KeyframeMappingTimes> LocalMapping::timing_history() const {
   return history_;
 }
 
-void LocalMapping::run() {
-  for (;;) {
-    KeyFramePtr kf;
-    {
-      std::unique_lock<std::mutex> lock(queue_mutex_);
-      queue_cv_.wait(lock, [&] { return stop_ || !queue_.empty(); });
-      if (stop_) {
-        busy_ = false;
-        idle_cv_.notify_all();
-        return;
-      }
-      kf = queue_.front();
-      queue_.pop_front();
-      busy_ = true;
-    }
-    abort_ba_.store(false);
-    {
-      std::lock_guard<std::mutex> work(work_mutex_);
-      process(kf);
-    }
-    {
-      std::lock_guard<std::mutex> lock(queue_mutex_);
-      busy_ = false;
-      if (queue_.empty()) idle_cv_.notify_all();
-    }
-  }
-}
-
 void LocalMapping::process(const KeyFramePtr& kf) {
+  abort_ba_.store(false);
   LocalMappingStats s;
   const auto t_start = Clock::now();
-  auto more_waiting = [&] {
-    std::lock_guard<std::mutex> lock(queue_mutex_);
-    return !queue_.empty();
-  };
+  auto more_waiting = [&] { return !worker_.empty(); };
   {
     const auto t0 = Clock::now();
     std::lock_guard<std::mutex> lock(map_.mutex());

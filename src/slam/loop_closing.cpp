@@ -77,87 +77,44 @@ void collect_matches(const KeyFrame& kf1, const KeyFrame& kf2, const std::vector
 
 LoopClosing::LoopClosing(const SlamConfig& config, Map& map, LocalMapping& mapper,
                          std::shared_ptr<PlaceRecognition> place, const StereoIntrinsics& intrinsics)
-    : config_(config), map_(map), mapper_(mapper), place_(std::move(place)), intrinsics_(intrinsics) {}
+    : config_(config),
+      map_(map),
+      mapper_(mapper),
+      place_(std::move(place)),
+      intrinsics_(intrinsics),
+      worker_(static_cast<std::size_t>(config.loop_closing.queue_capacity), KeyframeWorker::WhenFull::kDropOldest,
+              [this](const KeyFramePtr& kf) { process(kf); }) {}
 
 LoopClosing::~LoopClosing() { stop(); }
 
-void LoopClosing::start() {
-  if (thread_.joinable()) return;
-  {
-    std::lock_guard<std::mutex> lock(queue_mutex_);
-    stop_ = false;
-  }
-  thread_ = std::thread([this] { run(); });
-}
+void LoopClosing::start() { worker_.start(); }
 
 void LoopClosing::stop() {
-  {
-    std::lock_guard<std::mutex> lock(queue_mutex_);
-    stop_ = true;
-  }
-  queue_cv_.notify_all();
-  if (thread_.joinable()) thread_.join();
+  worker_.stop();
   stop_global_ba();
 }
 
 void LoopClosing::insert(const KeyFramePtr& kf) {
-  {
-    std::lock_guard<std::mutex> lock(queue_mutex_);
-    if (queue_.size() >= static_cast<std::size_t>(config_.loop_closing.queue_capacity)) {
-      queue_.pop_front();
-      std::lock_guard<std::mutex> stats_lock(stats_mutex_);
-      ++stats_.keyframes_dropped;
-    }
-    queue_.push_back(kf);
-  }
-  queue_cv_.notify_one();
-}
-
-std::size_t LoopClosing::queue_length() const {
-  std::lock_guard<std::mutex> lock(queue_mutex_);
-  return queue_.size();
-}
-
-void LoopClosing::process_pending() {
-  if (thread_.joinable()) return;
-  for (;;) {
-    KeyFramePtr kf;
-    {
-      std::lock_guard<std::mutex> lock(queue_mutex_);
-      if (queue_.empty()) return;
-      kf = queue_.front();
-      queue_.pop_front();
-      busy_ = true;
-    }
-    {
-      std::lock_guard<std::mutex> work(work_mutex_);
-      process(kf);
-    }
-    std::lock_guard<std::mutex> lock(queue_mutex_);
-    busy_ = false;
+  if (worker_.push(kf) == KeyframeWorker::Pushed::kQueuedDroppedOldest) {
+    std::lock_guard<std::mutex> stats_lock(stats_mutex_);
+    ++stats_.keyframes_dropped;
   }
 }
+
+std::size_t LoopClosing::queue_length() const { return worker_.size(); }
+
+void LoopClosing::process_pending() { worker_.process_pending(); }
 
 void LoopClosing::wait_until_idle() {
-  if (!thread_.joinable()) {
-    process_pending();
-    return;
-  }
-  {
-    std::unique_lock<std::mutex> lock(queue_mutex_);
-    idle_cv_.wait(lock, [&] { return (!busy_ && queue_.empty()) || stop_; });
-  }
+  worker_.wait_until_idle();
   // The loop thread is idle: no new global BA can start until another keyframe arrives.
-  std::lock_guard<std::mutex> work(work_mutex_);
+  std::lock_guard<std::mutex> work(worker_.work_mutex());
   if (gba_thread_.joinable()) gba_thread_.join();
 }
 
 void LoopClosing::reset() {
-  {
-    std::lock_guard<std::mutex> lock(queue_mutex_);
-    queue_.clear();
-  }
-  std::lock_guard<std::mutex> work(work_mutex_);
+  worker_.clear();
+  std::lock_guard<std::mutex> work(worker_.work_mutex());
   stop_global_ba();
   consistent_groups_.clear();
   enough_consistent_.clear();
@@ -170,31 +127,6 @@ void LoopClosing::reset() {
 LoopClosingStats LoopClosing::stats() const {
   std::lock_guard<std::mutex> lock(stats_mutex_);
   return stats_;
-}
-
-void LoopClosing::run() {
-  for (;;) {
-    KeyFramePtr kf;
-    {
-      std::unique_lock<std::mutex> lock(queue_mutex_);
-      queue_cv_.wait(lock, [&] { return stop_ || !queue_.empty(); });
-      if (stop_) {
-        busy_ = false;
-        idle_cv_.notify_all();
-        return;
-      }
-      kf = queue_.front();
-      queue_.pop_front();
-      busy_ = true;
-    }
-    {
-      std::lock_guard<std::mutex> work(work_mutex_);
-      process(kf);
-    }
-    std::lock_guard<std::mutex> lock(queue_mutex_);
-    busy_ = false;
-    if (queue_.empty()) idle_cv_.notify_all();
-  }
 }
 
 void LoopClosing::process(const KeyFramePtr& kf) {
@@ -623,7 +555,7 @@ void LoopClosing::stop_global_ba() {
 void LoopClosing::start_global_ba(uint64_t loop_kf_id, std::size_t event_index) {
   if (!config_.loop_closing.global_ba) return;
   stop_global_ba();
-  if (!thread_.joinable()) {
+  if (!worker_.running()) {
     run_global_ba(loop_kf_id, event_index);  // deterministic mode: in the caller's thread
     return;
   }

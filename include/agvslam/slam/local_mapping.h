@@ -24,6 +24,7 @@
 #include <vector>
 
 #include "agvslam/slam/key_frame.h"
+#include "agvslam/slam/keyframe_worker.h"
 #include "agvslam/slam/matcher.h"
 #include "agvslam/slam/optimizer.h"
 #include "agvslam/slam/place_recognition.h"
@@ -64,7 +65,7 @@ class LocalMapping {
   // Starts / stops the background thread (stop() finishes the keyframe in progress, leaves the rest queued).
   void start();
   void stop();
-  bool running() const { return thread_.joinable(); }
+  bool running() const { return worker_.running(); }
 
   // Tracking side. Never blocks; false when the queue is full.
   bool try_insert(const KeyFramePtr& kf);
@@ -92,7 +93,7 @@ class LocalMapping {
   // queued meanwhile are processed afterwards. Lock order: this before the map mutex.
   std::unique_lock<std::mutex> pause() {
     abort_ba_.store(true);
-    return std::unique_lock<std::mutex>(work_mutex_);
+    return std::unique_lock<std::mutex>(worker_.work_mutex());
   }
 
   LocalMappingStats stats() const;
@@ -100,7 +101,6 @@ class LocalMapping {
   std::vector<KeyframeMappingTimes> timing_history() const;
 
  private:
-  void run();
   void process(const KeyFramePtr& kf);
   void process_new_keyframe(KeyFrame& kf);
   void cull_recent_points(const KeyFrame& kf);
@@ -114,15 +114,7 @@ class LocalMapping {
   StereoIntrinsics intrinsics_;
   Matcher matcher_;
 
-  mutable std::mutex queue_mutex_;
-  std::condition_variable queue_cv_;
-  std::deque<KeyFramePtr> queue_;
-  bool busy_ = false;
-  bool stop_ = false;
-  std::condition_variable idle_cv_;
-  std::mutex work_mutex_;  // held while a keyframe is processed (reset and pause wait on it)
   std::atomic<bool> abort_ba_{false};
-  std::thread thread_;
 
   std::list<MapPointPtr> recent_points_;
   std::function<void(const KeyFramePtr&)> sink_;
@@ -130,6 +122,7 @@ class LocalMapping {
   mutable std::mutex stats_mutex_;
   LocalMappingStats stats_;
   std::vector<KeyframeMappingTimes> history_;
+  KeyframeWorker worker_;  // last: its thread stops before the members it uses go
 };
 
 }  // namespace agvslam::slam

@@ -41,6 +41,7 @@
 #include <vector>
 
 #include "agvslam/slam/key_frame.h"
+#include "agvslam/slam/keyframe_worker.h"
 #include "agvslam/slam/matcher.h"
 #include "agvslam/slam/optimizer.h"
 #include "agvslam/slam/place_recognition.h"
@@ -90,7 +91,7 @@ class LoopClosing {
   void start();
   // Stops the thread (the keyframe in progress is finished) and aborts a running global BA.
   void stop();
-  bool running() const { return thread_.joinable(); }
+  bool running() const { return worker_.running(); }
 
   // Local mapping's sink. Never blocks; drops the oldest queued keyframe when the queue is full.
   void insert(const KeyFramePtr& kf);
@@ -115,7 +116,6 @@ class LoopClosing {
     bool consistent = false;  // consistent over `consistency` keyframes
   };
 
-  void run();
   void process(const KeyFramePtr& kf);
   bool detect_loop(KeyFrame& kf);
   bool verify_loop(KeyFrame& kf, LoopEvent& event);
@@ -135,14 +135,6 @@ class LoopClosing {
   StereoIntrinsics intrinsics_;
   Matcher matcher_;
 
-  mutable std::mutex queue_mutex_;
-  std::condition_variable queue_cv_, idle_cv_;
-  std::deque<KeyFramePtr> queue_;
-  bool busy_ = false;
-  bool stop_ = false;
-  std::thread thread_;
-  std::mutex work_mutex_;  // held while a keyframe is processed
-
   // Detection state (loop thread only).
   std::vector<ConsistentGroup> consistent_groups_;
   std::vector<LoopCandidate> enough_consistent_;
@@ -161,6 +153,7 @@ class LoopClosing {
 
   mutable std::mutex stats_mutex_;
   LoopClosingStats stats_;
+  KeyframeWorker worker_;  // last: its thread stops before the members it uses go
 };
 
 }  // namespace agvslam::slam
