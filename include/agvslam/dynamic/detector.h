@@ -75,7 +75,7 @@ struct DetectorOptions {
   // group's disparity (from the frame's ground plane; legs often have no corners) is extended down to it.
   bool extend_to_floor = true;
   // ... and up to this height above the floor row (m; 0 = not): corners seldom reach the head of a person.
-  double extend_to_height_m = 0.0;
+  double extend_to_height_m = 1.9;
   // Beyond the paper: a region whose outline falls into pieces side by side (columns not overlapping, e.g. two
   // people walking apart inside one ROI) gives one object per piece in DynamicMask::instances.
   bool split_side_by_side = true;
