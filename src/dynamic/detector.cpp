@@ -331,7 +331,7 @@ void DynamicDetector::detect(const StereoFrame& frame, DetectorResult& result) {
     const bool objects = opt.track_objects && config_.regions.mask_mode == MaskMode::kDisparity;
     RoiGroupingConfig grouping = config_.grouping;
     if (objects) grouping.min_points = std::min(grouping.min_points, opt.continue_min_points);
-    std::vector<DynamicGroup> groups = group_dynamic_points(dyn_pts_, dyn_disp_, size, grouping);
+    std::vector<DynamicGroup> groups = group_dynamic_points(dyn_pts_, dyn_disp_, size, grouping, calibration_.baseline_m);
     // A group smaller than grouping.min_points is a ROI only when continue_min_points of it belong to one object
     // of the previous frame; each group takes over the object most of its points belong to.
     group_object_.clear();
@@ -730,7 +730,8 @@ void DynamicDetector::densify(const StereoFrame& frame, DetectorResult& result) 
   const int min_points = config_.grouping.min_points;
   RoiGroupingConfig small = config_.grouping;
   small.min_points = 2;
-  const std::vector<DynamicGroup> groups = group_dynamic_points(seed_pts_, seed_disp_, frame.left.size(), small);
+  const std::vector<DynamicGroup> groups =
+      group_dynamic_points(seed_pts_, seed_disp_, frame.left.size(), small, calibration_.baseline_m);
   const int b = config_.features.border_px;
   const cv::Rect inner(b, b, frame.left.cols - 2 * b, frame.left.rows - 2 * b);
   const float min_d2 = static_cast<float>(opt.densify_min_distance_px * opt.densify_min_distance_px);

@@ -94,7 +94,7 @@ DynamicDetectorConfig load_dynamic_config(const std::string& path) {
   in.read("multiframe", "check_uniqueness_margin", m.check_uniqueness_margin, num);
 
   in.check_keys("grouping", {"a_s_px", "b_s", "t_disp_px", "t_disp_rel", "min_points", "margin_px",
-                             "margin_disparity_factor", "merge_overlapping"});
+                             "margin_disparity_factor", "merge_overlapping", "merge_side_gap_m"});
   in.read("grouping", "a_s_px", c.grouping.a_s_px, px);
   in.read("grouping", "b_s", c.grouping.b_s, num);
   in.read("grouping", "t_disp_px", c.grouping.t_disp_px, px);
@@ -103,6 +103,7 @@ DynamicDetectorConfig load_dynamic_config(const std::string& path) {
   in.read("grouping", "margin_px", c.grouping.margin_px, "an integer (px)");
   in.read("grouping", "margin_disparity_factor", c.grouping.margin_disparity_factor, num);
   in.read("grouping", "merge_overlapping", c.grouping.merge_overlapping, flag);
+  in.read("grouping", "merge_side_gap_m", c.grouping.merge_side_gap_m, "a number (m)");
 
   in.check_keys("slic", {"superpixel_size_px", "max_superpixels", "max_color_distance", "iterations",
                          "min_change_fraction", "incremental", "min_segment_fraction"});

@@ -21,15 +21,16 @@ void RoiGroupingConfig::validate(const std::string& source) const {
   require(margin_px >= 0 && margin_px <= 1000, "margin_px", "expected an integer in [0, 1000] px");
   require(margin_disparity_factor >= 0 && margin_disparity_factor <= 100, "margin_disparity_factor",
           "expected a number in [0, 100]");
+  require(merge_side_gap_m >= 0 && merge_side_gap_m <= 5, "merge_side_gap_m", "expected a distance in [0, 5] m (0: off)");
 }
 
 std::string RoiGroupingConfig::describe() const {
-  char buf[320];
+  char buf[384];
   std::snprintf(buf, sizeof(buf),
                 "grouping: T_s = %.1f + %.2f d px, T_disp = %.2f + %.3f d px, ROI when >= %d points, margin %d + %.2f d px, "
-                "overlapping groups %s",
+                "overlapping groups %s, side by side within %.2f m merged",
                 a_s_px, b_s, t_disp_px, t_disp_rel, min_points, margin_px, margin_disparity_factor,
-                merge_overlapping ? "merged" : "kept apart");
+                merge_overlapping ? "merged" : "kept apart", merge_overlapping ? merge_side_gap_m : 0.0);
   return buf;
 }
 
@@ -45,7 +46,7 @@ int find_root(std::vector<int>& parent, int i) {
 
 std::vector<DynamicGroup> group_dynamic_points(const std::vector<cv::Point2f>& points_px,
                                                const std::vector<float>& disparity_px, cv::Size image_size,
-                                               const RoiGroupingConfig& config) {
+                                               const RoiGroupingConfig& config, double baseline_m) {
   CV_Assert(points_px.size() == disparity_px.size());
   const int n = static_cast<int>(points_px.size());
   std::vector<int> parent(static_cast<std::size_t>(n));
@@ -115,7 +116,11 @@ std::vector<DynamicGroup> group_dynamic_points(const std::vector<cv::Point2f>& p
           const cv::Rect& rb = candidates[b].roi;
           const bool columns_overlap = std::max(ra.x, rb.x) < std::min(ra.br().x, rb.br().x);
           const int gap_y = std::max(ra.y, rb.y) - std::min(ra.br().y, rb.br().y);
-          if ((ra & rb).empty() && !(columns_overlap && gap_y <= config.a_s_px + config.b_s * d)) continue;
+          // Side by side: rows overlap, columns within merge_side_gap_m at this depth (d px = B / Z).
+          const int gap_x = std::max(ra.x, rb.x) - std::min(ra.br().x, rb.br().x);
+          const bool side_by_side = baseline_m > 0 && config.merge_side_gap_m > 0 && gap_y < 0 &&
+                                    gap_x <= config.merge_side_gap_m * d / baseline_m;
+          if ((ra & rb).empty() && !(columns_overlap && gap_y <= config.a_s_px + config.b_s * d) && !side_by_side) continue;
           candidates[a].members.insert(candidates[a].members.end(), candidates[b].members.begin(),
                                        candidates[b].members.end());
           finish(candidates[a]);

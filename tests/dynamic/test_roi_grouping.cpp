@@ -61,6 +61,35 @@ TEST(RoiGrouping, StackedPartsOfOneUprightObjectMergeSideBySideObjectsDoNot) {
   EXPECT_TRUE(group_dynamic_points(p, d, cv::Size(752, 480), cfg).empty());
 }
 
+TEST(RoiGrouping, SideBySidePartsWithinTheGapMergeWhenTheBaselineIsGiven) {
+  // The two groups of three side by side, ROIs (margin 10) 34 px apart at d = 10 px: with a 0.12 m baseline one
+  // pixel of gap is 0.012 m at that depth, so 34 px = 0.41 m <= merge_side_gap_m (0.45): one ROI (a striding
+  // person's legs); without the baseline (or with the gap set to 0) two groups of three, no ROI.
+  RoiGroupingConfig cfg = paper_config();
+  cfg.merge_side_gap_m = 0.45;
+  std::vector<cv::Point2f> q = {{100, 100}, {110, 115}, {120, 130}, {175, 100}, {185, 115}, {195, 130}};
+  std::vector<float> e(6, 10.f);
+  const auto merged = group_dynamic_points(q, e, cv::Size(752, 480), cfg, 0.12);
+  ASSERT_EQ(merged.size(), 1u);
+  EXPECT_EQ(merged[0].members.size(), 6u);
+  EXPECT_EQ(merged[0].bounds, cv::Rect(100, 100, 96, 31));
+  EXPECT_TRUE(group_dynamic_points(q, e, cv::Size(752, 480), cfg).empty());
+  cfg.merge_side_gap_m = 0.0;
+  EXPECT_TRUE(group_dynamic_points(q, e, cv::Size(752, 480), cfg, 0.12).empty());
+  cfg.merge_side_gap_m = 0.45;
+  // 20 px further apart: 54 px = 0.65 m, two people.
+  for (std::size_t i = 3; i < 6; ++i) q[i].x += 20.f;
+  EXPECT_TRUE(group_dynamic_points(q, e, cv::Size(752, 480), cfg, 0.12).empty());
+  // Close, but at other depths (d 10 and 16): not one object.
+  for (std::size_t i = 3; i < 6; ++i) q[i].x -= 20.f;
+  e = {10, 10, 10, 16, 16, 16};
+  EXPECT_TRUE(group_dynamic_points(q, e, cv::Size(752, 480), cfg, 0.12).empty());
+  // Rows not overlapping (one group well above the other, columns apart): not side by side.
+  e.assign(6, 10.f);
+  for (std::size_t i = 3; i < 6; ++i) q[i].y += 120.f;
+  EXPECT_TRUE(group_dynamic_points(q, e, cv::Size(752, 480), cfg, 0.12).empty());
+}
+
 TEST(RoiGrouping, FourPointsAreNotAnObject) {
   std::vector<cv::Point2f> p = {{100, 100}, {110, 100}, {100, 110}, {110, 110}};
   std::vector<float> d(4, 15.f);

@@ -30,6 +30,11 @@ struct RoiGroupingConfig {
   // walking abreast) stay apart unless their ROIs overlap.
   // Merging happens before the min_points test, so two small groups of one object can make a ROI together.
   bool merge_overlapping = true;
+  // Beyond the paper, with merge_overlapping: groups side by side at agreeing disparity, their rows overlapping
+  // and their ROIs at most merge_side_gap_m apart (at their depth) are merged too: the two legs and the arm of a
+  // striding person in textureless clothes, torso between them without corners. People walking abreast then share
+  // a ROI; the disparity outline still separates them (detector.split_side_by_side). 0 = off.
+  double merge_side_gap_m = 0.45;
 
   void validate(const std::string& source) const;
   std::string describe() const;
@@ -43,9 +48,10 @@ struct DynamicGroup {
 };
 
 // points_px/disparity_px: the dynamic points (disparity <= 0: unknown, such points are not grouped).
+// baseline_m: the stereo baseline, for merge_side_gap_m (0: side-by-side groups are not merged).
 // Returns the groups with at least min_points members, largest first.
 std::vector<DynamicGroup> group_dynamic_points(const std::vector<cv::Point2f>& points_px,
                                                const std::vector<float>& disparity_px, cv::Size image_size,
-                                               const RoiGroupingConfig& config);
+                                               const RoiGroupingConfig& config, double baseline_m = 0.0);
 
 }  // namespace agvslam::dynamic
