@@ -7,8 +7,10 @@
 # Generates each <scenario>_<seed> sequence under --data once (agvslam-sim, full default length; ~0.2-0.35 s per
 # frame and core), runs agvslam-run on it per mode (trajectory, JSON and log under <data>/slam/), and prints one
 # line per sequence: ATE RMSE per mode (SE(3)-aligned), drift (largest distance from the first position: the
-# figure for scene1, where the AGV stands still), detector vs off (reduction, %), detector vs gt (%), lost frames
-# and the median tracking-thread CPU time per frame (ms); then the per-scenario means over the seeds.
+# figure for scene1, where the AGV stands still), detector vs off (reduction, %), detector vs gt (%), lost frames,
+# the median tracking-thread CPU time per frame (ms), and the share of the pose inliers that lay on ground-truth
+# moving objects with --dynamic off and detector (agvslam-run MOVING_INLIERS: what masking can take away); then
+# the per-scenario means over the seeds.
 # --mapping inline (default) maps each keyframe before the next frame: the same input gives the same result.
 # --table-only prints the table from the results already under <data>/slam/.
 set -euo pipefail
@@ -66,7 +68,7 @@ scenarios, seeds = args[:sep], args[sep + 1:]
 def load(sc, seed, mode):
     p = f"{root}/{sc}_{seed}_{mode}.json"
     return json.load(open(p)) if os.path.exists(p) else None
-head = f"{'sequence':<14}" + "".join(f"{'ATE ' + m:>13}" for m in modes) + f"{'drift det':>11}{'det/off':>9}{'det/gt':>8}{'lost':>6}{'trk cpu':>8}"
+head = f"{'sequence':<14}" + "".join(f"{'ATE ' + m:>13}" for m in modes) + f"{'drift det':>11}{'det/off':>9}{'det/gt':>8}{'lost':>6}{'trk cpu':>8}{'mov off':>9}{'mov det':>9}"
 print(head)
 means = {}
 for sc in scenarios:
@@ -81,7 +83,12 @@ for sc in scenarios:
         lost = sum(j["frames"]["lost"] for j in js.values() if j)
         t = ref["timings"] if ref else {}
         trk = t.get("tracking_cpu", t.get("tracking", {})).get("median_ms", float("nan")) if ref else float("nan")
-        print(line + f"{drift:>11.4f}{red:>8.1f}%{vs_gt:>7.1f}%{lost:>6}{trk:>8.2f}")
+        # Share of the pose inliers on ground-truth moving objects (agvslam-run MOVING_INLIERS): what masking can
+        # take away from the pose.
+        mov = {m: (100 * j["moving_inliers"]["fraction"] if j and "moving_inliers" in j else float("nan")) for m, j in js.items()}
+        print(line + f"{drift:>11.4f}{red:>8.1f}%{vs_gt:>7.1f}%{lost:>6}{trk:>8.2f}{mov.get('off', float('nan')):>8.2f}%{mov.get('detector', float('nan')):>8.2f}%")
+        for m in modes:
+            means.setdefault((sc, "mov " + m), []).append(mov[m])
         for m in modes:
             means.setdefault((sc, m), []).append(ate[m])
         means.setdefault((sc, "drift"), []).append(drift)
@@ -96,5 +103,9 @@ for sc in scenarios:
     if "gt" in vals and "off" in vals and vals["off"] > 0:
         extra += f"  gt vs off {(1 - vals['gt'] / vals['off']) * 100:+.1f}% lower"
     d = means[(sc, "drift")]
+    for m in ("off", "detector"):
+        if ("mov " + m) in [k[1] for k in means if k[0] == sc]:
+            v = means[(sc, "mov " + m)]
+            extra += f"  moving inliers {m} {sum(v) / len(v):.2f}%"
     print(f"  {sc:<8}" + "".join(f"  ATE {m} {vals[m]:.4f}" for m in modes) + f"  drift {sum(d) / len(d):.4f}" + extra)
 PY
