@@ -34,6 +34,7 @@ void DetectorOptions::validate(const std::string& source) const {
           "expected a number in [0, 100] px");
   require(continue_min_points >= 1 && continue_min_points <= 1000, "continue_min_points", "expected an integer in [1, 1000]");
   require(half_scale_min_area_px >= 0, "half_scale_min_area_px", "expected an integer >= 0 px");
+  require(half_scale_erode_px >= 0 && half_scale_erode_px <= 10, "half_scale_erode_px", "expected an integer in [0, 10] px");
   require(extend_to_height_m >= 0 && extend_to_height_m <= 20, "extend_to_height_m", "expected a number in [0, 20] m");
   require(roi_disparity_margin_px >= 0 && roi_disparity_margin_px <= 1024, "roi_disparity_margin_px",
           "expected a number in [0, 1024] px (a large value searches the whole configured range)");
@@ -50,12 +51,12 @@ std::string DetectorOptions::describe() const {
   char buf[700];
   std::snprintf(buf, sizeof(buf),
                 "detector: epipolar test %s, depth test %s, disparity %s, <= %d ROIs searched up to max point "
-                "disparity + %.1f px at scale %.1f (half scale above %d px, 0 = never), left border padded %s, ROIs "
+                "disparity + %.1f px at scale %.1f (half scale above %d px, 0 = never, eroded %d px more), left border padded %s, ROIs "
                 "extended to the floor %s and %.2f m above it, side-by-side pieces split %s, stacked regions merged "
                 "%s, mask dilation %d px, densification %s, objects over frames %s",
                 use_epipolar_test ? "on" : "off", use_depth_test ? "on" : "off",
                 full_frame_disparity ? "whole frame (debug)" : "points + ROIs", max_rois, roi_disparity_margin_px,
-                roi_scale, half_scale_min_area_px, pad_left_border ? "on" : "off", extend_to_floor ? "on" : "off",
+                roi_scale, half_scale_min_area_px, half_scale_erode_px, pad_left_border ? "on" : "off", extend_to_floor ? "on" : "off",
                 extend_to_height_m, split_side_by_side ? "on" : "off", merge_stacked_regions ? "on" : "off",
                 mask_dilation_px, densify_text, objects_text);
   return buf;
@@ -429,17 +430,17 @@ void DynamicDetector::detect(const StereoFrame& frame, DetectorResult& result) {
       if (seg.roi.empty()) continue;
 
       t = Clock::now();
+      seg.half_scale = false;
       if (opt.full_frame_disparity) {
         result.full_disparity_px(seg.roi).copyTo(seg.disparity_px);
       } else {
         float max_d = 0;
         for (float dd : group_disp_) max_d = std::max(max_d, dd);
+        const bool half = config_.regions.mask_mode == MaskMode::kDisparity && opt.half_scale_min_area_px > 0 &&
+                          seg.roi.area() > opt.half_scale_min_area_px;
+        seg.half_scale = half || opt.roi_scale != 1.0;
         roi_disparity(frame, seg.roi, static_cast<int>(std::ceil(max_d + opt.roi_disparity_margin_px)),
-                      config_.regions.mask_mode == MaskMode::kDisparity && opt.half_scale_min_area_px > 0 &&
-                              seg.roi.area() > opt.half_scale_min_area_px
-                          ? 0.5
-                          : opt.roi_scale,
-                      seg.disparity_px);
+                      half ? 0.5 : opt.roi_scale, seg.disparity_px);
       }
       tm.roi_disparity_ms += ms_since(t);
 
@@ -599,6 +600,13 @@ void DynamicDetector::outline_region(const StereoFrame& frame, DetectorResult& r
   seg.outline_stats = outliner_.outline(seg.disparity_px, seg.roi.tl(), group_pts_, group_disp_, static_pts_,
                                         static_disp_, result.ground_plane.valid ? &result.ground_plane : nullptr,
                                         calibration_.bf(), seg.outline);
+  const int extra_erode = seg.half_scale ? config_.detector.half_scale_erode_px : 0;
+  if (extra_erode > 0 && seg.outline_stats.object_pixels > 0) {
+    const int k = 2 * extra_erode + 1;
+    cv::erode(seg.outline, eroded_outline_, cv::getStructuringElement(cv::MORPH_RECT, cv::Size(k, k)));
+    std::swap(seg.outline, eroded_outline_);
+    seg.outline_stats.object_pixels = cv::countNonZero(seg.outline);
+  }
   seg.labels.release();
   seg.superpixels = 0;
   seg.planes.clear();

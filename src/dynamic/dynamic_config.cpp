@@ -190,7 +190,7 @@ DynamicDetectorConfig load_dynamic_config(const std::string& path) {
   in.read("photometric", "region_inset_px", c.photometric.region_inset_px, "an integer (px)");
 
   in.check_keys("detector", {"use_epipolar_test", "use_depth_test", "full_frame_disparity", "max_rois",
-                             "roi_disparity_margin_px", "roi_scale", "half_scale_min_area_px", "extend_to_floor", "extend_to_height_m", "split_side_by_side", "mask_dilation_px", "densify",
+                             "roi_disparity_margin_px", "roi_scale", "half_scale_min_area_px", "half_scale_erode_px", "extend_to_floor", "extend_to_height_m", "split_side_by_side", "mask_dilation_px", "densify",
                              "densify_radius_px",
                              "densify_radius_disparity_factor", "densify_max_points", "densify_min_distance_px",
                              "track_objects", "continue_min_points", "pad_left_border", "merge_stacked_regions"});
@@ -201,6 +201,7 @@ DynamicDetectorConfig load_dynamic_config(const std::string& path) {
   in.read("detector", "roi_disparity_margin_px", c.detector.roi_disparity_margin_px, px);
   in.read("detector", "roi_scale", c.detector.roi_scale, "1 or 0.5");
   in.read("detector", "half_scale_min_area_px", c.detector.half_scale_min_area_px, "an integer (px)");
+  in.read("detector", "half_scale_erode_px", c.detector.half_scale_erode_px, "an integer (px)");
   in.read("detector", "extend_to_floor", c.detector.extend_to_floor, flag);
   in.read("detector", "extend_to_height_m", c.detector.extend_to_height_m, "a number (m)");
   in.read("detector", "split_side_by_side", c.detector.split_side_by_side, flag);

@@ -60,6 +60,9 @@ struct DetectorOptions {
   // mask_mode disparity: ROIs larger than this (px) get their SGBM at half resolution anyway (near objects: the
   // half-resolution block's fattening is small against their width; 0 = never).
   int half_scale_min_area_px = 0;
+  // ... and their outline loses this many more pixels at its edge (the half-resolution SGBM block fattens the
+  // foreground twice as far in full-resolution pixels).
+  int half_scale_erode_px = 0;
   // StereoSGBM leaves the leftmost num_disparities columns of what it matches without disparity, so a ROI at the
   // left image border (a person entering or leaving there, or passing close in a turn) lost its outline left of
   // x ~ 32-64. With this, such a ROI is matched in images padded on the left (edge replicated): its pixels get a
@@ -168,6 +171,7 @@ struct RoiSegmentation {
   std::vector<SuperpixelBoundary> boundaries;
   std::vector<SuperpixelMotion> motion;    // photometric check per superpixel (when enabled)
   cv::Mat outline;                         // CV_8UC1, ROI size: the object's pixels (mask_mode disparity)
+  bool half_scale = false;                 // disparity_px came from half-resolution SGBM
   OutlineStats outline_stats;
   SuperpixelMotion outline_motion, outline_motion_multiframe;  // photometric check of the outline (when run)
   OutlineVerdict outline_verdict = OutlineVerdict::kNoSeed;   // kKept: the outline is a dynamic region
@@ -267,7 +271,7 @@ class DynamicDetector {
   std::vector<int> dyn_index_;
   std::vector<cv::Point2f> group_pts_, static_pts_;
   std::vector<float> group_disp_, static_disp_;
-  cv::Mat dilated_, small_grey_, small_labels_;
+  cv::Mat dilated_, small_grey_, small_labels_, eroded_outline_;
   cv::Mat prev_left_, prev_right_;            // the previous frame (for densification)
   std::vector<cv::KeyPoint> keypoints_;
   std::vector<cv::Point2f> extra_prev_, extra_cur_;
