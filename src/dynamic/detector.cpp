@@ -607,6 +607,16 @@ void DynamicDetector::outline_region(const StereoFrame& frame, DetectorResult& r
     std::swap(seg.outline, eroded_outline_);
     seg.outline_stats.object_pixels = cv::countNonZero(seg.outline);
   }
+  const OutlineConfig& occ = config_.outline;
+  const double d_med = seg.outline_stats.median_disparity_px;
+  if (occ.close_far_m > 0 && d_med > 0 && d_med <= occ.close_max_disparity_px && seg.outline_stats.object_pixels > 0) {
+    // close_far_m at depth bf / d spans close_far_m * fx * d / bf = close_far_m * d / B px.
+    const int k = std::max(3, 2 * static_cast<int>(std::lround(0.5 * occ.close_far_m * d_med / calibration_.baseline_m)) + 1);
+    cv::morphologyEx(seg.outline, eroded_outline_, cv::MORPH_CLOSE, cv::getStructuringElement(cv::MORPH_ELLIPSE, cv::Size(k, k)),
+                     cv::Point(-1, -1), 1, cv::BORDER_CONSTANT, cv::Scalar(0));
+    std::swap(seg.outline, eroded_outline_);
+    seg.outline_stats.object_pixels = cv::countNonZero(seg.outline);
+  }
   seg.labels.release();
   seg.superpixels = 0;
   seg.planes.clear();

@@ -28,21 +28,25 @@ void OutlineConfig::validate(const std::string& source) const {
   require(min_pixels >= 0 && min_pixels <= 1000000, "min_pixels", "expected an integer in [0, 1000000] px");
   require(min_dynamic_fraction >= 0 && min_dynamic_fraction <= 1, "min_dynamic_fraction", "expected a number in [0, 1]");
   require(max_height_m >= 0 && max_height_m <= 100, "max_height_m", "expected a number in [0, 100] m");
+  require(close_far_m >= 0 && close_far_m <= 2, "close_far_m", "expected a size in [0, 2] m (0: off)");
+  require(close_max_disparity_px >= 0 && close_max_disparity_px <= 500, "close_max_disparity_px",
+          "expected a disparity in [0, 500] px");
   require(min_tracked_for_fraction >= 1 && min_tracked_for_fraction <= 100000, "min_tracked_for_fraction",
           "expected an integer in [1, 100000]");
 }
 
 std::string OutlineConfig::describe() const {
-  char buf[560];
+  char buf[640];
   std::snprintf(buf, sizeof(buf),
                 "outline: seeds within %d px agreeing to %.2f + %.3f d px; flood steps <= %.2f + %.3f d px within "
                 "%.2f m of the seed's depth; floor within %.2f + %.3f d px of the ground plane; static competition %s; "
                 "enclosed parts join when >= %.0f %% without disparity or < %d px; eroded by %d px; kept when >= %d px "
-                "and (< %d tracks inside or >= %.0f %% of them dynamic) and <= %.1f m tall",
+                "and (< %d tracks inside or >= %.0f %% of them dynamic) and <= %.1f m tall; far ones (d <= %.1f px) closed "
+                "over %.2f m",
                 seed_radius_px, seed_tolerance_px, seed_tolerance_rel, step_tolerance_px, step_tolerance_rel, depth_band_m,
                 ground_tolerance_px, ground_tolerance_rel, static_competition ? "on" : "off",
                 100 * max_hole_invalid_fraction, min_hole_fill_px, erode_px, min_pixels, min_tracked_for_fraction,
-                100 * min_dynamic_fraction, max_height_m);
+                100 * min_dynamic_fraction, max_height_m, close_max_disparity_px, close_far_m);
   return buf;
 }
 

@@ -54,6 +54,11 @@ struct OutlineConfig {
   // ... or one taller than max_height_m at its median disparity (people, forklifts and AGVs are lower; a rack
   // upright flooded from a few false tracks at its edge is not). 0 = no limit.
   double max_height_m = 3.0;
+  // Beyond the paper: a far outline (median disparity <= close_max_disparity_px) is closed (morphologically) with
+  // a disc of close_far_m at its depth: a far forklift's mast and overhead guard are a few pixels wide and get no
+  // SGBM disparity of their own. The detector applies it (it knows the camera). 0 m = off.
+  double close_far_m = 0.5;
+  double close_max_disparity_px = 8.0;
 
   void validate(const std::string& source) const;
   std::string describe() const;
