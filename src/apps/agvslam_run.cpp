@@ -295,7 +295,9 @@ int run(const Options& o) {
   const auto dataset = agvslam::io::open_dataset(o.dataset, o.calib);
   std::size_t first = 0, last = 0;
   agvslam::io::parse_frame_range(o.frames, dataset->size(), "--frames", o.frames, first, last);
-  if (mode == DynamicMode::kGroundTruth && dataset->ground_truth_mask(first).empty()) {
+  // With ground-truth masks (simulator folders) every mode scores the pose's inliers against them.
+  const bool has_gt_masks = !dataset->ground_truth_mask(first).empty();
+  if (mode == DynamicMode::kGroundTruth && !has_gt_masks) {
     throw InputError("--dynamic", "gt", "expected a dataset with ground-truth masks (mask_0/, as agvslam-sim writes); " +
                                             dataset->root() + " has none");
   }
@@ -363,8 +365,6 @@ int run(const Options& o) {
   }
 
   // Reader (+ detector) thread, one frame ahead.
-  // With ground-truth masks (simulator folders) every mode scores the pose's inliers against them.
-  const bool has_gt_masks = !dataset->ground_truth_mask(first).empty();
   JobQueue queue(2);
   std::thread worker([&] {
     std::optional<dyn::DynamicDetector> detector;
@@ -398,8 +398,8 @@ int run(const Options& o) {
           job.detector_cpu_ms = slam::thread_cpu_ms() - cpu1;
           job.mask = result.mask.image.clone();
         }
-        if (has_gt_masks && !job.blank) job.gt_mask = dataset->ground_truth_mask(i);
-        if (mode == DynamicMode::kGroundTruth) job.mask = job.gt_mask.empty() ? dataset->ground_truth_mask(i) : job.gt_mask;
+        if (has_gt_masks) job.gt_mask = dataset->ground_truth_mask(i);
+        if (mode == DynamicMode::kGroundTruth) job.mask = job.gt_mask;
         queue.push(std::move(job));
       }
     } catch (const std::exception& e) {

@@ -568,10 +568,10 @@ bool Tracking::need_new_keyframe() {
   const double ref_ratio = n_kfs < 2 ? 0.4 : config_.tracking.keyframe_ref_ratio;
   const bool c1a = current_.id >= last_keyframe_frame_id_ + static_cast<uint64_t>(max_frames_);
   const bool c1b = current_.id >= last_keyframe_frame_id_ + static_cast<uint64_t>(min_frames_) && mapper_idle;
-  const bool c1c = inliers_ < ref_matches * 0.25 || need_close;
+  const bool weak = inliers_ < ref_matches * 0.25;
+  const bool c1c = weak || need_close;
   const bool c2 = (inliers_ < ref_matches * ref_ratio || need_close) && inliers_ > 15;
   if (!((c1a || c1b || c1c) && c2)) return false;
-  const bool weak = inliers_ < ref_matches * 0.25;
   if (KeyFrame* old_kf = weak ? nullptr : revisited_keyframe()) {
     // The place is already in the map from an earlier pass: track against that keyframe instead of adding one.
     reference_kf_ = old_kf->shared_from_this();
