@@ -654,7 +654,7 @@ void DynamicDetector::outline_region(const StereoFrame& frame, DetectorResult& r
     seg.outline_motion = region_motion(frame.left, prev_left_, calibration_.left, calibration_.bf(), result.depth.T_cur_prev,
                                        seg.outline, seg.disparity_px, seg.roi.tl(), pc, pc.max_motion_px);
     bool moves_with_background = seg.outline_motion.apparent_motion_px >= 0 && seg.outline_motion.moves_with_background;
-    if (moves_with_background && result.multiframe.valid) {
+    if (moves_with_background && result.multiframe.valid && st.median_disparity_px >= pc.multiframe_min_disparity_px) {
       seg.outline_motion_multiframe =
           region_motion(frame.left, result.multiframe.reference_left, calibration_.left, calibration_.bf(),
                         result.multiframe.T_cur_ref, seg.outline, seg.disparity_px, seg.roi.tl(), pc,

@@ -68,7 +68,7 @@ DynamicDetectorConfig load_dynamic_config(const std::string& path) {
                                "min_points", "min_disparity_px", "ransac_reprojection_px", "a_reproj_px", "b_reproj",
                                "a_disp_px", "b_disp", "adaptive_k", "max_scale", "verify_levels", "verify_fb_px",
                                "verify_max_shift_px", "edge_check_px", "edge_tolerance_px", "edge_tolerance_rel",
-                               "check_half_window", "check_uniqueness_margin"});
+                               "check_half_window", "check_uniqueness_margin", "aperture_ratio"});
   MultiFrameTestConfig& m = c.multiframe;
   in.read("multiframe", "enabled", m.enabled, flag);
   in.read("multiframe", "max_frames", m.max_frames, integer);
@@ -92,6 +92,7 @@ DynamicDetectorConfig load_dynamic_config(const std::string& path) {
   in.read("multiframe", "edge_tolerance_rel", m.edge_tolerance_rel, num);
   in.read("multiframe", "check_half_window", m.check_half_window, integer);
   in.read("multiframe", "check_uniqueness_margin", m.check_uniqueness_margin, num);
+  in.read("multiframe", "aperture_ratio", m.aperture_ratio, num);
 
   in.check_keys("grouping", {"a_s_px", "b_s", "t_disp_px", "t_disp_rel", "min_points", "margin_px",
                              "margin_disparity_factor", "merge_overlapping", "merge_side_gap_m"});
@@ -183,13 +184,14 @@ DynamicDetectorConfig load_dynamic_config(const std::string& path) {
   in.read("outline", "close_max_disparity_px", o.close_max_disparity_px, "a number (px)");
 
   in.check_keys("photometric", {"enabled", "max_motion_px", "min_gradient", "sample_step_px", "min_samples",
-                                "multiframe_max_motion_px", "region_inset_px"});
+                                "multiframe_max_motion_px", "multiframe_min_disparity_px", "region_inset_px"});
   in.read("photometric", "enabled", c.photometric.enabled, flag);
   in.read("photometric", "max_motion_px", c.photometric.max_motion_px, px);
   in.read("photometric", "min_gradient", c.photometric.min_gradient, "a number (grey levels per px)");
   in.read("photometric", "sample_step_px", c.photometric.sample_step_px, "an integer (px)");
   in.read("photometric", "min_samples", c.photometric.min_samples, "an integer");
   in.read("photometric", "multiframe_max_motion_px", c.photometric.multiframe_max_motion_px, px);
+  in.read("photometric", "multiframe_min_disparity_px", c.photometric.multiframe_min_disparity_px, px);
   in.read("photometric", "region_inset_px", c.photometric.region_inset_px, "an integer (px)");
 
   in.check_keys("detector", {"use_epipolar_test", "use_depth_test", "full_frame_disparity", "max_rois",

@@ -36,6 +36,7 @@ void MultiFrameTestConfig::validate(const std::string& source) const {
   require(check_half_window >= 0 && check_half_window <= 20, "check_half_window", "expected an integer in [0, 20]");
   require(check_uniqueness_margin >= 0 && check_uniqueness_margin <= 10, "check_uniqueness_margin",
           "expected a number in [0, 10]");
+  require(aperture_ratio >= 0 && aperture_ratio < 1, "aperture_ratio", "expected a number in [0, 1)");
 }
 
 std::string MultiFrameTestConfig::describe() const {
@@ -45,11 +46,11 @@ std::string MultiFrameTestConfig::describe() const {
                 "tracks with d >= %.1f px in both; PnP %.2f px; dynamic if offset > %.2f + %.3f d px or disparity "
                 "residual > %.2f + %.3f d px (adaptive k %.1f, <= %.1fx); verified by LK into the reference (%d levels, "
                 "fb <= %.2f px, same point within %.2f px); not at depth edges (disparity %d px away within %.2f + "
-                "%.3f d px); disparity confirmed with a %dx%d window, uniqueness %.2f",
+                "%.3f d px); disparity confirmed with a %dx%d window, uniqueness %.2f; aperture ratio %.2f",
                 enabled ? "on" : "off", min_frames, max_frames, min_translation_m, max_rotation_deg, min_points,
                 min_disparity_px, ransac_reprojection_px, a_reproj_px, b_reproj, a_disp_px, b_disp, adaptive_k, max_scale,
                 verify_levels, verify_fb_px, verify_max_shift_px, edge_check_px, edge_tolerance_px, edge_tolerance_rel,
-                2 * check_half_window + 1, 2 * check_half_window + 1, check_uniqueness_margin);
+                2 * check_half_window + 1, 2 * check_half_window + 1, check_uniqueness_margin, aperture_ratio);
   return buf;
 }
 
@@ -149,6 +150,41 @@ DepthTestConfig inner_test_config(const MultiFrameTestConfig& c) {
   return d;
 }
 }  // namespace
+
+double offset_across_edge(const cv::Mat& image, const cv::Point2f& p, int half, const PinholeCamera& camera,
+                          double bf_px_m, const SE3d& T_cur_ref, const cv::Point2f& ref_px, float ref_disparity_px,
+                          double ratio) {
+  const int x0 = cvRound(p.x) - half, y0 = cvRound(p.y) - half;
+  if (x0 < 1 || y0 < 1 || x0 + 2 * half + 1 >= image.cols - 1 || y0 + 2 * half + 1 >= image.rows - 1 || !(ref_disparity_px > 0)) {
+    return -1;
+  }
+  double gxx = 0, gxy = 0, gyy = 0;
+  for (int y = y0; y <= y0 + 2 * half; ++y) {
+    const uint8_t* r = image.ptr<uint8_t>(y);
+    const uint8_t* up = image.ptr<uint8_t>(y - 1);
+    const uint8_t* down = image.ptr<uint8_t>(y + 1);
+    for (int x = x0; x <= x0 + 2 * half; ++x) {
+      const double gx = 0.5 * (r[x + 1] - r[x - 1]);
+      const double gy = 0.5 * (down[x] - up[x]);
+      gxx += gx * gx;
+      gxy += gx * gy;
+      gyy += gy * gy;
+    }
+  }
+  const double tr = gxx + gyy, det = gxx * gyy - gxy * gxy;
+  const double disc = std::sqrt(std::max(0.0, 0.25 * tr * tr - det));
+  const double l_max = 0.5 * tr + disc, l_min = 0.5 * tr - disc;
+  if (!(l_max > 0) || l_min >= ratio * l_max) return -1;
+  // Eigenvector of l_max.
+  Eigen::Vector2d v = std::abs(gxy) > 1e-12 ? Eigen::Vector2d(l_max - gyy, gxy) : (gxx >= gyy ? Eigen::Vector2d(1, 0) : Eigen::Vector2d(0, 1));
+  v.normalize();
+  const double z = bf_px_m / ref_disparity_px;
+  const Eigen::Vector3d X((ref_px.x - camera.cx) / camera.fx * z, (ref_px.y - camera.cy) / camera.fy * z, z);
+  const Eigen::Vector3d Xc = T_cur_ref * X;
+  if (!(Xc.z() > 1e-3)) return -1;
+  const Eigen::Vector2d e(camera.fx * Xc.x() / Xc.z() + camera.cx - p.x, camera.fy * Xc.y() / Xc.z() + camera.cy - p.y);
+  return std::abs(e.dot(v));
+}
 
 MultiFrameTest::MultiFrameTest(const MultiFrameTestConfig& config) : config_(config), test_(inner_test_config(config)) {}
 
@@ -285,7 +321,13 @@ void MultiFrameTest::run(const PinholeCamera& camera, double bf_px_m, const Trac
     DepthConsistencyTest::residuals(camera, bf_px_m, result.T_cur_ref, found, ref_d_[i], cur_px_[i], cur_d_[i], offset,
                                     r_disp);
     const double d = cur_d_[i] > 0 ? cur_d_[i] : ref_d_[i];
-    const bool off_2d = offset >= 0 && offset > result.test.a_reproj_used_px + config_.b_reproj * d;
+    const double t_2d = result.test.a_reproj_used_px + config_.b_reproj * d;
+    bool off_2d = offset >= 0 && offset > t_2d;
+    if (off_2d && config_.aperture_ratio > 0 && offset < 1e5) {
+      const double across = offset_across_edge(cur_pyramid[0], cur_px_[i], tracking.window_px / 2, camera, bf_px_m,
+                                               result.T_cur_ref, found, ref_d_[i], config_.aperture_ratio);
+      if (across >= 0) off_2d = across > t_2d;
+    }
     const bool off_depth = same_point && r_disp >= 0 && r_disp > result.test.a_disp_used_px + config_.b_disp * d;
     result.test.reprojection_px[i] = offset;
     result.test.disparity_residual_px[i] = same_point ? r_disp : -1;

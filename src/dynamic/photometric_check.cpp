@@ -17,15 +17,17 @@ void PhotometricCheckConfig::validate(const std::string& source) const {
   require(min_samples >= 3 && min_samples <= 100000, "min_samples", "expected an integer in [3, 100000]");
   require(multiframe_max_motion_px > 0 && multiframe_max_motion_px <= 20, "multiframe_max_motion_px",
           "expected a number in (0, 20] px");
+  require(multiframe_min_disparity_px >= 0 && multiframe_min_disparity_px <= 1000, "multiframe_min_disparity_px",
+          "expected a number in [0, 1000] px");
   require(region_inset_px >= 0 && region_inset_px <= 20, "region_inset_px", "expected an integer in [0, 20] px");
 }
 
 std::string PhotometricCheckConfig::describe() const {
-  char buf[360];
+  char buf[420];
   std::snprintf(buf, sizeof(buf),
-                "photometric: %s, static when apparent motion <= %.2f px (multi-frame reference %.2f px) with gradient "
-                ">= %.1f /px, every %d px, >= %d samples, regions sampled %d px inside",
-                enabled ? "on" : "off", max_motion_px, multiframe_max_motion_px, min_gradient, sample_step_px,
+                "photometric: %s, static when apparent motion <= %.2f px (multi-frame reference %.2f px, consulted for "
+                "regions with d >= %.1f px) with gradient >= %.1f /px, every %d px, >= %d samples, regions sampled %d px inside",
+                enabled ? "on" : "off", max_motion_px, multiframe_max_motion_px, multiframe_min_disparity_px, min_gradient, sample_step_px,
                 min_samples, region_inset_px);
   return buf;
 }

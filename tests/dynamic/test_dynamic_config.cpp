@@ -75,6 +75,8 @@ TEST(DynamicConfig, BadValuesNameFileAndField) {
   expect_error("grouping:\n  merge_side_gap_m: -0.1\n", "grouping.merge_side_gap_m");
   expect_error("detector:\n  half_scale_erode_px: 11\n", "detector.half_scale_erode_px");
   expect_error("outline:\n  close_far_m: 3\n", "outline.close_far_m");
+  expect_error("multiframe:\n  aperture_ratio: 1\n", "multiframe.aperture_ratio");
+  expect_error("photometric:\n  multiframe_min_disparity_px: -2\n", "photometric.multiframe_min_disparity_px");
   expect_error("slic:\n  superpixel_size: 12\n", "slic.superpixel_size");  // unknown key
   expect_error("regions:\n  mask_mode: blob\n", "regions.mask_mode");
   expect_error("detector:\n  roi_scale: 0.3\n", "detector.roi_scale");

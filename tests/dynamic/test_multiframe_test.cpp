@@ -238,6 +238,37 @@ TEST(MultiFrameTest, StandingStillUsesTheOldestFrame) {
   for (uint8_t v : r.test.dynamic) EXPECT_EQ(v, 0);
 }
 
+// Aperture check on built patches: on a horizontal step edge only the vertical part of the offset counts; a
+// textured patch is well conditioned (-1: the whole offset counts).
+TEST(MultiFrameTest, ApertureCheckKeepsOnlyTheOffsetAcrossAnEdge) {
+  cv::Mat image(120, 160, CV_8UC1, cv::Scalar(60));
+  image.rowRange(60, 120).setTo(180);                      // horizontal edge at y = 60 for x < 80
+  cv::Mat textured = image.colRange(80, 160);
+  cv::randu(textured, cv::Scalar(0), cv::Scalar(255));     // x >= 80: random texture
+  PinholeCamera camera;
+  camera.fx = camera.fy = 400;
+  camera.cx = 80;
+  camera.cy = 60;
+  camera.width = 160;
+  camera.height = 120;
+  const double bf = 40;
+  const SE3d still = SE3d::Identity();
+  const cv::Point2f on_edge(40, 60);
+  // Slid 4 px along the edge: nothing across it.
+  EXPECT_NEAR(offset_across_edge(image, on_edge, 5, camera, bf, still, on_edge + cv::Point2f(4, 0), 8.0f, 0.15), 0.0, 1e-6);
+  // 3 px across and 4 px along: the 3 px count.
+  EXPECT_NEAR(offset_across_edge(image, on_edge, 5, camera, bf, still, on_edge + cv::Point2f(4, 3), 8.0f, 0.15), 3.0, 1e-6);
+  // A textured patch and a flat one: not edge-like, the whole offset counts.
+  EXPECT_EQ(offset_across_edge(image, cv::Point2f(120, 60), 5, camera, bf, still, cv::Point2f(124, 60), 8.0f, 0.15), -1);
+  EXPECT_EQ(offset_across_edge(image, cv::Point2f(40, 20), 5, camera, bf, still, cv::Point2f(44, 20), 8.0f, 0.15), -1);
+  // The prediction moves with the camera: 0.1 m to the right makes a point at 5 m (d = 8 px) appear 8 px left.
+  SE3d right = SE3d::Identity();
+  right.translation() = Eigen::Vector3d(-0.1, 0, 0);
+  EXPECT_NEAR(offset_across_edge(image, on_edge, 5, camera, bf, right, on_edge + cv::Point2f(8, 2), 8.0f, 0.15), 2.0, 1e-6);
+  // Too close to the border to sample the patch.
+  EXPECT_EQ(offset_across_edge(image, cv::Point2f(3, 60), 5, camera, bf, still, cv::Point2f(7, 60), 8.0f, 0.15), -1);
+}
+
 TEST(MultiFrameTest, InvalidConfigurationNamesTheField) {
   MultiFrameTestConfig c;
   c.min_frames = 20;  // > max_frames

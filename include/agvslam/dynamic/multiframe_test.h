@@ -76,6 +76,11 @@ struct MultiFrameTestConfig {
   // match makes it not dynamic by this test. 0 = off.
   int check_half_window = 8;
   double check_uniqueness_margin = 0.2;
+  // Aperture check: a track on an edge-like patch (least / largest eigenvalue of its gradient structure tensor
+  // below aperture_ratio) slides along the edge over the frames, and the verification cannot tell (LK into the
+  // reference does not move along the edge either). For such a track only the part of the offset across the
+  // edge (along the strong gradient) counts for the 2-D test. 0 = off.
+  double aperture_ratio = 0.15;
 
   void validate(const std::string& source) const;
   std::string describe() const;
@@ -127,6 +132,14 @@ struct MultiFrameResult {
   cv::Mat reference_left;         // the reference frame's left image (shared; valid until the next run)
   DepthTestResult test;           // per track (current list) residuals and decisions
 };
+
+// Aperture check of one track: for an edge-like (2 half + 1)^2 patch of `image` (CV_8UC1) around p (least / largest
+// eigenvalue of its gradient structure tensor below ratio), the component along the strong gradient of the offset
+// between the prediction (ref_px with ref_disparity_px moved by T_cur_ref and projected) and p; -1 for a
+// well-conditioned patch (the whole offset counts), a patch without gradient or one too close to the border.
+double offset_across_edge(const cv::Mat& image, const cv::Point2f& p, int half, const PinholeCamera& camera,
+                          double bf_px_m, const SE3d& T_cur_ref, const cv::Point2f& ref_px, float ref_disparity_px,
+                          double ratio);
 
 class MultiFrameTest {
  public:

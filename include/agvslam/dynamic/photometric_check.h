@@ -34,6 +34,9 @@ struct PhotometricCheckConfig {
   // the depth error of the warp grows with the baseline), sampling its pixels at least region_inset_px inside its
   // outline (SGBM's disparity is unreliable at the edge).
   double multiframe_max_motion_px = 1.2;
+  // The multi-frame reference can only keep a region (static frame to frame) whose median disparity is at least
+  // this (px; 0 = any): farther regions it keeps are false (see params/dynamic.yaml).
+  double multiframe_min_disparity_px = 10;
   int region_inset_px = 2;
 
   void validate(const std::string& source) const;
