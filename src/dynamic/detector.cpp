@@ -416,6 +416,12 @@ void DynamicDetector::detect(const StereoFrame& frame, DetectorResult& result) {
           }
         }
       }
+      // An object near the left border may reach into the band without stereo matches (x < d): the ROI then
+      // starts at the border, so the outline can be completed there (outline.left_band_touch_px).
+      if (config_.outline.left_band_touch_px >= 0 && seg.roi.x > 0 && seg.roi.x <= 1.5 * group.mean_disparity_px) {
+        seg.roi.width += seg.roi.x;
+        seg.roi.x = 0;
+      }
       seg.points.clear();
       group_pts_.clear();
       group_disp_.clear();
@@ -615,6 +621,18 @@ void DynamicDetector::outline_region(const StereoFrame& frame, DetectorResult& r
     cv::morphologyEx(seg.outline, eroded_outline_, cv::MORPH_CLOSE, cv::getStructuringElement(cv::MORPH_ELLIPSE, cv::Size(k, k)),
                      cv::Point(-1, -1), 1, cv::BORDER_CONSTANT, cv::Scalar(0));
     std::swap(seg.outline, eroded_outline_);
+    seg.outline_stats.object_pixels = cv::countNonZero(seg.outline);
+  }
+  if (occ.left_band_touch_px >= 0 && d_med > 0 && seg.roi.x < d_med && seg.outline_stats.object_pixels > 0) {
+    // Rows whose outline starts within left_band_touch_px of the unmatched band x < d_med: filled to the border.
+    const int band_end = static_cast<int>(std::ceil(d_med)) - seg.roi.x + occ.left_band_touch_px;
+    for (int y = 0; y < seg.outline.rows; ++y) {
+      uint8_t* row = seg.outline.ptr<uint8_t>(y);
+      const int limit = std::min(band_end, seg.outline.cols - 1);
+      int x0 = 0;
+      while (x0 <= limit && !row[x0]) ++x0;
+      if (x0 > 0 && x0 <= limit) std::fill(row, row + x0, static_cast<uint8_t>(255));
+    }
     seg.outline_stats.object_pixels = cv::countNonZero(seg.outline);
   }
   seg.labels.release();

@@ -162,7 +162,7 @@ DynamicDetectorConfig load_dynamic_config(const std::string& path) {
                             "step_tolerance_rel", "depth_band_m", "ground_tolerance_px", "ground_tolerance_rel",
                             "static_competition", "max_hole_invalid_fraction", "min_hole_fill_px", "erode_px", "min_pixels",
                             "min_dynamic_fraction", "min_tracked_for_fraction", "max_height_m", "close_far_m",
-                            "close_max_disparity_px"});
+                            "close_max_disparity_px", "left_band_touch_px"});
   OutlineConfig& o = c.outline;
   in.read("outline", "seed_radius_px", o.seed_radius_px, "an integer (px)");
   in.read("outline", "seed_tolerance_px", o.seed_tolerance_px, px);
@@ -181,6 +181,7 @@ DynamicDetectorConfig load_dynamic_config(const std::string& path) {
   in.read("outline", "min_tracked_for_fraction", o.min_tracked_for_fraction, integer);
   in.read("outline", "max_height_m", o.max_height_m, "a number (m)");
   in.read("outline", "close_far_m", o.close_far_m, "a number (m)");
+  in.read("outline", "left_band_touch_px", o.left_band_touch_px, "an integer (px)");
   in.read("outline", "close_max_disparity_px", o.close_max_disparity_px, "a number (px)");
 
   in.check_keys("photometric", {"enabled", "max_motion_px", "min_gradient", "sample_step_px", "min_samples",

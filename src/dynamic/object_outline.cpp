@@ -31,22 +31,24 @@ void OutlineConfig::validate(const std::string& source) const {
   require(close_far_m >= 0 && close_far_m <= 2, "close_far_m", "expected a size in [0, 2] m (0: off)");
   require(close_max_disparity_px >= 0 && close_max_disparity_px <= 500, "close_max_disparity_px",
           "expected a disparity in [0, 500] px");
+  require(left_band_touch_px >= -1 && left_band_touch_px <= 100, "left_band_touch_px",
+          "expected an integer in [-1, 100] px (-1: off)");
   require(min_tracked_for_fraction >= 1 && min_tracked_for_fraction <= 100000, "min_tracked_for_fraction",
           "expected an integer in [1, 100000]");
 }
 
 std::string OutlineConfig::describe() const {
-  char buf[640];
+  char buf[720];
   std::snprintf(buf, sizeof(buf),
                 "outline: seeds within %d px agreeing to %.2f + %.3f d px; flood steps <= %.2f + %.3f d px within "
                 "%.2f m of the seed's depth; floor within %.2f + %.3f d px of the ground plane; static competition %s; "
                 "enclosed parts join when >= %.0f %% without disparity or < %d px; eroded by %d px; kept when >= %d px "
                 "and (< %d tracks inside or >= %.0f %% of them dynamic) and <= %.1f m tall; far ones (d <= %.1f px) closed "
-                "over %.2f m",
+                "over %.2f m; rows within %d px of the unmatched left band filled to the border (-1: off)",
                 seed_radius_px, seed_tolerance_px, seed_tolerance_rel, step_tolerance_px, step_tolerance_rel, depth_band_m,
                 ground_tolerance_px, ground_tolerance_rel, static_competition ? "on" : "off",
                 100 * max_hole_invalid_fraction, min_hole_fill_px, erode_px, min_pixels, min_tracked_for_fraction,
-                100 * min_dynamic_fraction, max_height_m, close_max_disparity_px, close_far_m);
+                100 * min_dynamic_fraction, max_height_m, close_max_disparity_px, close_far_m, left_band_touch_px);
   return buf;
 }
 

@@ -248,5 +248,33 @@ TEST(DynamicDetector, BoxAtTheLeftBorderGetsItsOutlineThere) {
               with_band, gt_band, without_band, iou_with, iou_without);
 }
 
+TEST(DynamicDetector, BoxAtTheLeftBorderIsCompletedIntoTheUnmatchedBand) {
+  // The same box: its pixels at x < d (22 px) have no match in the right image. Rows where the outline reaches
+  // that band are filled to the border (outline.left_band_touch_px); off, the band stays empty.
+  CorridorScene scene;
+  scene.box.origin = {-2.3, -1.1, 2.5};
+  scene.box.width_m = 0.8;
+  const Eigen::Vector3d motion(0.08, 0, 0);
+  DynamicDetectorConfig filled;
+  DynamicDetectorConfig unfilled;
+  unfilled.outline.left_band_touch_px = -1;
+  const RunOutcome with = run_two_frames(filled, camera_pose(0.0, 0, 0.10, 0.0), motion, true, scene);
+  const RunOutcome without = run_two_frames(unfilled, camera_pose(0.0, 0, 0.10, 0.0), motion, true, scene);
+  const cv::Rect band(0, 0, 18, 480);
+  const int gt_band = cv::countNonZero(with.gt_mask(band));
+  ASSERT_GT(gt_band, 18 * 150);
+  const int with_band = cv::countNonZero(with.result.mask.image(band) & with.gt_mask(band));
+  const int with_false = cv::countNonZero(with.result.mask.image(band) & ~with.gt_mask(band));
+  const int without_band = cv::countNonZero(without.result.mask.image(band));
+  EXPECT_GT(with_band, gt_band * 8 / 10) << summary(with.result);
+  EXPECT_LT(with_false, gt_band / 10) << summary(with.result);
+  EXPECT_LT(without_band, gt_band / 20) << summary(without.result);
+  const double iou_with = iou(with.result.mask.image, with.gt_mask);
+  const double iou_without = iou(without.result.mask.image, without.gt_mask);
+  EXPECT_GT(iou_with, iou_without + 0.05);
+  std::printf("box at the left border: band x < 18 %d / %d px filled (%d false), IoU %.3f filled, %.3f not\n",
+              with_band, gt_band, with_false, iou_with, iou_without);
+}
+
 }  // namespace
 }  // namespace agvslam::dynamic

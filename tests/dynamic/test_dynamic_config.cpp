@@ -76,6 +76,7 @@ TEST(DynamicConfig, BadValuesNameFileAndField) {
   expect_error("detector:\n  half_scale_erode_px: 11\n", "detector.half_scale_erode_px");
   expect_error("outline:\n  close_far_m: 3\n", "outline.close_far_m");
   expect_error("multiframe:\n  aperture_ratio: 1\n", "multiframe.aperture_ratio");
+  expect_error("outline:\n  left_band_touch_px: -2\n", "outline.left_band_touch_px");
   expect_error("photometric:\n  multiframe_min_disparity_px: -2\n", "photometric.multiframe_min_disparity_px");
   expect_error("slic:\n  superpixel_size: 12\n", "slic.superpixel_size");  // unknown key
   expect_error("regions:\n  mask_mode: blob\n", "regions.mask_mode");

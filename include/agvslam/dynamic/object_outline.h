@@ -59,6 +59,11 @@ struct OutlineConfig {
   // SGBM disparity of their own. The detector applies it (it knows the camera). 0 m = off.
   double close_far_m = 0.5;
   double close_max_disparity_px = 8.0;
+  // Beyond the paper: the leftmost d columns of the left image have no match in the right one at disparity d, so an
+  // object entering or leaving at the left border has no disparity there (nor an outline). In each row where the
+  // outline reaches within left_band_touch_px of that band (x < median d of the outline), the row is filled from
+  // the image border to the outline. The detector applies it. -1 = off.
+  int left_band_touch_px = 6;
 
   void validate(const std::string& source) const;
   std::string describe() const;
