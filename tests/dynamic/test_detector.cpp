@@ -250,14 +250,14 @@ TEST(DynamicDetector, BoxAtTheLeftBorderGetsItsOutlineThere) {
 
 TEST(DynamicDetector, BoxAtTheLeftBorderIsCompletedIntoTheUnmatchedBand) {
   // The same box: its pixels at x < d (22 px) have no match in the right image. Rows where the outline reaches
-  // that band are filled to the border (outline.left_band_touch_px); off, the band stays empty.
+  // that band are filled to the border (outline.left_band_touch_px 6); off (the default), the band stays empty.
   CorridorScene scene;
   scene.box.origin = {-2.3, -1.1, 2.5};
   scene.box.width_m = 0.8;
   const Eigen::Vector3d motion(0.08, 0, 0);
   DynamicDetectorConfig filled;
-  DynamicDetectorConfig unfilled;
-  unfilled.outline.left_band_touch_px = -1;
+  filled.outline.left_band_touch_px = 6;
+  DynamicDetectorConfig unfilled;  // the default: off
   const RunOutcome with = run_two_frames(filled, camera_pose(0.0, 0, 0.10, 0.0), motion, true, scene);
   const RunOutcome without = run_two_frames(unfilled, camera_pose(0.0, 0, 0.10, 0.0), motion, true, scene);
   const cv::Rect band(0, 0, 18, 480);
