@@ -143,17 +143,27 @@ void DepthConsistencyTest::residuals(const PinholeCamera& camera, double bf_px_m
   reprojection_px = -1;
   disparity_residual_px = -1;
   if (!(prev_disparity_px > 0)) return;
+  Eigen::Vector2d uv;
+  double depth_m = 0;
+  if (!predict(camera, bf_px_m, T_cur_prev, prev_px, prev_disparity_px, uv, depth_m)) {
+    reprojection_px = 1e6;  // behind the camera under the estimated motion: inconsistent
+    return;
+  }
+  reprojection_px = std::hypot(uv.x() - cur_px.x, uv.y() - cur_px.y);
+  if (cur_disparity_px > 0) disparity_residual_px = std::abs(bf_px_m / depth_m - cur_disparity_px);
+}
+
+bool DepthConsistencyTest::predict(const PinholeCamera& camera, double bf_px_m, const SE3d& T_cur_prev,
+                                   const cv::Point2f& prev_px, float prev_disparity_px, Eigen::Vector2d& predicted_px,
+                                   double& depth_m) {
+  if (!(prev_disparity_px > 0)) return false;
   const double z = bf_px_m / prev_disparity_px;
   const Eigen::Vector3d X((prev_px.x - camera.cx) / camera.fx * z, (prev_px.y - camera.cy) / camera.fy * z, z);
   const Eigen::Vector3d Xc = T_cur_prev * X;
-  if (!(Xc.z() > 1e-3)) {  // behind the camera under the estimated motion: inconsistent
-    reprojection_px = 1e6;
-    return;
-  }
-  const double u = camera.fx * Xc.x() / Xc.z() + camera.cx;
-  const double v = camera.fy * Xc.y() / Xc.z() + camera.cy;
-  reprojection_px = std::hypot(u - cur_px.x, v - cur_px.y);
-  if (cur_disparity_px > 0) disparity_residual_px = std::abs(bf_px_m / Xc.z() - cur_disparity_px);
+  if (!(Xc.z() > 1e-3)) return false;
+  predicted_px = Eigen::Vector2d(camera.fx * Xc.x() / Xc.z() + camera.cx, camera.fy * Xc.y() / Xc.z() + camera.cy);
+  depth_m = Xc.z();
+  return true;
 }
 
 bool DepthConsistencyTest::is_dynamic(const DepthTestResult& fitted, double reprojection_px,

@@ -155,9 +155,7 @@ double offset_across_edge(const cv::Mat& image, const cv::Point2f& p, int half, 
                           double bf_px_m, const SE3d& T_cur_ref, const cv::Point2f& ref_px, float ref_disparity_px,
                           double ratio) {
   const int x0 = cvRound(p.x) - half, y0 = cvRound(p.y) - half;
-  if (x0 < 1 || y0 < 1 || x0 + 2 * half + 1 >= image.cols - 1 || y0 + 2 * half + 1 >= image.rows - 1 || !(ref_disparity_px > 0)) {
-    return -1;
-  }
+  if (x0 < 1 || y0 < 1 || x0 + 2 * half + 1 >= image.cols - 1 || y0 + 2 * half + 1 >= image.rows - 1) return -1;
   double gxx = 0, gxy = 0, gyy = 0;
   for (int y = y0; y <= y0 + 2 * half; ++y) {
     const uint8_t* r = image.ptr<uint8_t>(y);
@@ -176,14 +174,13 @@ double offset_across_edge(const cv::Mat& image, const cv::Point2f& p, int half, 
   const double l_max = 0.5 * tr + disc, l_min = 0.5 * tr - disc;
   if (!(l_max > 0) || l_min >= ratio * l_max) return -1;
   // Eigenvector of l_max.
-  Eigen::Vector2d v = std::abs(gxy) > 1e-12 ? Eigen::Vector2d(l_max - gyy, gxy) : (gxx >= gyy ? Eigen::Vector2d(1, 0) : Eigen::Vector2d(0, 1));
+  Eigen::Vector2d v = std::abs(gxy) > 1e-12 ? Eigen::Vector2d(l_max - gyy, gxy)
+                                             : (gxx >= gyy ? Eigen::Vector2d(1, 0) : Eigen::Vector2d(0, 1));
   v.normalize();
-  const double z = bf_px_m / ref_disparity_px;
-  const Eigen::Vector3d X((ref_px.x - camera.cx) / camera.fx * z, (ref_px.y - camera.cy) / camera.fy * z, z);
-  const Eigen::Vector3d Xc = T_cur_ref * X;
-  if (!(Xc.z() > 1e-3)) return -1;
-  const Eigen::Vector2d e(camera.fx * Xc.x() / Xc.z() + camera.cx - p.x, camera.fy * Xc.y() / Xc.z() + camera.cy - p.y);
-  return std::abs(e.dot(v));
+  Eigen::Vector2d predicted;
+  double depth_m = 0;
+  if (!DepthConsistencyTest::predict(camera, bf_px_m, T_cur_ref, ref_px, ref_disparity_px, predicted, depth_m)) return -1;
+  return std::abs((predicted - Eigen::Vector2d(p.x, p.y)).dot(v));
 }
 
 MultiFrameTest::MultiFrameTest(const MultiFrameTestConfig& config) : config_(config), test_(inner_test_config(config)) {}

@@ -61,6 +61,10 @@ class DepthConsistencyTest {
            const std::vector<float>& prev_disparity_px, const std::vector<cv::Point2f>& cur_pts,
            const std::vector<float>& cur_disparity_px, const std::vector<uint8_t>& usable, DepthTestResult& result);
 
+  // Where a point seen at prev_px with prev_disparity_px appears after the motion: false when it has no disparity
+  // or lands behind the camera. depth_m: its depth in the current camera.
+  static bool predict(const PinholeCamera& camera, double bf_px_m, const SE3d& T_cur_prev, const cv::Point2f& prev_px,
+                      float prev_disparity_px, Eigen::Vector2d& predicted_px, double& depth_m);
   // Residuals of one track under a motion (-1 where not computable: no previous disparity, or no current
   // one for the disparity residual).
   static void residuals(const PinholeCamera& camera, double bf_px_m, const SE3d& T_cur_prev, const cv::Point2f& prev_px,
