@@ -606,35 +606,38 @@ void DynamicDetector::outline_region(const StereoFrame& frame, DetectorResult& r
   seg.outline_stats = outliner_.outline(seg.disparity_px, seg.roi.tl(), group_pts_, group_disp_, static_pts_,
                                         static_disp_, result.ground_plane.valid ? &result.ground_plane : nullptr,
                                         calibration_.bf(), seg.outline);
+  // Post-processing of the outline; its pixel count is taken again once at the end.
+  const bool has_pixels = seg.outline_stats.object_pixels > 0;
+  bool reshaped = false;
   const int extra_erode = seg.half_scale ? config_.detector.half_scale_erode_px : 0;
-  if (extra_erode > 0 && seg.outline_stats.object_pixels > 0) {
+  if (extra_erode > 0 && has_pixels) {
     const int k = 2 * extra_erode + 1;
-    cv::erode(seg.outline, eroded_outline_, cv::getStructuringElement(cv::MORPH_RECT, cv::Size(k, k)));
-    std::swap(seg.outline, eroded_outline_);
-    seg.outline_stats.object_pixels = cv::countNonZero(seg.outline);
+    cv::erode(seg.outline, reshaped_outline_, cv::getStructuringElement(cv::MORPH_RECT, cv::Size(k, k)));
+    std::swap(seg.outline, reshaped_outline_);
+    reshaped = true;
   }
   const OutlineConfig& occ = config_.outline;
   const double d_med = seg.outline_stats.median_disparity_px;
-  if (occ.close_far_m > 0 && d_med > 0 && d_med <= occ.close_max_disparity_px && seg.outline_stats.object_pixels > 0) {
+  if (occ.close_far_m > 0 && d_med > 0 && d_med <= occ.close_max_disparity_px && has_pixels) {
     // close_far_m at depth bf / d spans close_far_m * fx * d / bf = close_far_m * d / B px.
     const int k = std::max(3, 2 * static_cast<int>(std::lround(0.5 * occ.close_far_m * d_med / calibration_.baseline_m)) + 1);
-    cv::morphologyEx(seg.outline, eroded_outline_, cv::MORPH_CLOSE, cv::getStructuringElement(cv::MORPH_ELLIPSE, cv::Size(k, k)),
+    cv::morphologyEx(seg.outline, reshaped_outline_, cv::MORPH_CLOSE, cv::getStructuringElement(cv::MORPH_ELLIPSE, cv::Size(k, k)),
                      cv::Point(-1, -1), 1, cv::BORDER_CONSTANT, cv::Scalar(0));
-    std::swap(seg.outline, eroded_outline_);
-    seg.outline_stats.object_pixels = cv::countNonZero(seg.outline);
+    std::swap(seg.outline, reshaped_outline_);
+    reshaped = true;
   }
-  if (occ.left_band_touch_px >= 0 && d_med > 0 && seg.roi.x < d_med && seg.outline_stats.object_pixels > 0) {
+  if (occ.left_band_touch_px >= 0 && d_med > 0 && seg.roi.x < d_med && has_pixels) {
     // Rows whose outline starts within left_band_touch_px of the unmatched band x < d_med: filled to the border.
-    const int band_end = static_cast<int>(std::ceil(d_med)) - seg.roi.x + occ.left_band_touch_px;
+    const int limit = std::min(static_cast<int>(std::ceil(d_med)) - seg.roi.x + occ.left_band_touch_px, seg.outline.cols - 1);
     for (int y = 0; y < seg.outline.rows; ++y) {
       uint8_t* row = seg.outline.ptr<uint8_t>(y);
-      const int limit = std::min(band_end, seg.outline.cols - 1);
       int x0 = 0;
       while (x0 <= limit && !row[x0]) ++x0;
       if (x0 > 0 && x0 <= limit) std::fill(row, row + x0, static_cast<uint8_t>(255));
     }
-    seg.outline_stats.object_pixels = cv::countNonZero(seg.outline);
+    reshaped = true;
   }
+  if (reshaped) seg.outline_stats.object_pixels = cv::countNonZero(seg.outline);
   seg.labels.release();
   seg.superpixels = 0;
   seg.planes.clear();

@@ -88,9 +88,8 @@ for sc in scenarios:
         mov = {m: (100 * j["moving_inliers"]["fraction"] if j and "moving_inliers" in j else float("nan")) for m, j in js.items()}
         print(line + f"{drift:>11.4f}{red:>8.1f}%{vs_gt:>7.1f}%{lost:>6}{trk:>8.2f}{mov.get('off', float('nan')):>8.2f}%{mov.get('detector', float('nan')):>8.2f}%")
         for m in modes:
-            means.setdefault((sc, "mov " + m), []).append(mov[m])
-        for m in modes:
             means.setdefault((sc, m), []).append(ate[m])
+            means.setdefault((sc, "mov " + m), []).append(mov[m])
         means.setdefault((sc, "drift"), []).append(drift)
 print("mean over seeds " + " ".join(seeds) + ":")
 for sc in scenarios:
@@ -104,7 +103,7 @@ for sc in scenarios:
         extra += f"  gt vs off {(1 - vals['gt'] / vals['off']) * 100:+.1f}% lower"
     d = means[(sc, "drift")]
     for m in ("off", "detector"):
-        if ("mov " + m) in [k[1] for k in means if k[0] == sc]:
+        if m in modes:
             v = means[(sc, "mov " + m)]
             extra += f"  moving inliers {m} {sum(v) / len(v):.2f}%"
     print(f"  {sc:<8}" + "".join(f"  ATE {m} {vals[m]:.4f}" for m in modes) + f"  drift {sum(d) / len(d):.4f}" + extra)

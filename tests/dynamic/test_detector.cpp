@@ -218,19 +218,22 @@ TEST(DynamicDetector, MultiFrameTestFindsABoxKeepingItsDistanceAhead) {
   std::printf("%s\nbox ahead: %d multi-frame points, IoU %.3f\n", summary(with).c_str(), multi, overlap);
 }
 
-TEST(DynamicDetector, BoxAtTheLeftBorderGetsItsOutlineThere) {
-  // A box 2.5 m away (d = 22 px) cut by the left image border, moving sideways. StereoSGBM gives no disparity in
-  // the leftmost num_disparities columns of the crop it matches, so without padding the outline (and the mask)
-  // starts at x ~ 32; matched in left-padded images, the box's pixels from x = d on get their disparity.
+// A box 2.5 m away (d = 22 px) cut by the left image border, moving sideways, seen by the detector with `config`.
+RunOutcome box_at_left_border(const DynamicDetectorConfig& config) {
   CorridorScene scene;
   scene.box.origin = {-2.3, -1.1, 2.5};
   scene.box.width_m = 0.8;
-  const Eigen::Vector3d motion(0.08, 0, 0);
-  DynamicDetectorConfig padded;
+  return run_two_frames(config, camera_pose(0.0, 0, 0.10, 0.0), Eigen::Vector3d(0.08, 0, 0), true, scene);
+}
+
+TEST(DynamicDetector, BoxAtTheLeftBorderGetsItsOutlineThere) {
+  // StereoSGBM gives no disparity in the leftmost num_disparities columns of the crop it matches, so without
+  // padding the outline (and the mask) starts at x ~ 32; matched in left-padded images, the box's pixels from
+  // x = d on get their disparity.
   DynamicDetectorConfig unpadded;
   unpadded.detector.pad_left_border = false;
-  const RunOutcome with = run_two_frames(padded, camera_pose(0.0, 0, 0.10, 0.0), motion, true, scene);
-  const RunOutcome without = run_two_frames(unpadded, camera_pose(0.0, 0, 0.10, 0.0), motion, true, scene);
+  const RunOutcome with = box_at_left_border(DynamicDetectorConfig{});
+  const RunOutcome without = box_at_left_border(unpadded);
   // Columns 24..31: matchable (x > d), left of what SGBM covers without padding.
   const cv::Rect band(24, 0, 8, 480);
   const int gt_band = cv::countNonZero(with.gt_mask(band));
@@ -251,15 +254,10 @@ TEST(DynamicDetector, BoxAtTheLeftBorderGetsItsOutlineThere) {
 TEST(DynamicDetector, BoxAtTheLeftBorderIsCompletedIntoTheUnmatchedBand) {
   // The same box: its pixels at x < d (22 px) have no match in the right image. Rows where the outline reaches
   // that band are filled to the border (outline.left_band_touch_px 6); off (the default), the band stays empty.
-  CorridorScene scene;
-  scene.box.origin = {-2.3, -1.1, 2.5};
-  scene.box.width_m = 0.8;
-  const Eigen::Vector3d motion(0.08, 0, 0);
   DynamicDetectorConfig filled;
   filled.outline.left_band_touch_px = 6;
-  DynamicDetectorConfig unfilled;  // the default: off
-  const RunOutcome with = run_two_frames(filled, camera_pose(0.0, 0, 0.10, 0.0), motion, true, scene);
-  const RunOutcome without = run_two_frames(unfilled, camera_pose(0.0, 0, 0.10, 0.0), motion, true, scene);
+  const RunOutcome with = box_at_left_border(filled);
+  const RunOutcome without = box_at_left_border(DynamicDetectorConfig{});
   const cv::Rect band(0, 0, 18, 480);
   const int gt_band = cv::countNonZero(with.gt_mask(band));
   ASSERT_GT(gt_band, 18 * 150);

@@ -245,12 +245,7 @@ TEST(MultiFrameTest, ApertureCheckKeepsOnlyTheOffsetAcrossAnEdge) {
   image.rowRange(60, 120).setTo(180);                      // horizontal edge at y = 60 for x < 80
   cv::Mat textured = image.colRange(80, 160);
   cv::randu(textured, cv::Scalar(0), cv::Scalar(255));     // x >= 80: random texture
-  PinholeCamera camera;
-  camera.fx = camera.fy = 400;
-  camera.cx = 80;
-  camera.cy = 60;
-  camera.width = 160;
-  camera.height = 120;
+  const PinholeCamera camera{400, 400, 80, 60, 160, 120};  // fx, fy, cx, cy, width, height
   const double bf = 40;
   const SE3d still = SE3d::Identity();
   const cv::Point2f on_edge(40, 60);

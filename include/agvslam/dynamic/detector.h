@@ -271,7 +271,7 @@ class DynamicDetector {
   std::vector<int> dyn_index_;
   std::vector<cv::Point2f> group_pts_, static_pts_;
   std::vector<float> group_disp_, static_disp_;
-  cv::Mat dilated_, small_grey_, small_labels_, eroded_outline_;
+  cv::Mat dilated_, small_grey_, small_labels_, reshaped_outline_;
   cv::Mat prev_left_, prev_right_;            // the previous frame (for densification)
   std::vector<cv::KeyPoint> keypoints_;
   std::vector<cv::Point2f> extra_prev_, extra_cur_;
