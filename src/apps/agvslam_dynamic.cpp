@@ -289,6 +289,54 @@ nlohmann::json object_diagnostics(const std::vector<agvslam::io::SceneObject>* o
   return out;
 }
 
+// Recall by the objects' visible size and by whether the image border cuts them (the detector's hard cases: far
+// people, people entering or leaving the view), from the per-object diagnostics.
+struct RecallBreakdown {
+  static constexpr int kBins = 4;
+  static constexpr int kUpper[kBins - 1] = {1500, 5000, 20000};  // visible moving pixels
+  int found[kBins] = {}, total[kBins] = {};
+  int border_found = 0, border_total = 0, inner_found = 0, inner_total = 0;
+  static constexpr int kBorderPx = 2;  // a box within this of the left/right edge is cut by it
+
+  void add(const std::vector<agvslam::io::SceneObject>& objects, const nlohmann::json& diagnostics, cv::Size size,
+           const eval::DetectionScoringConfig& scoring) {
+    for (const auto& d : diagnostics) {
+      if (!d["moving"].get<bool>() || d["pixels"].get<int>() < std::max(1, scoring.min_object_pixels)) continue;
+      const int id = d["id"].get<int>();
+      const auto obj = std::find_if(objects.begin(), objects.end(), [&](const auto& o) { return o.id == id; });
+      if (obj == objects.end()) continue;
+      const bool hit = d["iou"].get<double>() >= scoring.min_iou;
+      int bin = 0;
+      while (bin < kBins - 1 && d["pixels"].get<int>() >= kUpper[bin]) ++bin;
+      ++total[bin];
+      found[bin] += hit;
+      const bool cut = obj->box.x <= kBorderPx || obj->box.br().x >= size.width - kBorderPx;
+      (cut ? border_total : inner_total) += 1;
+      (cut ? border_found : inner_found) += hit;
+    }
+  }
+  static std::string ratio(int f, int t) {
+    if (t == 0) return "- (0/0)";
+    char buf[48];
+    std::snprintf(buf, sizeof(buf), "%.3f (%d/%d)", static_cast<double>(f) / t, f, t);
+    return buf;
+  }
+  std::string describe() const {
+    return "recall by visible size: <1500 px " + ratio(found[0], total[0]) + ", 1500-5000 px " + ratio(found[1], total[1]) +
+           ", 5000-20000 px " + ratio(found[2], total[2]) + ", >= 20000 px " + ratio(found[3], total[3]) +
+           "; cut by the left/right image border " + ratio(border_found, border_total) + ", inside the image " +
+           ratio(inner_found, inner_total);
+  }
+  nlohmann::json to_json() const {
+    nlohmann::json j;
+    const char* names[kBins] = {"lt1500", "1500_5000", "5000_20000", "ge20000"};
+    for (int b = 0; b < kBins; ++b) j["size_" + std::string(names[b])] = {{"found", found[b]}, {"objects", total[b]}};
+    j["border"] = {{"found", border_found}, {"objects", border_total}};
+    j["inside"] = {{"found", inner_found}, {"objects", inner_total}};
+    return j;
+  }
+};
+
 // Per detected object: its box and size, the object it matched (-1 none) and how many of its pixels lie on
 // moving ground truth (a false positive on a moving object is a split or merged outline, elsewhere a false alarm).
 nlohmann::json detection_diagnostics(const eval::FrameDetectionScore& f, const cv::Mat& instances, const cv::Mat& gt_mask) {
@@ -363,6 +411,7 @@ int run(const Options& o) {
   std::map<std::string, StageSeries> timings;
   std::vector<std::string> stage_order;
   int regions_total = 0, frames_detected = 0, frames_with_regions = 0;
+  RecallBreakdown breakdown;
   nlohmann::json per_frame = nlohmann::json::array();
 
   for (std::size_t i = first; i <= last; ++i) {
@@ -435,7 +484,8 @@ int run(const Options& o) {
                         {"dynamic_inside", roi.outline_stats.dynamic_inside}, {"d", roi.mean_disparity_px},
                         {"motion", roi.outline_motion.apparent_motion_px},
                         {"motion_multiframe", roi.outline_motion_multiframe.apparent_motion_px},
-                        {"verdict", dyn::to_string(roi.outline_verdict)}});
+                        {"verdict", dyn::to_string(roi.outline_verdict)}, {"coasted", roi.coasted}, {"median_offset", roi.outline_stats.median_offset_px},
+                        {"object", roi.object_id}});
         }
         jf["rois"] = jr;
       }
@@ -454,6 +504,7 @@ int run(const Options& o) {
         jf["fn"] = f.false_negatives;
         jf["iou"] = f.matched_iou;
         jf["objects"] = object_diagnostics(it == objects.end() ? nullptr : &it->second, gt_mask, result, f);
+        if (it != objects.end()) breakdown.add(it->second, jf["objects"], gt_mask.size(), scoring);
         jf["detections"] = detection_diagnostics(f, result.mask.instances, gt_mask);
       }
     }
@@ -479,6 +530,7 @@ int run(const Options& o) {
                 score.false_negatives(), score.ignored_objects(), score.false_positives_per_100_frames());
     std::printf("pixels: precision %.4f recall %.4f IoU %.4f\n", score.pixel_precision(), score.pixel_recall(),
                 score.pixel_iou());
+    std::printf("%s\n", breakdown.describe().c_str());
   } else {
     std::printf("no ground-truth masks (mask_0/) in the dataset: not scored\n");
   }
@@ -503,6 +555,7 @@ int run(const Options& o) {
       j["dont_care_objects"] = score.ignored_objects();
       j["false_regions_per_100_frames"] = score.false_positives_per_100_frames();
       j["pixel"] = {{"precision", score.pixel_precision()}, {"recall", score.pixel_recall()}, {"iou", score.pixel_iou()}};
+      j["recall_breakdown"] = breakdown.to_json();
     }
     nlohmann::json jt;
     for (const auto& name : stage_order) {

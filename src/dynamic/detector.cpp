@@ -13,6 +13,12 @@ namespace agvslam::dynamic {
 
 namespace {
 using Clock = std::chrono::steady_clock;
+// Median of v (reordered); -1 for an empty vector.
+double median_of(std::vector<float>& v) {
+  if (v.empty()) return -1;
+  std::nth_element(v.begin(), v.begin() + static_cast<std::ptrdiff_t>(v.size() / 2), v.end());
+  return v[v.size() / 2];
+}
 double ms_since(Clock::time_point t0) {
   return std::chrono::duration<double, std::milli>(Clock::now() - t0).count();
 }
@@ -33,6 +39,11 @@ void DetectorOptions::validate(const std::string& source) const {
   require(densify_min_distance_px >= 0 && densify_min_distance_px <= 100, "densify_min_distance_px",
           "expected a number in [0, 100] px");
   require(continue_min_points >= 1 && continue_min_points <= 1000, "continue_min_points", "expected an integer in [1, 1000]");
+  require(coast_max_frames >= 0 && coast_max_frames <= 100, "coast_max_frames", "expected an integer in [0, 100] frames");
+  require(coast_min_detections >= 1 && coast_min_detections <= 1000, "coast_min_detections",
+          "expected an integer in [1, 1000] frames");
+  require(coast_min_tracks >= 1 && coast_min_tracks <= 1000, "coast_min_tracks", "expected an integer in [1, 1000]");
+  require(coast_min_area_ratio >= 0 && coast_min_area_ratio <= 1, "coast_min_area_ratio", "expected a number in [0, 1]");
   require(half_scale_min_area_px >= 0, "half_scale_min_area_px", "expected an integer >= 0 px");
   require(half_scale_erode_px >= 0 && half_scale_erode_px <= 10, "half_scale_erode_px", "expected an integer in [0, 10] px");
   require(extend_to_height_m >= 0 && extend_to_height_m <= 20, "extend_to_height_m", "expected a number in [0, 20] m");
@@ -46,9 +57,14 @@ std::string DetectorOptions::describe() const {
     std::snprintf(densify_text, sizeof(densify_text), "<= %d points within %.0f + %.2f d px, %.0f px apart",
                   densify_max_points, densify_radius_px, densify_radius_disparity_factor, densify_min_distance_px);
   }
-  char objects_text[80] = "off";
-  if (track_objects) std::snprintf(objects_text, sizeof(objects_text), "on (>= %d points continue one)", continue_min_points);
-  char buf[700];
+  char objects_text[200] = "off";
+  if (track_objects) {
+    std::snprintf(objects_text, sizeof(objects_text),
+                  "on (>= %d points continue one; after >= %d detections it coasts <= %d frames on >= %d tracks, "
+                  ">= %.2f of its area)",
+                  continue_min_points, coast_min_detections, coast_max_frames, coast_min_tracks, coast_min_area_ratio);
+  }
+  char buf[800];
   std::snprintf(buf, sizeof(buf),
                 "detector: epipolar test %s, depth test %s, disparity %s, <= %d ROIs searched up to max point "
                 "disparity + %.1f px at scale %.1f (half scale above %d px, 0 = never, eroded %d px more), left border padded %s, ROIs "
@@ -155,6 +171,7 @@ void DynamicDetector::reset() {
   history_.clear();
   multiframe_.reset();
   track_object_.clear();
+  objects_.clear();
 }
 
 DetectorResult DynamicDetector::detect(const StereoFrame& frame) {
@@ -205,6 +222,7 @@ void DynamicDetector::detect(const StereoFrame& frame, DetectorResult& result) {
   result.multiframe.test.dynamic.clear();
   result.timings = StageTimings{};
   StageTimings& tm = result.timings;
+  static_offset_median_px_ = -1;
 
   auto t = Clock::now();
   if (opt.full_frame_disparity) {
@@ -376,7 +394,8 @@ void DynamicDetector::detect(const StereoFrame& frame, DetectorResult& result) {
     tm.grouping_ms = ms_since(t);
 
     // The floor in disparity space, from the static points below the principal point (ground veto).
-    if (!groups.empty() && (config_.regions.ground_veto || opt.extend_to_floor)) {
+    const bool coasting = objects && opt.coast_max_frames > 0 && !objects_.empty();
+    if ((!groups.empty() || coasting) && (config_.regions.ground_veto || opt.extend_to_floor)) {
       static_pts_.clear();
       static_disp_.clear();
       for (const TrackedPoint& p : result.points) {
@@ -391,9 +410,10 @@ void DynamicDetector::detect(const StereoFrame& frame, DetectorResult& result) {
     int next_instance = 1;
     instance_object_.assign(1, -1);
     kept_regions_.clear();
-    for (std::size_t g = 0; g < groups.size(); ++g) {
+    auto process_group = [&](std::size_t g) {
       RoiSegmentation& seg = result.rois[g];
       const DynamicGroup& group = groups[g];
+      seg.coasted = coast_group_[g] != 0;
       seg.roi = group.roi;
       seg.mean_disparity_px = group.mean_disparity_px;
       // Objects stand on the floor: when the group's lowest corner is well above the floor row at the group's
@@ -433,7 +453,7 @@ void DynamicDetector::detect(const StereoFrame& frame, DetectorResult& result) {
         group_disp_.push_back(dyn_disp_[static_cast<std::size_t>(m)]);
       }
       seg.object_id = group_object_[g];
-      if (seg.roi.empty()) continue;
+      if (seg.roi.empty()) return;
 
       t = Clock::now();
       seg.half_scale = false;
@@ -455,7 +475,7 @@ void DynamicDetector::detect(const StereoFrame& frame, DetectorResult& result) {
         t = Clock::now();
         outline_region(frame, result, seg, next_instance);
         tm.regions_ms += ms_since(t);
-        continue;
+        return;
       }
 
       t = Clock::now();
@@ -510,6 +530,16 @@ void DynamicDetector::detect(const StereoFrame& frame, DetectorResult& result) {
                                       result.mask.instances(rect));
       }
       tm.regions_ms += ms_since(t);
+    };
+    coast_group_.assign(groups.size(), 0);
+    for (std::size_t g = 0; g < groups.size(); ++g) process_group(g);
+    // Objects of earlier frames that no region of this frame continues coast on their own tracks.
+    if (coasting) {
+      const std::size_t first_coasted = groups.size();
+      add_coasting_groups(result, size, groups);
+      result.rois.resize(groups.size());
+      coast_group_.resize(groups.size(), 1);
+      for (std::size_t g = first_coasted; g < groups.size(); ++g) process_group(g);
     }
     if (opt.mask_dilation_px > 0 && !result.mask.regions.empty()) {
       const int k = 2 * opt.mask_dilation_px + 1;
@@ -517,6 +547,7 @@ void DynamicDetector::detect(const StereoFrame& frame, DetectorResult& result) {
       dilated_.copyTo(result.mask.instances);
     }
     cv::compare(result.mask.instances, 0, result.mask.image, cv::CMP_GT);
+    if (objects) update_objects(result);
   }
 
   // The tracks that held continue into the next call (tracking.persistent); this frame's quadtree corners fill
@@ -646,20 +677,40 @@ void DynamicDetector::outline_region(const StereoFrame& frame, DetectorResult& r
   seg.region = DynamicRegion{};
   seg.outline_motion = SuperpixelMotion{};
   seg.outline_motion_multiframe = SuperpixelMotion{};
+  inside_offsets_.clear();
   for (const TrackedPoint& p : result.points) {
     if (!p.tracked) continue;
     const cv::Point q(cvRound(p.cur_px.x) - seg.roi.x, cvRound(p.cur_px.y) - seg.roi.y);
     if (q.x < 0 || q.y < 0 || q.x >= seg.outline.cols || q.y >= seg.outline.rows || !seg.outline.at<uint8_t>(q)) continue;
     ++seg.outline_stats.tracked_inside;
     seg.outline_stats.dynamic_inside += p.dynamic ? 1 : 0;
+    if (p.reprojection_px >= 0) inside_offsets_.push_back(static_cast<float>(p.reprojection_px));
   }
   const OutlineStats& st = seg.outline_stats;
   const OutlineConfig& oc = config_.outline;
+  // The tracks inside move together (outline.aggregate_*): their median offset against the static tracks'.
+  seg.outline_stats.median_offset_px = median_of(inside_offsets_);
+  if (oc.aggregate_ratio > 0 && static_offset_median_px_ < 0) {
+    static_offsets_.clear();
+    for (const TrackedPoint& p : result.points) {
+      if (p.tracked && !p.dynamic && p.reprojection_px >= 0) static_offsets_.push_back(static_cast<float>(p.reprojection_px));
+    }
+    static_offset_median_px_ = static_offsets_.empty() ? 0.0 : median_of(static_offsets_);
+  }
+  const bool moves_together = tracks_move_together(inside_offsets_, static_offset_median_px_, oc);
+  int coast_min_pixels = 0;  // a coasted outline: a good part of the object's last one
+  if (seg.coasted) {
+    const auto ob = std::lower_bound(objects_.begin(), objects_.end(), seg.object_id,
+                                     [](const auto& e, int id) { return e.first < id; });
+    if (ob != objects_.end() && ob->first == seg.object_id) {
+      coast_min_pixels = static_cast<int>(config_.detector.coast_min_area_ratio * ob->second.pixels);
+    }
+  }
   if (st.object_pixels == 0) {
     seg.outline_verdict = OutlineVerdict::kNoSeed;
-  } else if (st.object_pixels < oc.min_pixels) {
+  } else if (st.object_pixels < std::max(oc.min_pixels, coast_min_pixels)) {
     seg.outline_verdict = OutlineVerdict::kTooSmall;
-  } else if (st.tracked_inside >= oc.min_tracked_for_fraction &&
+  } else if (!seg.coasted && !moves_together && st.tracked_inside >= oc.min_tracked_for_fraction &&
              st.dynamic_inside < oc.min_dynamic_fraction * st.tracked_inside) {
     seg.outline_verdict = OutlineVerdict::kMostlyStaticTracks;
   } else if (oc.max_height_m > 0 && st.median_disparity_px > 0 &&
@@ -675,7 +726,11 @@ void DynamicDetector::outline_region(const StereoFrame& frame, DetectorResult& r
     seg.outline_motion = region_motion(frame.left, prev_left_, calibration_.left, calibration_.bf(), result.depth.T_cur_prev,
                                        seg.outline, seg.disparity_px, seg.roi.tl(), pc, pc.max_motion_px);
     bool moves_with_background = seg.outline_motion.apparent_motion_px >= 0 && seg.outline_motion.moves_with_background;
-    if (moves_with_background && result.multiframe.valid && st.median_disparity_px >= pc.multiframe_min_disparity_px) {
+    // A coasted outline has no dynamic point of this frame behind it: it must show its motion frame to frame (a
+    // person who has just stopped still differs from the multi-frame reference).
+    if (seg.coasted) moves_with_background = !(seg.outline_motion.apparent_motion_px >= 0) || moves_with_background;
+    if (moves_with_background && !seg.coasted && result.multiframe.valid &&
+        st.median_disparity_px >= pc.multiframe_min_disparity_px) {
       seg.outline_motion_multiframe =
           region_motion(frame.left, result.multiframe.reference_left, calibration_.left, calibration_.bf(),
                         result.multiframe.T_cur_ref, seg.outline, seg.disparity_px, seg.roi.tl(), pc,
@@ -729,6 +784,88 @@ void DynamicDetector::outline_region(const StereoFrame& frame, DetectorResult& r
                                        config_.detector.split_side_by_side, next_instance, result.mask.instances(rect));
   instance_object_.resize(static_cast<std::size_t>(std::min(next_instance, 256)), -1);
   for (int k = first_instance; k < next_instance && k < 256; ++k) instance_object_[static_cast<std::size_t>(k)] = seg.object_id;
+}
+
+void DynamicDetector::add_coasting_groups(const DetectorResult& result, cv::Size image_size,
+                                          std::vector<DynamicGroup>& groups) {
+  const DetectorOptions& opt = config_.detector;
+  const RoiGroupingConfig& gc = config_.grouping;
+  const cv::Rect image(cv::Point(0, 0), image_size);
+  const std::size_t n = std::min(track_object_.size(), result.points.size());
+  for (const auto& [id, ob] : objects_) {
+    if (static_cast<int>(groups.size()) >= opt.max_rois) break;
+    if (ob.detections < opt.coast_min_detections || ob.coasted >= opt.coast_max_frames) continue;
+    if (std::find(instance_object_.begin(), instance_object_.end(), id) != instance_object_.end()) continue;
+    // Its tracks: inside its outline in the last frame, tracked into this one, at its depth.
+    const double tol = gc.t_disp_px + gc.t_disp_rel * ob.median_disparity_px;
+    coast_tracks_.clear();
+    for (std::size_t i = 0; i < n; ++i) {
+      const TrackedPoint& p = result.points[i];
+      if (track_object_[i] != id || !p.tracked || !(p.cur_disparity_px > 0)) continue;
+      if (std::abs(p.cur_disparity_px - ob.median_disparity_px) > tol) continue;
+      coast_tracks_.push_back(static_cast<int>(i));
+    }
+    if (static_cast<int>(coast_tracks_.size()) < opt.coast_min_tracks) continue;
+    // The last rectangle moved with the median motion of its tracks, and the tracks themselves.
+    std::vector<float> dx, dy;
+    DynamicGroup g;
+    float x0 = 1e9f, y0 = 1e9f, x1 = -1e9f, y1 = -1e9f;
+    double sum_d = 0;
+    for (int i : coast_tracks_) {
+      const TrackedPoint& p = result.points[static_cast<std::size_t>(i)];
+      dx.push_back(p.cur_px.x - p.prev_px.x);
+      dy.push_back(p.cur_px.y - p.prev_px.y);
+      x0 = std::min(x0, p.cur_px.x);
+      y0 = std::min(y0, p.cur_px.y);
+      x1 = std::max(x1, p.cur_px.x);
+      y1 = std::max(y1, p.cur_px.y);
+      sum_d += p.cur_disparity_px;
+      g.members.push_back(static_cast<int>(dyn_pts_.size()));
+      dyn_pts_.push_back(p.cur_px);
+      dyn_disp_.push_back(p.cur_disparity_px);
+      dyn_index_.push_back(i);
+    }
+    const cv::Point shift(cvRound(median_of(dx)), cvRound(median_of(dy)));
+    g.mean_disparity_px = sum_d / static_cast<double>(coast_tracks_.size());
+    g.bounds = cv::Rect(cv::Point(cvFloor(x0), cvFloor(y0)), cv::Point(cvCeil(x1) + 1, cvCeil(y1) + 1));
+    const int margin = gc.margin_px + static_cast<int>(std::lround(gc.margin_disparity_factor * g.mean_disparity_px));
+    const cv::Rect moved = (ob.rect + shift) | g.bounds;
+    g.roi = cv::Rect(moved.x - margin, moved.y - margin, moved.width + 2 * margin, moved.height + 2 * margin) & image;
+    if (g.roi.empty()) continue;
+    groups.push_back(std::move(g));
+    group_object_.push_back(id);
+  }
+}
+
+void DynamicDetector::update_objects(const DetectorResult& result) {
+  next_objects_.clear();
+  std::vector<uint8_t> own;  // per entry of next_objects_: kept on its own evidence this frame
+  for (const RoiSegmentation& seg : result.rois) {
+    if (seg.outline_verdict != OutlineVerdict::kKept || seg.object_id < 0) continue;
+    auto it = std::find_if(next_objects_.begin(), next_objects_.end(), [&](const auto& e) { return e.first == seg.object_id; });
+    if (it == next_objects_.end()) {
+      ObjectTrack ob;
+      ob.rect = seg.region.rectangle;
+      ob.median_disparity_px = seg.outline_stats.median_disparity_px;
+      ob.pixels = seg.outline_stats.object_pixels;
+      next_objects_.emplace_back(seg.object_id, ob);
+      own.push_back(seg.coasted ? 0 : 1);
+    } else {
+      it->second.rect |= seg.region.rectangle;
+      it->second.pixels += seg.outline_stats.object_pixels;
+      own[static_cast<std::size_t>(it - next_objects_.begin())] |= seg.coasted ? 0 : 1;
+    }
+  }
+  for (std::size_t k = 0; k < next_objects_.size(); ++k) {
+    ObjectTrack& ob = next_objects_[k].second;
+    auto prev = std::lower_bound(objects_.begin(), objects_.end(), next_objects_[k].first,
+                                 [](const auto& e, int id) { return e.first < id; });
+    const bool known = prev != objects_.end() && prev->first == next_objects_[k].first;
+    ob.detections = (known ? prev->second.detections : 0) + own[k];
+    ob.coasted = own[k] ? 0 : (known ? prev->second.coasted : 0) + 1;
+  }
+  std::sort(next_objects_.begin(), next_objects_.end(), [](const auto& a, const auto& b) { return a.first < b.first; });
+  std::swap(objects_, next_objects_);
 }
 
 void DynamicDetector::roi_disparity(const StereoFrame& frame, const cv::Rect& roi, int max_disparity_px, double scale,

@@ -161,7 +161,7 @@ DynamicDetectorConfig load_dynamic_config(const std::string& path) {
   in.check_keys("outline", {"seed_radius_px", "seed_tolerance_px", "seed_tolerance_rel", "step_tolerance_px",
                             "step_tolerance_rel", "depth_band_m", "ground_tolerance_px", "ground_tolerance_rel",
                             "static_competition", "max_hole_invalid_fraction", "min_hole_fill_px", "erode_px", "min_pixels",
-                            "min_dynamic_fraction", "min_tracked_for_fraction", "max_height_m", "close_far_m",
+                            "min_dynamic_fraction", "min_tracked_for_fraction", "aggregate_ratio", "aggregate_min_px", "max_height_m", "close_far_m",
                             "close_max_disparity_px", "left_band_touch_px"});
   OutlineConfig& o = c.outline;
   in.read("outline", "seed_radius_px", o.seed_radius_px, "an integer (px)");
@@ -179,6 +179,8 @@ DynamicDetectorConfig load_dynamic_config(const std::string& path) {
   in.read("outline", "min_pixels", o.min_pixels, "an integer (px)");
   in.read("outline", "min_dynamic_fraction", o.min_dynamic_fraction, num);
   in.read("outline", "min_tracked_for_fraction", o.min_tracked_for_fraction, integer);
+  in.read("outline", "aggregate_ratio", o.aggregate_ratio, num);
+  in.read("outline", "aggregate_min_px", o.aggregate_min_px, px);
   in.read("outline", "max_height_m", o.max_height_m, "a number (m)");
   in.read("outline", "close_far_m", o.close_far_m, "a number (m)");
   in.read("outline", "left_band_touch_px", o.left_band_touch_px, "an integer (px)");
@@ -199,7 +201,8 @@ DynamicDetectorConfig load_dynamic_config(const std::string& path) {
                              "roi_disparity_margin_px", "roi_scale", "half_scale_min_area_px", "half_scale_erode_px", "extend_to_floor", "extend_to_height_m", "split_side_by_side", "mask_dilation_px", "densify",
                              "densify_radius_px",
                              "densify_radius_disparity_factor", "densify_max_points", "densify_min_distance_px",
-                             "track_objects", "continue_min_points", "pad_left_border", "merge_stacked_regions"});
+                             "track_objects", "continue_min_points", "coast_max_frames", "coast_min_detections",
+                             "coast_min_tracks", "coast_min_area_ratio", "pad_left_border", "merge_stacked_regions"});
   in.read("detector", "use_epipolar_test", c.detector.use_epipolar_test, flag);
   in.read("detector", "use_depth_test", c.detector.use_depth_test, flag);
   in.read("detector", "full_frame_disparity", c.detector.full_frame_disparity, flag);
@@ -219,6 +222,10 @@ DynamicDetectorConfig load_dynamic_config(const std::string& path) {
   in.read("detector", "densify_min_distance_px", c.detector.densify_min_distance_px, px);
   in.read("detector", "track_objects", c.detector.track_objects, flag);
   in.read("detector", "continue_min_points", c.detector.continue_min_points, integer);
+  in.read("detector", "coast_max_frames", c.detector.coast_max_frames, "an integer (frames)");
+  in.read("detector", "coast_min_detections", c.detector.coast_min_detections, "an integer (frames)");
+  in.read("detector", "coast_min_tracks", c.detector.coast_min_tracks, integer);
+  in.read("detector", "coast_min_area_ratio", c.detector.coast_min_area_ratio, num);
   in.read("detector", "pad_left_border", c.detector.pad_left_border, flag);
   in.read("detector", "merge_stacked_regions", c.detector.merge_stacked_regions, flag);
 

@@ -49,6 +49,7 @@ args = sys.argv[2:]
 sep = args.index("--")
 scenarios, seeds = args[:sep], args[sep + 1:]
 tot = {"tp": 0, "fp": 0, "fn": 0, "iou": 0.0}
+breakdown = {}
 print(f"{'sequence':<14}{'frames':>7}{'P':>8}{'R':>8}{'IoU':>8}{'TP':>6}{'FP':>6}{'FN':>6}{'FP/100f':>9}{'med ms':>8}{'p95 ms':>8}"
       f"{'cpu med':>9}{'cpu p95':>9}")
 static_frames = static_regions = 0
@@ -58,6 +59,8 @@ for sc in scenarios:
         tp, fp, fn = j["true_positives"], j["false_positives"], j["false_negatives"]
         if sc != "static":
             tot["tp"] += tp; tot["fp"] += fp; tot["fn"] += fn; tot["iou"] += j["mean_iou"] * tp
+            for k, v in j.get("recall_breakdown", {}).items():
+                b = breakdown.setdefault(k, [0, 0]); b[0] += v["found"]; b[1] += v["objects"]
         else:
             static_frames += j["frames"]["detected"]; static_regions += j["regions"]["total"]
         t = j["timings"]["total"]
@@ -69,6 +72,12 @@ tp, fp, fn = tot["tp"], tot["fp"], tot["fn"]
 if tp + fp + fn:
     print(f"scene1..5 total: precision {tp / max(1, tp + fp):.3f} recall {tp / max(1, tp + fn):.3f} "
           f"mean IoU {tot['iou'] / max(1, tp):.3f} (TP {tp} FP {fp} FN {fn})")
+if breakdown:
+    names = [("size_lt1500", "<1500 px"), ("size_1500_5000", "1500-5000 px"), ("size_5000_20000", "5000-20000 px"),
+             ("size_ge20000", ">=20000 px"), ("border", "cut by the image border"), ("inside", "inside the image")]
+    print("scene1..5 recall by object: " + ", ".join(
+        f"{label} {breakdown[k][0] / max(1, breakdown[k][1]):.3f} ({breakdown[k][0]}/{breakdown[k][1]})"
+        for k, label in names if k in breakdown))
 if static_frames:
     print(f"static: {static_regions} regions in {static_frames} frames ({100 * static_regions / static_frames:.2f} per 100 frames)")
 PY

@@ -77,6 +77,12 @@ TEST(DynamicConfig, BadValuesNameFileAndField) {
   expect_error("outline:\n  close_far_m: 3\n", "outline.close_far_m");
   expect_error("multiframe:\n  aperture_ratio: 1\n", "multiframe.aperture_ratio");
   expect_error("outline:\n  left_band_touch_px: -2\n", "outline.left_band_touch_px");
+  expect_error("outline:\n  aggregate_ratio: -1\n", "outline.aggregate_ratio");
+  expect_error("outline:\n  aggregate_min_px: many\n", "outline.aggregate_min_px");
+  expect_error("detector:\n  coast_max_frames: -1\n", "detector.coast_max_frames");
+  expect_error("detector:\n  coast_min_tracks: 0\n", "detector.coast_min_tracks");
+  expect_error("detector:\n  coast_min_area_ratio: 1.5\n", "detector.coast_min_area_ratio");
+  expect_error("detector:\n  coast_min_detections: 0\n", "detector.coast_min_detections");
   expect_error("photometric:\n  multiframe_min_disparity_px: -2\n", "photometric.multiframe_min_disparity_px");
   expect_error("slic:\n  superpixel_size: 12\n", "slic.superpixel_size");  // unknown key
   expect_error("regions:\n  mask_mode: blob\n", "regions.mask_mode");

@@ -100,6 +100,18 @@ struct DetectorOptions {
   // object's other tracks as well was tried: more false regions on scene2/3/5 than it gained.)
   bool track_objects = true;
   int continue_min_points = 3;
+  // Objects coast (beyond the paper, paper 002's mask propagation with the detector's own tracks; needs
+  // track_objects): an object kept in at least coast_min_detections frames on its own evidence that has no region
+  // in this frame (its movers showed too few dynamic corners: a person turning, slowing, half hidden or passing
+  // the image border) is outlined again from its own tracks, those of its last outline tracked into this frame
+  // (at least coast_min_tracks, at its depth), in its last rectangle moved with them. It is kept only as a region
+  // passes the outline checks and the photometric check (a person who stopped moves with the background and is
+  // dropped), for at most coast_max_frames frames in a row (0 = off).
+  int coast_max_frames = 0;
+  int coast_min_detections = 2;
+  int coast_min_tracks = 3;
+  double coast_min_area_ratio = 0.5;  // a coasted outline smaller than this part of the object's last one is a
+                                      // fragment of it: dropped
 
   void validate(const std::string& source) const;
   std::string describe() const;
@@ -176,6 +188,7 @@ struct RoiSegmentation {
   SuperpixelMotion outline_motion, outline_motion_multiframe;  // photometric check of the outline (when run)
   OutlineVerdict outline_verdict = OutlineVerdict::kNoSeed;   // kKept: the outline is a dynamic region
   int object_id = -1;                      // the object over frames (detector.track_objects): continued or new
+  bool coasted = false;                    // outlined from the tracks of an object of earlier frames (coast_*)
   DynamicRegion region;
 };
 
@@ -233,6 +246,11 @@ class DynamicDetector {
  private:
   void densify(const StereoFrame& frame, DetectorResult& result);
   void outline_region(const StereoFrame& frame, DetectorResult& result, RoiSegmentation& seg, int& next_instance);
+  // Coasting (detector.coast_*): a group per object of the last frame that no region of this frame continues and
+  // that still has coast_min_tracks tracks at its depth (seeds appended to dyn_pts_).
+  void add_coasting_groups(const DetectorResult& result, cv::Size image_size, std::vector<DynamicGroup>& groups);
+  // The objects with regions in this frame become objects_.
+  void update_objects(const DetectorResult& result);
   // SGBM of one ROI (detector.pad_left_border: in left-padded images near the left border).
   void roi_disparity(const StereoFrame& frame, const cv::Rect& roi, int max_disparity_px, double scale, cv::Mat& out);
   void measure_point_disparities(const StereoFrame& frame, const std::vector<cv::Point2f>& pts, std::vector<float>& out,
@@ -285,6 +303,20 @@ class DynamicDetector {
   std::vector<int> group_object_;           // per group: the previous frame's object it continues, -1 none
   std::vector<int> instance_object_;        // per instance id of this frame's mask: object id
   int next_object_id_ = 0;
+  // The objects of the last frame that had regions (detector.track_objects), for coasting.
+  struct ObjectTrack {
+    cv::Rect rect;                   // its region in that frame
+    double median_disparity_px = 0;
+    int pixels = 0;                  // its outline's pixels in that frame
+    int detections = 0;              // frames kept on its own evidence
+    int coasted = 0;                 // frames in a row it has coasted since
+  };
+  std::vector<std::pair<int, ObjectTrack>> objects_;  // by object id, ascending
+  std::vector<std::pair<int, ObjectTrack>> next_objects_;
+  std::vector<int> coast_tracks_;
+  std::vector<float> inside_offsets_, static_offsets_;
+  double static_offset_median_px_ = -1;  // of this frame's static tracks (-1: not computed yet)
+  std::vector<uint8_t> coast_group_;  // per group: coasted
   cv::Mat region_mask_;
   cv::Mat padded_left_, padded_right_;
   struct KeptRegion {

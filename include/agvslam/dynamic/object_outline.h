@@ -51,6 +51,13 @@ struct OutlineConfig {
   int min_pixels = 150;
   double min_dynamic_fraction = 0.2;
   int min_tracked_for_fraction = 10;
+  // ... unless its tracks move together (beyond the paper; paper 001 decides per object with its own points): the
+  // median depth-test reprojection offset of the tracks inside is at least aggregate_min_px and aggregate_ratio
+  // times the median of the frame's static tracks. A person walking ahead of the AGV at a similar speed moves
+  // each of its tracks by a little less than the per-track threshold (which grows with d), all of them the same
+  // way; a static surface flooded from a depth edge keeps the static tracks' offsets. 0 = off.
+  double aggregate_ratio = 3.0;
+  double aggregate_min_px = 0.45;
   // ... or one taller than max_height_m at its median disparity (people, forklifts and AGVs are lower; a rack
   // upright flooded from a few false tracks at its edge is not). 0 = no limit.
   double max_height_m = 3.0;
@@ -73,8 +80,14 @@ struct OutlineStats {
   int object_seeds = 0, static_seeds = 0;
   int object_pixels = 0;
   int tracked_inside = 0, dynamic_inside = 0;  // tracked points inside the outline, and the dynamic ones (detector)
+  double median_offset_px = -1;                // their median depth-test reprojection offset (detector; -1 none)
   double median_disparity_px = 0;              // of the outline's pixels with a disparity
 };
+
+// outline.aggregate_*: whether the tracks inside an outline move together, their median depth-test reprojection
+// offset (inside_offsets_px, reordered) at least aggregate_min_px and aggregate_ratio x static_median_px (the
+// frame's static tracks'). False when aggregate_ratio is 0 or there is no offset.
+bool tracks_move_together(std::vector<float>& inside_offsets_px, double static_median_px, const OutlineConfig& config);
 
 // Reusable buffers (no allocation per call once sizes have settled).
 class ObjectOutliner {
