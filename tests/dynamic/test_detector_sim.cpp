@@ -92,6 +92,42 @@ TEST(DynamicDetectorSim, DrivingAgvPersonCrossingTheAisle) {
   EXPECT_GE(s.recall(), 0.80);
 }
 
+TEST(DynamicDetectorSim, CoastedObjectsLieOnMovingObjects) {
+  // Scene3, seed 1: three people cross ahead of the driving AGV; around frames 250-270 the per-frame tests miss a
+  // close one now and then, and the detector coasts it on its own tracks (measured when written: 3 coasted regions
+  // kept in 28 frames, 95 % of their pixels on the moving person).
+  sim::ScenarioOptions options;
+  options.name = "scene3";
+  options.frames = 400;
+  const sim::Simulator simulator(sim::SimConfig{}, options);
+  DynamicDetectorConfig config;
+  config.detector.coast_max_frames = 4;
+  DynamicDetector detector(simulator.calibration(), config);
+  sim::SimFrame rendered;
+  DetectorResult result;
+  int coasted_kept = 0;
+  long coasted_px = 0, coasted_on_moving_px = 0;
+  for (int i = 245; i <= 272; ++i) {
+    simulator.render_frame(i, rendered, 2);
+    StereoFrame frame;
+    frame.index = static_cast<std::size_t>(i);
+    frame.t_ns = rendered.t_ns;
+    frame.left = rendered.left;
+    frame.right = rendered.right;
+    detector.detect(frame, result);
+    for (const RoiSegmentation& seg : result.rois) {
+      if (!seg.coasted || seg.outline_verdict != OutlineVerdict::kKept) continue;
+      ++coasted_kept;
+      coasted_px += cv::countNonZero(seg.outline);
+      coasted_on_moving_px += cv::countNonZero(seg.outline & rendered.mask(seg.roi));
+    }
+  }
+  std::printf("scene3 frames 245..272: %d coasted regions kept, %.3f of their pixels on moving objects\n", coasted_kept,
+              coasted_px > 0 ? static_cast<double>(coasted_on_moving_px) / static_cast<double>(coasted_px) : 0.0);
+  ASSERT_GE(coasted_kept, 1);
+  EXPECT_GE(static_cast<double>(coasted_on_moving_px), 0.8 * static_cast<double>(coasted_px));
+}
+
 TEST(DynamicDetectorSim, DrivingThroughAStaticWarehouseFlagsAlmostNothing) {
   const Score s = run("static", 40, 56);  // measured: ~67 false pixels per frame (0.02 % of the image)
   EXPECT_EQ(s.tp + s.fn, 0);

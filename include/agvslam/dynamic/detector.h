@@ -107,7 +107,7 @@ struct DetectorOptions {
   // (at least coast_min_tracks, at its depth), in its last rectangle moved with them. It is kept only as a region
   // passes the outline checks and the photometric check (a person who stopped moves with the background and is
   // dropped), for at most coast_max_frames frames in a row (0 = off).
-  int coast_max_frames = 0;
+  int coast_max_frames = 4;
   int coast_min_detections = 2;
   int coast_min_tracks = 3;
   double coast_min_area_ratio = 0.5;  // a coasted outline smaller than this part of the object's last one is a
