@@ -20,6 +20,17 @@ struct Score {
   double recall() const { return tp + fn > 0 ? static_cast<double>(tp) / static_cast<double>(tp + fn) : 0.0; }
 };
 
+// Frame i of the simulator (ground truth in `rendered`) as the detector's input.
+StereoFrame render(const sim::Simulator& simulator, int i, sim::SimFrame& rendered) {
+  simulator.render_frame(i, rendered, 2);
+  StereoFrame frame;
+  frame.index = static_cast<std::size_t>(i);
+  frame.t_ns = rendered.t_ns;
+  frame.left = rendered.left;
+  frame.right = rendered.right;
+  return frame;
+}
+
 Score run(const std::string& scenario, int first, int last) {
   sim::ScenarioOptions options;
   options.name = scenario;
@@ -31,13 +42,7 @@ Score run(const std::string& scenario, int first, int last) {
   DetectorResult result;
   Score score;
   for (int i = first; i <= last; ++i) {
-    simulator.render_frame(i, rendered, 2);
-    StereoFrame frame;
-    frame.index = static_cast<std::size_t>(i);
-    frame.t_ns = rendered.t_ns;
-    frame.left = rendered.left;
-    frame.right = rendered.right;
-    detector.detect(frame, result);
+    detector.detect(render(simulator, i, rendered), result);
     if (!result.has_previous) continue;
     const int tp = cv::countNonZero(result.mask.image & rendered.mask);
     score.tp += tp;
@@ -108,13 +113,7 @@ TEST(DynamicDetectorSim, CoastedObjectsLieOnMovingObjects) {
   int coasted_kept = 0;
   long coasted_px = 0, coasted_on_moving_px = 0;
   for (int i = 245; i <= 272; ++i) {
-    simulator.render_frame(i, rendered, 2);
-    StereoFrame frame;
-    frame.index = static_cast<std::size_t>(i);
-    frame.t_ns = rendered.t_ns;
-    frame.left = rendered.left;
-    frame.right = rendered.right;
-    detector.detect(frame, result);
+    detector.detect(render(simulator, i, rendered), result);
     for (const RoiSegmentation& seg : result.rois) {
       if (!seg.coasted || seg.outline_verdict != OutlineVerdict::kKept) continue;
       ++coasted_kept;
