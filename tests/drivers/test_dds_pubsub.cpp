@@ -61,7 +61,13 @@ TEST(DdsPubSub, InProcessEverySampleArrivesInOrderWithExactValues) {
     }
   }
   ASSERT_TRUE(pub.flush(std::chrono::seconds(10)));
-  for (int k = 0; k < 100 && static_cast<int>(got_status.size()) < n; ++k) sub.poll(std::chrono::milliseconds(100));
+  // The three topics are delivered independently: wait until each has every sample (under load the status topic
+  // can be complete while the last poses are still in flight).
+  auto complete = [&] {
+    return static_cast<int>(got_pose.size()) >= n && static_cast<int>(got_odom.size()) >= n &&
+           static_cast<int>(got_status.size()) >= n;
+  };
+  for (int k = 0; k < 100 && !complete(); ++k) sub.poll(std::chrono::milliseconds(100));
   EXPECT_EQ(pub.stats().published, static_cast<uint64_t>(n));
   EXPECT_EQ(pub.stats().dropped_queue_full, 0U);
   EXPECT_EQ(got_pose, want_pose);
