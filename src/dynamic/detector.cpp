@@ -807,7 +807,10 @@ void DynamicDetector::add_coasting_groups(const DetectorResult& result, cv::Size
     }
     if (static_cast<int>(coast_tracks_.size()) < opt.coast_min_tracks) continue;
     // The last rectangle moved with the median motion of its tracks, and the tracks themselves.
-    std::vector<float> dx, dy;
+    std::vector<float>& dx = coast_dx_;
+    std::vector<float>& dy = coast_dy_;
+    dx.clear();
+    dy.clear();
     DynamicGroup g;
     float x0 = 1e9f, y0 = 1e9f, x1 = -1e9f, y1 = -1e9f;
     double sum_d = 0;
@@ -839,7 +842,8 @@ void DynamicDetector::add_coasting_groups(const DetectorResult& result, cv::Size
 
 void DynamicDetector::update_objects(const DetectorResult& result) {
   next_objects_.clear();
-  std::vector<uint8_t> own;  // per entry of next_objects_: kept on its own evidence this frame
+  std::vector<uint8_t>& own = coast_own_;  // per entry of next_objects_: kept on its own evidence this frame
+  own.clear();
   for (const RoiSegmentation& seg : result.rois) {
     if (seg.outline_verdict != OutlineVerdict::kKept || seg.object_id < 0) continue;
     auto it = std::find_if(next_objects_.begin(), next_objects_.end(), [&](const auto& e) { return e.first == seg.object_id; });

@@ -13,10 +13,12 @@
 //                   -> groups of dynamic points -> dynamic ROIs (> 4 points)
 //                   -> per ROI: SGBM on the ROI crop, then (regions.mask_mode)
 //                      disparity (default): the object's pixels connected to its points through smooth disparity,
-//                        not floor (object_outline.h), kept when its tracks are not mostly static and its
-//                        content does not move with the background (photometric check) -> dynamic region;
+//                        not floor (object_outline.h), kept when its tracks are not mostly static (or move
+//                        together) and its content does not move with the background (photometric check) -> dynamic
+//                        region;
 //                      superpixels / rectangle (the paper): SLIC, disparity planes, boundary types, search to the
 //                        occlusion boundaries (+ disparity band, static veto) -> rectangle or superpixel outline
+//                   -> objects of the last frame that no region continues coast on their own tracks (detector.coast_*)
 //                   -> DynamicMask; then the tracks that held continue, and quadtree FAST corners of the current
 //                      frame fill the places no track covers.
 //
@@ -314,6 +316,8 @@ class DynamicDetector {
   std::vector<std::pair<int, ObjectTrack>> objects_;  // by object id, ascending
   std::vector<std::pair<int, ObjectTrack>> next_objects_;
   std::vector<int> coast_tracks_;
+  std::vector<float> coast_dx_, coast_dy_;
+  std::vector<uint8_t> coast_own_;
   std::vector<float> inside_offsets_, static_offsets_;
   double static_offset_median_px_ = -1;  // of this frame's static tracks (-1: not computed yet)
   std::vector<uint8_t> coast_group_;  // per group: coasted
