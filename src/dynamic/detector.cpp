@@ -688,16 +688,22 @@ void DynamicDetector::outline_region(const StereoFrame& frame, DetectorResult& r
   }
   const OutlineStats& st = seg.outline_stats;
   const OutlineConfig& oc = config_.outline;
-  // The tracks inside move together (outline.aggregate_*): their median offset against the static tracks'.
   seg.outline_stats.median_offset_px = median_of(inside_offsets_);
-  if (oc.aggregate_ratio > 0 && static_offset_median_px_ < 0) {
-    static_offsets_.clear();
-    for (const TrackedPoint& p : result.points) {
-      if (p.tracked && !p.dynamic && p.reprojection_px >= 0) static_offsets_.push_back(static_cast<float>(p.reprojection_px));
+  const bool mostly_static = !seg.coasted && st.tracked_inside >= oc.min_tracked_for_fraction &&
+                             st.dynamic_inside < oc.min_dynamic_fraction * st.tracked_inside;
+  // ... unless they move together (outline.aggregate_*): their median offset against the frame's static tracks',
+  // taken once per frame and only when an outline needs it.
+  bool moves_together = false;
+  if (mostly_static && oc.aggregate_ratio > 0) {
+    if (static_offset_median_px_ < 0) {
+      static_offsets_.clear();
+      for (const TrackedPoint& p : result.points) {
+        if (p.tracked && !p.dynamic && p.reprojection_px >= 0) static_offsets_.push_back(static_cast<float>(p.reprojection_px));
+      }
+      static_offset_median_px_ = static_offsets_.empty() ? 0.0 : median_of(static_offsets_);
     }
-    static_offset_median_px_ = static_offsets_.empty() ? 0.0 : median_of(static_offsets_);
+    moves_together = tracks_move_together(st.median_offset_px, static_offset_median_px_, oc);
   }
-  const bool moves_together = tracks_move_together(inside_offsets_, static_offset_median_px_, oc);
   int coast_min_pixels = 0;  // a coasted outline: a good part of the object's last one
   if (seg.coasted) {
     const auto ob = std::lower_bound(objects_.begin(), objects_.end(), seg.object_id,
@@ -710,8 +716,7 @@ void DynamicDetector::outline_region(const StereoFrame& frame, DetectorResult& r
     seg.outline_verdict = OutlineVerdict::kNoSeed;
   } else if (st.object_pixels < std::max(oc.min_pixels, coast_min_pixels)) {
     seg.outline_verdict = OutlineVerdict::kTooSmall;
-  } else if (!seg.coasted && !moves_together && st.tracked_inside >= oc.min_tracked_for_fraction &&
-             st.dynamic_inside < oc.min_dynamic_fraction * st.tracked_inside) {
+  } else if (mostly_static && !moves_together) {
     seg.outline_verdict = OutlineVerdict::kMostlyStaticTracks;
   } else if (oc.max_height_m > 0 && st.median_disparity_px > 0 &&
              cv::boundingRect(seg.outline).height * calibration_.baseline_m / st.median_disparity_px > oc.max_height_m) {

@@ -55,12 +55,10 @@ std::string OutlineConfig::describe() const {
   return buf;
 }
 
-bool tracks_move_together(std::vector<float>& inside_offsets_px, double static_median_px, const OutlineConfig& config) {
-  if (!(config.aggregate_ratio > 0) || inside_offsets_px.empty()) return false;
-  const auto mid = inside_offsets_px.begin() + static_cast<std::ptrdiff_t>(inside_offsets_px.size() / 2);
-  std::nth_element(inside_offsets_px.begin(), mid, inside_offsets_px.end());
-  const double median_px = *mid;
-  return median_px >= config.aggregate_min_px && median_px >= config.aggregate_ratio * std::max(0.0, static_median_px);
+bool tracks_move_together(double median_offset_px, double static_median_px, const OutlineConfig& config) {
+  if (!(config.aggregate_ratio > 0) || median_offset_px < 0) return false;
+  return median_offset_px >= config.aggregate_min_px &&
+         median_offset_px >= config.aggregate_ratio * std::max(0.0, static_median_px);
 }
 
 ObjectOutliner::ObjectOutliner(const OutlineConfig& config) : config_(config) { config_.validate("OutlineConfig"); }

@@ -85,9 +85,9 @@ struct OutlineStats {
 };
 
 // outline.aggregate_*: whether the tracks inside an outline move together, their median depth-test reprojection
-// offset (inside_offsets_px, reordered) at least aggregate_min_px and aggregate_ratio x static_median_px (the
-// frame's static tracks'). False when aggregate_ratio is 0 or there is no offset.
-bool tracks_move_together(std::vector<float>& inside_offsets_px, double static_median_px, const OutlineConfig& config);
+// offset (median_offset_px, < 0 = none measured) at least aggregate_min_px and aggregate_ratio x static_median_px
+// (the frame's static tracks'). False when aggregate_ratio is 0.
+bool tracks_move_together(double median_offset_px, double static_median_px, const OutlineConfig& config);
 
 // Reusable buffers (no allocation per call once sizes have settled).
 class ObjectOutliner {
