@@ -12,8 +12,8 @@
 // and regions (red rectangles) against the ground truth where the dataset has one (green: correct, red: false,
 // blue: missed pixels).
 // Where the dataset has mask_0/ (the simulator), each frame after the first is scored as the paper does
-// (eqs. 12-14, objects matched by IoU >= 0.5; each detector region is one detected object; see
-// agvslam/eval/detection_scoring.h). The first line of
+// (eqs. 12-14, objects matched by IoU >= 0.5; each detector region is one detected object; with instance_0/ each
+// ground-truth object is its own visible pixels, also where objects overlap; see agvslam/eval/detection_scoring.h). The first line of
 // stdout is `PRECISION <p> RECALL <r> IOU <iou>` (fractions; nan without ground truth), followed by the counts,
 // regions per frame and per-stage median/p95 times. Exit status: 0 on success, 2 on bad input (the message
 // names the option, file or folder), 1 on any other failure.
@@ -248,19 +248,22 @@ std::vector<std::pair<std::string, double>> stage_values(const dyn::StageTimings
 // Per ground-truth object of a frame (moving or not): its visible moving pixels, the tracked and dynamic points on
 // it, how much of it the ROIs and the mask cover, and the IoU of the detection matched to it (0 = missed). This
 // tells at which stage an object was lost (no dynamic points, no ROI, or a poor outline).
+// gt_instances (may be empty): each pixel's object id; with it, an object's pixels are its own ones only.
 nlohmann::json object_diagnostics(const std::vector<agvslam::io::SceneObject>* objects, const cv::Mat& gt_mask,
-                                  const dyn::DetectorResult& r, const eval::FrameDetectionScore& f) {
+                                  const cv::Mat& gt_instances, const dyn::DetectorResult& r,
+                                  const eval::FrameDetectionScore& f) {
   nlohmann::json out = nlohmann::json::array();
   if (objects == nullptr) return out;
   const cv::Rect frame_rect(cv::Point(0, 0), gt_mask.size());
   for (const auto& obj : *objects) {
     const cv::Rect box = obj.box & frame_rect;
     int pixels = 0, in_mask = 0, in_roi = 0, tracked = 0, dynamic = 0;
+    auto own = [&](int x, int y) { return gt_instances.empty() || gt_instances.at<uint8_t>(y, x) == obj.id; };
     for (int y = box.y; y < box.br().y; ++y) {
       const uint8_t* g = gt_mask.ptr<uint8_t>(y);
       const uint8_t* d = r.mask.image.ptr<uint8_t>(y);
       for (int x = box.x; x < box.br().x; ++x) {
-        if (!g[x]) continue;
+        if (!g[x] || !own(x, y)) continue;
         ++pixels;
         in_mask += d[x] ? 1 : 0;
         for (const auto& roi : r.rois) {
@@ -274,7 +277,7 @@ nlohmann::json object_diagnostics(const std::vector<agvslam::io::SceneObject>* o
     for (const auto& p : r.points) {
       if (!p.tracked) continue;
       const cv::Point q(cvRound(p.cur_px.x), cvRound(p.cur_px.y));
-      if (!box.contains(q) || (obj.moving && !gt_mask.at<uint8_t>(q))) continue;
+      if (!box.contains(q) || (obj.moving && !gt_mask.at<uint8_t>(q)) || !own(q.x, q.y)) continue;
       ++tracked;
       dynamic += p.dynamic ? 1 : 0;
     }
@@ -411,6 +414,7 @@ int run(const Options& o) {
   std::map<std::string, StageSeries> timings;
   std::vector<std::string> stage_order;
   int regions_total = 0, frames_detected = 0, frames_with_regions = 0;
+  int instances_scored = 0;  // frames whose objects were scored with instance_0/ (their own pixels only)
   RecallBreakdown breakdown;
   nlohmann::json per_frame = nlohmann::json::array();
 
@@ -420,8 +424,11 @@ int run(const Options& o) {
     detector.detect(frame, result);
     const double detect_cpu_ms = thread_cpu_ms() - cpu_before_ms;
     write_png((out / "mask" / frame_name(i)).string(), result.mask.image);
-    cv::Mat gt_mask;
-    if (has_gt_masks) gt_mask = dataset->ground_truth_mask(i);
+    cv::Mat gt_mask, gt_instances;
+    if (has_gt_masks) {
+      gt_mask = dataset->ground_truth_mask(i);
+      gt_instances = dataset->ground_truth_instances(i);  // empty without instance_0/
+    }
     nlohmann::json jf;
     jf["frame"] = i;
     if (result.has_previous) {
@@ -497,13 +504,15 @@ int run(const Options& o) {
             if (obj.moving) gt_objects.push_back({obj.id, obj.box});
           }
         }
-        const eval::FrameDetectionScore f = eval::score_detection_instances(result.mask.instances, gt_mask, gt_objects, scoring);
+        const eval::FrameDetectionScore f = eval::score_detection_instances(result.mask.instances, gt_mask, gt_objects, scoring,
+                                                                          gt_instances);
         score.add(f);
+        instances_scored += gt_instances.empty() ? 0 : 1;
         jf["tp"] = f.true_positives;
         jf["fp"] = f.false_positives;
         jf["fn"] = f.false_negatives;
         jf["iou"] = f.matched_iou;
-        jf["objects"] = object_diagnostics(it == objects.end() ? nullptr : &it->second, gt_mask, result, f);
+        jf["objects"] = object_diagnostics(it == objects.end() ? nullptr : &it->second, gt_mask, gt_instances, result, f);
         if (it != objects.end()) breakdown.add(it->second, jf["objects"], gt_mask.size(), scoring);
         jf["detections"] = detection_diagnostics(f, result.mask.instances, gt_mask);
       }
@@ -524,10 +533,14 @@ int run(const Options& o) {
               frames_detected, regions_total, frames_detected > 0 ? static_cast<double>(regions_total) / frames_detected : 0.0,
               frames_with_regions);
   if (scored) {
-    std::printf("objects (IoU >= %.2f, objects under %d px don't care): TP %d FP %d FN %d, %d don't-care; "
+    std::printf("objects (IoU >= %.2f, objects under %d px don't care; %s): TP %d FP %d FN %d, %d don't-care; "
                 "false regions per 100 frames %.2f\n",
-                scoring.min_iou, scoring.min_object_pixels, score.true_positives(), score.false_positives(),
-                score.false_negatives(), score.ignored_objects(), score.false_positives_per_100_frames());
+                scoring.min_iou, scoring.min_object_pixels,
+                instances_scored == score.frames() ? "each object its own pixels (instance_0/)"
+                : instances_scored == 0          ? "each object the moving pixels in its box (no instance_0/)"
+                                                 : "instance_0/ for some frames only",
+                score.true_positives(), score.false_positives(), score.false_negatives(), score.ignored_objects(),
+                score.false_positives_per_100_frames());
     std::printf("pixels: precision %.4f recall %.4f IoU %.4f\n", score.pixel_precision(), score.pixel_recall(),
                 score.pixel_iou());
     std::printf("%s\n", breakdown.describe().c_str());
@@ -545,7 +558,8 @@ int run(const Options& o) {
     j["frames"] = {{"first", first}, {"last", last}, {"detected", frames_detected}};
     j["regions"] = {{"total", regions_total}, {"per_frame", frames_detected > 0 ? static_cast<double>(regions_total) / frames_detected : 0.0}};
     if (scored) {
-      j["scoring"] = {{"min_iou", scoring.min_iou}, {"min_object_pixels", scoring.min_object_pixels}};
+      j["scoring"] = {{"min_iou", scoring.min_iou}, {"min_object_pixels", scoring.min_object_pixels},
+                      {"instance_frames", instances_scored}};
       j["precision"] = score.precision();
       j["recall"] = score.recall();
       j["mean_iou"] = score.mean_iou();

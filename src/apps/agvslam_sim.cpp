@@ -5,7 +5,8 @@
 //   agvslam-sim --list
 //
 // Writes the KITTI layout (image_0/ image_1/ calib.txt times.txt poses.txt) plus disp_0/ (16-bit disparity*256),
-// mask_0/ (255 = moving object), objects.txt and scenario.json (what was generated, with its seeds).
+// mask_0/ (255 = moving object), instance_0/ (the actor id seen at each pixel, 0 = none), objects.txt and
+// scenario.json (what was generated, with its seeds).
 // The output is identical for any --threads. Exit status: 0 on success, 2 on bad input (the message names the
 // option, file or folder), 1 on any other failure.
 
@@ -62,7 +63,8 @@ nlohmann::json describe(const sim::Simulator& s) {
                  {"fy", c.fy_px()},        {"cx", c.cx_px()},             {"cy", c.cy_px()},
                  {"baseline_m", c.baseline_m}, {"height_above_floor_m", c.camera_height_m}};
   j["conventions"] = "poses.txt: T_w_cam0 (world = left camera at frame 0; camera x right, y down, z forward); "
-                     "disp_0: uint16 disparity*256 of the left image, 0 = none; mask_0: 255 = moving object";
+                     "disp_0: uint16 disparity*256 of the left image, 0 = none; mask_0: 255 = moving object; "
+                     "instance_0: uint8 actor id (objects.txt) of each pixel, 0 = none";
   return j;
 }
 

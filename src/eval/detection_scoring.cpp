@@ -21,26 +21,38 @@ struct ObjectPixels {
 namespace {
 
 FrameDetectionScore score_labelled(const cv::Mat& det_labels, int n_labels, const cv::Mat& gt_mask,
-                                   const std::vector<GroundTruthObject>& objects, const DetectionScoringConfig& config);
+                                   const std::vector<GroundTruthObject>& objects, const DetectionScoringConfig& config,
+                                   const cv::Mat& gt_instances);
+
+void check_gt_instances(const cv::Mat& gt_instances, const cv::Mat& gt_mask, const char* function) {
+  if (gt_instances.empty()) return;
+  if (gt_instances.type() != CV_8UC1 || gt_instances.size() != gt_mask.size()) {
+    throw std::invalid_argument(std::string(function) + ": expected CV_8UC1 ground-truth instances of the mask's size " +
+                                std::to_string(gt_mask.cols) + "x" + std::to_string(gt_mask.rows) + ", got " +
+                                std::to_string(gt_instances.cols) + "x" + std::to_string(gt_instances.rows));
+  }
+}
 
 }  // namespace
 
 FrameDetectionScore score_detections(const cv::Mat& detected_mask, const cv::Mat& gt_mask,
                                      const std::vector<GroundTruthObject>& objects,
-                                     const DetectionScoringConfig& config) {
+                                     const DetectionScoringConfig& config, const cv::Mat& gt_instances) {
   if (detected_mask.type() != CV_8UC1 || gt_mask.type() != CV_8UC1 || detected_mask.size() != gt_mask.size()) {
     throw std::invalid_argument("score_detections: expected two CV_8UC1 masks of one size, got " +
                                 std::to_string(detected_mask.cols) + "x" + std::to_string(detected_mask.rows) +
                                 " and " + std::to_string(gt_mask.cols) + "x" + std::to_string(gt_mask.rows));
   }
+  check_gt_instances(gt_instances, gt_mask, "score_detections");
   cv::Mat labels;
   const int n = cv::connectedComponents(detected_mask, labels, 8, CV_32S);
-  return score_labelled(labels, n, gt_mask, objects, config);
+  return score_labelled(labels, n, gt_mask, objects, config, gt_instances);
 }
 
 FrameDetectionScore score_detection_instances(const cv::Mat& detection_labels, const cv::Mat& gt_mask,
                                               const std::vector<GroundTruthObject>& objects,
-                                              const DetectionScoringConfig& config) {
+                                              const DetectionScoringConfig& config,
+                                              const cv::Mat& gt_instances) {
   if ((detection_labels.type() != CV_8UC1 && detection_labels.type() != CV_32SC1) || gt_mask.type() != CV_8UC1 ||
       detection_labels.size() != gt_mask.size()) {
     throw std::invalid_argument("score_detection_instances: expected CV_8UC1/CV_32SC1 labels and a CV_8UC1 mask of one "
@@ -48,17 +60,19 @@ FrameDetectionScore score_detection_instances(const cv::Mat& detection_labels, c
                                 std::to_string(detection_labels.rows) + " and " + std::to_string(gt_mask.cols) + "x" +
                                 std::to_string(gt_mask.rows));
   }
+  check_gt_instances(gt_instances, gt_mask, "score_detection_instances");
   cv::Mat labels;
   detection_labels.convertTo(labels, CV_32S);
   double max_label = 0;
   cv::minMaxLoc(labels, nullptr, &max_label);
-  return score_labelled(labels, static_cast<int>(max_label) + 1, gt_mask, objects, config);
+  return score_labelled(labels, static_cast<int>(max_label) + 1, gt_mask, objects, config, gt_instances);
 }
 
 namespace {
 
 FrameDetectionScore score_labelled(const cv::Mat& det_labels, int n_labels, const cv::Mat& gt_mask,
-                                   const std::vector<GroundTruthObject>& objects, const DetectionScoringConfig& config) {
+                                   const std::vector<GroundTruthObject>& objects, const DetectionScoringConfig& config,
+                                   const cv::Mat& gt_instances) {
   FrameDetectionScore score;
   const cv::Rect frame_rect(0, 0, gt_mask.cols, gt_mask.rows);
 
@@ -115,8 +129,10 @@ FrameDetectionScore score_labelled(const cv::Mat& det_labels, int n_labels, cons
       const uint8_t* m = gt_mask.ptr<uint8_t>(y);
       const int* dl = det_labels.ptr<int>(y);
       const int* gl = gt_labels.empty() ? nullptr : gt_labels.ptr<int>(y);
+      // An object's own pixels: where instances are known, those carrying its id.
+      const uint8_t* gi = gl == nullptr && !gt_instances.empty() ? gt_instances.ptr<uint8_t>(y) : nullptr;
       for (int x = box.x; x < box.x + box.width; ++x) {
-        if (!m[x] || (gl && gl[x] != gt[g].id)) continue;
+        if (!m[x] || (gl && gl[x] != gt[g].id) || (gi && gi[x] != gt[g].id)) continue;
         ++gt[g].pixels;
         if (dl[x] > 0 && dl[x] < n_labels && det_index[static_cast<std::size_t>(dl[x])] >= 0) {
           ++inter[g][static_cast<std::size_t>(det_index[static_cast<std::size_t>(dl[x])])];

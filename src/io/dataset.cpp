@@ -255,6 +255,20 @@ cv::Mat KittiDataset::ground_truth_mask(std::size_t i) const {
   return mask;
 }
 
+cv::Mat KittiDataset::ground_truth_instances(std::size_t i) const {
+  const std::string path = (fs::path(root_) / "instance_0" / left_names_.at(i)).string();
+  if (!is_file(path)) return {};
+  cv::Mat instances = cv::imread(path, cv::IMREAD_UNCHANGED);
+  if (instances.empty() || instances.type() != CV_8UC1) {
+    throw InputError(path, "", "expected an 8-bit single-channel PNG of object ids (0 = none)");
+  }
+  if (instances.size() != image_size_) {
+    throw InputError(path, "image size",
+                     "expected " + size_text(image_size_) + " like the images, found " + size_text(instances.size()));
+  }
+  return instances;
+}
+
 cv::Mat KittiDataset::ground_truth_disparity_px(std::size_t i) const {
   const std::string path = (fs::path(root_) / "disp_0" / left_names_.at(i)).string();
   if (!is_file(path)) return {};

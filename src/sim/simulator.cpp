@@ -177,8 +177,13 @@ void Simulator::render_frame(int frame, SimFrame& out, int threads) const {
   const double max_depth = config_.max_depth_m;
   out.disparity_u16.create(height, width, CV_16UC1);
   out.mask.create(height, width, CV_8UC1);
+  out.instances.create(height, width, CV_8UC1);
   int max_id = 0;
   for (const auto& o : out.posed_objects) max_id = std::max(max_id, o.id);
+  if (max_id > 255) {
+    throw InputError("scenario", "actor id " + std::to_string(max_id),
+                     "expected actor ids of at most 255 (instance_0/ holds them in 8-bit PNGs)");
+  }
   std::vector<int> moving_by_id(static_cast<std::size_t>(max_id) + 1, 0);
   std::vector<int> slot_by_id(static_cast<std::size_t>(max_id) + 1, -1);
   for (std::size_t i = 0; i < out.posed_objects.size(); ++i) {
@@ -191,6 +196,7 @@ void Simulator::render_frame(int frame, SimFrame& out, int threads) const {
     const uint16_t* ids = out.left_render.object_id.ptr<uint16_t>(v);
     uint16_t* disp = out.disparity_u16.ptr<uint16_t>(v);
     uint8_t* mask = out.mask.ptr<uint8_t>(v);
+    uint8_t* instance = out.instances.ptr<uint8_t>(v);
     for (int u = 0; u < width; ++u) {
       const double z = depth[u];
       uint16_t d16 = 0;
@@ -201,6 +207,7 @@ void Simulator::render_frame(int frame, SimFrame& out, int threads) const {
       disp[u] = d16;
       const int id = ids[u];
       mask[u] = (id > 0 && id <= max_id && moving_by_id[static_cast<std::size_t>(id)]) ? 255 : 0;
+      instance[u] = (id > 0 && id <= max_id) ? static_cast<uint8_t>(id) : 0;
       if (id > 0 && id <= max_id) {
         VisibleObject& b = boxes[static_cast<std::size_t>(id)];
         if (b.pixel_count == 0) {
@@ -239,7 +246,7 @@ void prepare_output_dir(const std::string& dir, const std::string& option) {
   fs::create_directories(dir, ec);
   if (ec || !fs::is_directory(dir))
     throw InputError(option, dir, "could not create the output folder: " + (ec ? ec.message() : std::string("unknown")));
-  for (const char* sub : {"image_0", "image_1", "disp_0", "mask_0"}) {
+  for (const char* sub : {"image_0", "image_1", "disp_0", "mask_0", "instance_0"}) {
     fs::create_directories(fs::path(dir) / sub, ec);
     if (ec) throw InputError(option, (fs::path(dir) / sub).string(), "could not create the folder: " + ec.message());
   }
@@ -293,6 +300,7 @@ void write_sequence(const Simulator& sim, const std::string& out_dir, const Writ
     png.write((root / "image_1" / name).string(), frame.right, PngFilter::kPaeth);
     png.write((root / "disp_0" / name).string(), frame.disparity_u16, PngFilter::kPaeth);
     png.write((root / "mask_0" / name).string(), frame.mask, PngFilter::kNone);
+    png.write((root / "instance_0" / name).string(), frame.instances, PngFilter::kNone);
     objects += format_objects(k, frame.objects);
     if (options.progress) options.progress(k + 1, sim.frame_count());
   }

@@ -55,6 +55,42 @@ TEST(DetectionScoring, ObjectPixelsAreTheMaskInsideTheBoxAndMatchingIsOneToOne) 
   EXPECT_EQ(s.pixels_intersection, 2800);
 }
 
+TEST(DetectionScoring, WithInstancesAnObjectBehindAnotherIsOnlyItsOwnPixels) {
+  // Person 2 walks behind person 1: its box overlaps person 1's, but only its own pixels are visible.
+  cv::Mat gt = blank(), det = blank(), instances = blank();
+  instances(cv::Rect(100, 40, 60, 120)).setTo(2);  // person 2, 7200 px in its box ...
+  instances(cv::Rect(60, 20, 80, 160)).setTo(1);   // ... of which person 1 in front hides 40 x 120 px
+  gt.setTo(255, instances > 0);
+  // The detector outlines each person exactly, as two instances.
+  det.setTo(1, instances == 1);
+  det.setTo(2, instances == 2);
+  const std::vector<GroundTruthObject> objects = {{1, cv::Rect(60, 20, 80, 160)}, {2, cv::Rect(100, 40, 60, 120)}};
+  auto s = score_detection_instances(det, gt, objects, {}, instances);
+  EXPECT_EQ(s.true_positives, 2);
+  EXPECT_EQ(s.false_positives, 0);
+  EXPECT_EQ(s.false_negatives, 0);
+  ASSERT_EQ(s.matched_iou.size(), 2u);
+  EXPECT_DOUBLE_EQ(s.matched_iou[0], 1.0);
+  EXPECT_DOUBLE_EQ(s.matched_iou[1], 1.0);
+  // Without instances person 2 is every moving pixel in its box (7200 px), its own 2400 px give IoU 1/3: missed.
+  s = score_detection_instances(det, gt, objects);
+  EXPECT_EQ(s.true_positives, 1);
+  EXPECT_EQ(s.false_positives, 1);
+  EXPECT_EQ(s.false_negatives, 1);
+  ASSERT_EQ(s.missed_object_ids.size(), 1u);
+  EXPECT_EQ(s.missed_object_ids[0], 2);
+  // A detection merging both people matches neither well with instances: person 1 (12800 px) at IoU 12800/15200.
+  cv::Mat merged = blank();
+  merged.setTo(1, instances > 0);
+  s = score_detection_instances(merged, gt, objects, {}, instances);
+  EXPECT_EQ(s.true_positives, 1);
+  EXPECT_EQ(s.false_negatives, 1);
+  ASSERT_EQ(s.matched_iou.size(), 1u);
+  EXPECT_NEAR(s.matched_iou[0], 12800.0 / 15200.0, 1e-12);
+  // Instances of another size are refused.
+  EXPECT_THROW(score_detection_instances(det, gt, objects, {}, cv::Mat::zeros(10, 10, CV_8UC1)), std::invalid_argument);
+}
+
 TEST(DetectionScoring, SmallObjectsAreDontCareEitherWay) {
   cv::Mat gt = blank(), det = blank();
   gt(cv::Rect(10, 10, 10, 20)).setTo(255);  // 200 px < 400: don't care

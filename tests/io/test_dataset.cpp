@@ -264,13 +264,14 @@ StereoCalibration small_calibration() {
 }
 
 // A KITTI-layout sequence the way agvslam-sim writes it: image_0/1, calib.txt, times.txt, poses.txt,
-// disp_0 (16-bit disparity * 256), mask_0.
+// disp_0 (16-bit disparity * 256), mask_0, instance_0.
 void write_sim_sequence(const TempDir& dir, std::size_t frames) {
   const cv::Size size(64, 48);
   fs::create_directories(dir.file("image_0"));
   fs::create_directories(dir.file("image_1"));
   fs::create_directories(dir.file("disp_0"));
   fs::create_directories(dir.file("mask_0"));
+  fs::create_directories(dir.file("instance_0"));
   std::vector<int64_t> times_ns;
   Trajectory poses;
   for (std::size_t i = 0; i < frames; ++i) {
@@ -284,6 +285,10 @@ void write_sim_sequence(const TempDir& dir, std::size_t frames) {
     cv::Mat mask(size, CV_8UC1, cv::Scalar(0));
     mask(cv::Rect(40, 5, 10, 30)).setTo(255);
     cv::imwrite(dir.file(std::string("mask_0/") + name), mask);
+    cv::Mat instances(size, CV_8UC1, cv::Scalar(0));
+    instances.setTo(3, mask);
+    instances(cv::Rect(2, 30, 8, 8)).setTo(7);  // a parked object
+    cv::imwrite(dir.file(std::string("instance_0/") + name), instances);
     times_ns.push_back(1'000'000'000 + static_cast<int64_t>(i) * 33'333'333);
     poses.push_back({times_ns.back(), make_se3(Eigen::Matrix3d::Identity(), Eigen::Vector3d(0, 0, 0.1 * static_cast<double>(i)))});
   }
@@ -317,6 +322,23 @@ TEST(Dataset, SimulatorSequenceWithDisparityAndMask) {
   ASSERT_EQ(mask.type(), CV_8UC1);
   EXPECT_EQ(mask.at<uint8_t>(10, 45), 255);
   EXPECT_EQ(cv::countNonZero(mask), 300);
+
+  const cv::Mat instances = dataset.ground_truth_instances(1);
+  ASSERT_EQ(instances.type(), CV_8UC1);
+  EXPECT_EQ(instances.at<uint8_t>(10, 45), 3);
+  EXPECT_EQ(instances.at<uint8_t>(33, 5), 7);
+  EXPECT_EQ(cv::countNonZero(instances), 364);
+  // A wrong instance image names its file and what was expected; a missing one is simply absent.
+  cv::imwrite(dir.file("instance_0/000002.png"), cv::Mat(24, 32, CV_8UC1, cv::Scalar(1)));
+  try {
+    (void)dataset.ground_truth_instances(2);
+    FAIL() << "an instance image of another size must be refused";
+  } catch (const InputError& e) {
+    EXPECT_NE(e.source().find("instance_0/000002.png"), std::string::npos) << e.what();
+    EXPECT_NE(std::string(e.what()).find("64x48"), std::string::npos) << e.what();
+  }
+  fs::remove(dir.file("instance_0/000003.png"));
+  EXPECT_TRUE(dataset.ground_truth_instances(3).empty());
 
   const auto gt = dataset.ground_truth();
   ASSERT_TRUE(gt.has_value());

@@ -4,6 +4,7 @@
 #include <filesystem>
 #include <fstream>
 #include <opencv2/imgcodecs.hpp>
+#include <opencv2/imgproc.hpp>
 #include <sstream>
 
 #include "agvslam/core/error.h"
@@ -124,7 +125,7 @@ TEST(Sequence, WritesTheKittiLayoutReadableAsADataset) {
   const std::string dir = test::make_temp_dir("agvslam-sim-seq");
   const Simulator sim = make_sim("scene3", 4, 0.25, 6);
   write_sequence(sim, dir);
-  for (const char* sub : {"image_0", "image_1", "disp_0", "mask_0"})
+  for (const char* sub : {"image_0", "image_1", "disp_0", "mask_0", "instance_0"})
     for (int k = 0; k < 6; ++k) {
       char name[32];
       std::snprintf(name, sizeof(name), "%06d.png", k);
@@ -196,6 +197,22 @@ TEST(Sequence, WritesTheKittiLayoutReadableAsADataset) {
   const cv::Mat gt_mask = ds.ground_truth_mask(3);
   ASSERT_FALSE(gt_mask.empty());
   EXPECT_EQ(cv::countNonZero(gt_mask != f.mask), 0);
+  // instance_0: each pixel's actor id; every object's pixels lie inside its objects.txt box, the moving ones make
+  // up the motion mask exactly, and the box of an object's own pixels is its box.
+  const cv::Mat gt_instances = ds.ground_truth_instances(3);
+  ASSERT_FALSE(gt_instances.empty());
+  EXPECT_EQ(gt_instances.type(), CV_8UC1);
+  EXPECT_TRUE(identical(gt_instances, f.instances));
+  ASSERT_FALSE(f.objects.empty());
+  cv::Mat moving_from_instances = cv::Mat::zeros(gt_instances.size(), CV_8UC1);
+  for (const auto& o : f.objects) {
+    const cv::Mat own = gt_instances == o.id;
+    EXPECT_EQ(cv::countNonZero(own), o.pixel_count) << "object " << o.id;
+    const cv::Rect box = cv::boundingRect(own);
+    EXPECT_EQ(box, cv::Rect(cv::Point(o.x_min, o.y_min), cv::Point(o.x_max + 1, o.y_max + 1))) << "object " << o.id;
+    if (o.moving) moving_from_instances.setTo(255, own);
+  }
+  EXPECT_EQ(cv::countNonZero(moving_from_instances != gt_mask), 0);
   fs::remove_all(dir);
 }
 

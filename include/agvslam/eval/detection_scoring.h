@@ -2,7 +2,9 @@
 // Object-level scoring of dynamic-region masks as in paper 004 (eqs. 12-14).
 //
 // Ground-truth objects: the moving objects of a frame, each the pixels of the ground-truth moving mask inside
-// its box (the simulator's objects.txt); without boxes, the 8-connected components of the ground-truth mask.
+// its box (the simulator's objects.txt) that carry its id in the ground-truth instance image where one is given
+// (instance_0/: where two objects' boxes overlap, e.g. a person walking behind another, each object is only its
+// own visible pixels); without boxes, the 8-connected components of the ground-truth mask.
 // Detected objects: the 8-connected components of the detected mask, or the instances of a label image (a
 // detector's regions, one object each even when its outline is in pieces). A detection and an object match when
 // their IoU (eq. 14) is >= min_iou, one to one, best IoU first. TP = matched objects, FP = detections matching
@@ -49,16 +51,18 @@ struct FrameDetectionScore {
 };
 
 // detected_mask, gt_mask: CV_8UC1 of one size, non-zero = dynamic. objects: the frame's moving objects; when
-// empty, the connected components of gt_mask are the objects.
+// empty, the connected components of gt_mask are the objects. gt_instances: empty, or CV_8UC1 of the same size
+// holding each pixel's object id (objects' ids; used only with objects).
 FrameDetectionScore score_detections(const cv::Mat& detected_mask, const cv::Mat& gt_mask,
                                      const std::vector<GroundTruthObject>& objects,
-                                     const DetectionScoringConfig& config = {});
+                                     const DetectionScoringConfig& config = {}, const cv::Mat& gt_instances = {});
 
 // Same with the detected objects given as an instance label image (CV_8UC1 or CV_32SC1, 0 = none, each other
 // value one detected object, which may consist of several pieces).
 FrameDetectionScore score_detection_instances(const cv::Mat& detection_labels, const cv::Mat& gt_mask,
                                               const std::vector<GroundTruthObject>& objects,
-                                              const DetectionScoringConfig& config = {});
+                                              const DetectionScoringConfig& config = {},
+                                              const cv::Mat& gt_instances = {});
 
 // Totals over a sequence.
 class DetectionScore {

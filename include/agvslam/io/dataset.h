@@ -4,7 +4,8 @@
 //   KITTI odometry layout (also what agvslam-sim writes):
 //     image_0/ + image_1/ (or image_l/ + image_r/), NNNNNN.png; calib.txt; times.txt (optional: 10 Hz
 //     assumed without it); poses.txt (optional ground truth, T_w_cam0). Simulator extras: disp_0/ (16-bit,
-//     disparity*256, 0 = none), mask_0/ (8-bit, 255 = moving object), objects.txt.
+//     disparity*256, 0 = none), mask_0/ (8-bit, 255 = moving object), instance_0/ (8-bit, object id per
+//     pixel, 0 = none), objects.txt.
 //   EuRoC ASL layout: mav0/cam0|cam1/data.csv + data/ + sensor.yaml. Left and right are paired by time
 //     stamp; a frame listed in a CSV whose image is missing, or that has no partner, is skipped with a
 //     warning. Images are rectified with maps computed from the two sensor.yaml files.
@@ -38,6 +39,8 @@ class StereoDataset {
   virtual std::optional<Trajectory> ground_truth() const { return std::nullopt; }
   // Simulator ground truth: empty Mat when the dataset has none.
   virtual cv::Mat ground_truth_mask(std::size_t /*i*/) const { return {}; }
+  // CV_8UC1, the id (objects.txt) of the object seen at each pixel, 0 = none; empty Mat when the dataset has none.
+  virtual cv::Mat ground_truth_instances(std::size_t /*i*/) const { return {}; }
   virtual cv::Mat ground_truth_disparity_px(std::size_t /*i*/) const { return {}; }  // CV_32FC1, 0 = none
 };
 
@@ -55,6 +58,7 @@ class KittiDataset final : public StereoDataset {
   StereoFrame frame(std::size_t i) const override;
   std::optional<Trajectory> ground_truth() const override;
   cv::Mat ground_truth_mask(std::size_t i) const override;
+  cv::Mat ground_truth_instances(std::size_t i) const override;
   cv::Mat ground_truth_disparity_px(std::size_t i) const override;
 
   const std::string& left_dir() const { return left_dir_; }

@@ -41,6 +41,7 @@ struct SimFrame {
   cv::Mat left, right;            // CV_8UC1
   cv::Mat disparity_u16;          // CV_16UC1: disparity * 256, 0 = none
   cv::Mat mask;                   // CV_8UC1: 255 = pixel of a moving object
+  cv::Mat instances;              // CV_8UC1: the id of the actor seen at each pixel (moving or not), 0 = none
   std::vector<VisibleObject> objects;
   std::vector<DynamicObject> posed_objects;  // the actors as rendered
   CameraRender left_render, right_render;    // depth_m and object_id of each camera (pixel centres)
@@ -98,7 +99,9 @@ struct WriteOptions {
 
 // Writes the whole sequence in the KITTI layout:
 //   image_0/ image_1/ NNNNNN.png (8-bit grey), disp_0/ NNNNNN.png (16-bit, disparity * 256, 0 = none),
-//   mask_0/ NNNNNN.png (8-bit, 255 = moving object), calib.txt (labelled P0/P1), times.txt, poses.txt,
+//   mask_0/ NNNNNN.png (8-bit, 255 = moving object), instance_0/ NNNNNN.png (8-bit, the id of the actor seen at
+//   each pixel, as in objects.txt, 0 = none: an object's own pixels where objects overlap), calib.txt (labelled
+//   P0/P1), times.txt, poses.txt,
 //   objects.txt ("frame id class moving x_min y_min x_max y_max" per visible actor and frame),
 //   odometry.txt (TUM: simulated wheel odometry with default WheelOdometryConfig errors, seeded by the scenario).
 void write_sequence(const Simulator& sim, const std::string& out_dir, const WriteOptions& options = {});
