@@ -35,7 +35,8 @@ mkdir -p "$data/results"
 for scenario in $scenarios; do
   for seed in $seeds; do
     seq=$data/${scenario}_$seed
-    if [[ ! -f $seq/objects.txt ]]; then
+    # Sequences written before instance_0/ existed are written again (objects are scored by their own pixels).
+    if [[ ! -f $seq/objects.txt || ! -d $seq/instance_0 ]]; then
       "$sim" --scenario "$scenario" --seed "$seed" --out "$seq" --threads "$threads" > "$seq.log" 2>&1
     fi
     "$dyn" --dataset "$seq" "${params[@]}" --out "$data/results/${scenario}_$seed" --overlay-every 50 \
