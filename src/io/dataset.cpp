@@ -241,32 +241,27 @@ std::optional<Trajectory> KittiDataset::ground_truth() const {
   return poses;
 }
 
-cv::Mat KittiDataset::ground_truth_mask(std::size_t i) const {
-  const std::string path = (fs::path(root_) / "mask_0" / left_names_.at(i)).string();
+// An 8-bit single-channel ground-truth image of frame i in <root>/<folder>/, the images' size; empty Mat when absent.
+cv::Mat KittiDataset::ground_truth_u8(const char* folder, std::size_t i, const char* content) const {
+  const std::string path = (fs::path(root_) / folder / left_names_.at(i)).string();
   if (!is_file(path)) return {};
-  cv::Mat mask = cv::imread(path, cv::IMREAD_UNCHANGED);
-  if (mask.empty() || mask.type() != CV_8UC1) {
-    throw InputError(path, "", "expected an 8-bit single-channel PNG mask (255 = moving object)");
+  cv::Mat image = cv::imread(path, cv::IMREAD_UNCHANGED);
+  if (image.empty() || image.type() != CV_8UC1) {
+    throw InputError(path, "", std::string("expected an 8-bit single-channel PNG ") + content);
   }
-  if (mask.size() != image_size_) {
+  if (image.size() != image_size_) {
     throw InputError(path, "image size",
-                     "expected " + size_text(image_size_) + " like the images, found " + size_text(mask.size()));
+                     "expected " + size_text(image_size_) + " like the images, found " + size_text(image.size()));
   }
-  return mask;
+  return image;
+}
+
+cv::Mat KittiDataset::ground_truth_mask(std::size_t i) const {
+  return ground_truth_u8("mask_0", i, "mask (255 = moving object)");
 }
 
 cv::Mat KittiDataset::ground_truth_instances(std::size_t i) const {
-  const std::string path = (fs::path(root_) / "instance_0" / left_names_.at(i)).string();
-  if (!is_file(path)) return {};
-  cv::Mat instances = cv::imread(path, cv::IMREAD_UNCHANGED);
-  if (instances.empty() || instances.type() != CV_8UC1) {
-    throw InputError(path, "", "expected an 8-bit single-channel PNG of object ids (0 = none)");
-  }
-  if (instances.size() != image_size_) {
-    throw InputError(path, "image size",
-                     "expected " + size_text(image_size_) + " like the images, found " + size_text(instances.size()));
-  }
-  return instances;
+  return ground_truth_u8("instance_0", i, "of object ids (0 = none)");
 }
 
 cv::Mat KittiDataset::ground_truth_disparity_px(std::size_t i) const {

@@ -68,6 +68,8 @@ class KittiDataset final : public StereoDataset {
   std::string right_path(std::size_t i) const;
 
  private:
+  cv::Mat ground_truth_u8(const char* folder, std::size_t i, const char* content) const;
+
   std::string root_, left_dir_, right_dir_;
   std::vector<std::string> left_names_, right_names_;  // file names, sorted
   std::vector<int64_t> times_ns_;
