@@ -13,9 +13,9 @@
 // blue: missed pixels).
 // Where the dataset has mask_0/ (the simulator), each frame after the first is scored as the paper does
 // (eqs. 12-14, objects matched by IoU >= 0.5; each detector region is one detected object; with instance_0/ each
-// ground-truth object is its own visible pixels, also where objects overlap; see agvslam/eval/detection_scoring.h). The first line of
-// stdout is `PRECISION <p> RECALL <r> IOU <iou>` (fractions; nan without ground truth), followed by the counts,
-// regions per frame and per-stage median/p95 times. Exit status: 0 on success, 2 on bad input (the message
+// ground-truth object is its own visible pixels, also where objects overlap; see agvslam/eval/detection_scoring.h).
+// The first line of stdout is `PRECISION <p> RECALL <r> IOU <iou>` (fractions; nan without ground truth),
+// followed by the counts, regions per frame and per-stage median/p95 times. Exit status: 0 on success, 2 on bad input (the message
 // names the option, file or folder), 1 on any other failure.
 
 #include <CLI/CLI.hpp>
@@ -504,8 +504,8 @@ int run(const Options& o) {
             if (obj.moving) gt_objects.push_back({obj.id, obj.box});
           }
         }
-        const eval::FrameDetectionScore f = eval::score_detection_instances(result.mask.instances, gt_mask, gt_objects, scoring,
-                                                                          gt_instances);
+        const eval::FrameDetectionScore f =
+            eval::score_detection_instances(result.mask.instances, gt_mask, gt_objects, scoring, gt_instances);
         score.add(f);
         instances_scored += gt_instances.empty() ? 0 : 1;
         jf["tp"] = f.true_positives;
