@@ -31,6 +31,9 @@ void DetectorOptions::validate(const std::string& source) const {
   require(use_epipolar_test || use_depth_test, "use_epipolar_test", "expected at least one of the two tests enabled");
   require(max_rois >= 0 && max_rois <= 256, "max_rois", "expected an integer in [0, 256]");
   require(mask_dilation_px >= 0 && mask_dilation_px <= 64, "mask_dilation_px", "expected an integer in [0, 64] px");
+  require(extend_max_rounds >= 0 && extend_max_rounds <= 100, "extend_max_rounds", "expected an integer in [0, 100] (0: off)");
+  require(extend_min_rows >= 1 && extend_min_rows <= 10000, "extend_min_rows", "expected an integer in [1, 10000]");
+  require(extend_step_m > 0 && extend_step_m <= 100, "extend_step_m", "expected a number in (0, 100] m");
   require(roi_scale == 1.0 || roi_scale == 0.5, "roi_scale", "expected 1 or 0.5");
   require(densify_radius_px >= 0 && densify_radius_px <= 500, "densify_radius_px", "expected a number in [0, 500] px");
   require(densify_radius_disparity_factor >= 0 && densify_radius_disparity_factor <= 50, "densify_radius_disparity_factor",
@@ -38,6 +41,9 @@ void DetectorOptions::validate(const std::string& source) const {
   require(densify_max_points >= 0 && densify_max_points <= 1000, "densify_max_points", "expected an integer in [0, 1000]");
   require(densify_min_distance_px >= 0 && densify_min_distance_px <= 100, "densify_min_distance_px",
           "expected a number in [0, 100] px");
+  require(densify_min_seeds >= 1 && densify_min_seeds <= 100, "densify_min_seeds", "expected an integer in [1, 100]");
+  require(densify_extra_tracks >= 0 && densify_extra_tracks <= 10000, "densify_extra_tracks",
+          "expected an integer in [0, 10000]");
   require(continue_min_points >= 1 && continue_min_points <= 1000, "continue_min_points", "expected an integer in [1, 1000]");
   require(coast_max_frames >= 0 && coast_max_frames <= 100, "coast_max_frames", "expected an integer in [0, 100] frames");
   require(coast_min_detections >= 1 && coast_min_detections <= 1000, "coast_min_detections",
@@ -52,10 +58,18 @@ void DetectorOptions::validate(const std::string& source) const {
 }
 
 std::string DetectorOptions::describe() const {
-  char densify_text[160] = "off";
+  char densify_text[240] = "off";
+  char widen_text[120] = "off";
+  if (extend_max_rounds > 0) {
+    std::snprintf(widen_text, sizeof(widen_text), "<= %d times by %.2f m when the outline reaches a side over >= %d rows",
+                  extend_max_rounds, extend_step_m, extend_min_rows);
+  }
   if (densify) {
-    std::snprintf(densify_text, sizeof(densify_text), "<= %d points within %.0f + %.2f d px, %.0f px apart",
-                  densify_max_points, densify_radius_px, densify_radius_disparity_factor, densify_min_distance_px);
+    std::snprintf(densify_text, sizeof(densify_text),
+                  "<= %d points within %.0f + %.2f d px, %.0f px apart, >= %d seeds, <= %d tracks beyond the cap, static "
+                  "ones kept %s",
+                  densify_max_points, densify_radius_px, densify_radius_disparity_factor, densify_min_distance_px,
+                  densify_min_seeds, densify_extra_tracks, densify_keep_static ? "yes" : "no");
   }
   char objects_text[200] = "off";
   if (track_objects) {
@@ -64,16 +78,16 @@ std::string DetectorOptions::describe() const {
                   ">= %.2f of its area)",
                   continue_min_points, coast_min_detections, coast_max_frames, coast_min_tracks, coast_min_area_ratio);
   }
-  char buf[800];
+  char buf[1100];
   std::snprintf(buf, sizeof(buf),
                 "detector: epipolar test %s, depth test %s, disparity %s, <= %d ROIs searched up to max point "
                 "disparity + %.1f px at scale %.1f (half scale above %d px, 0 = never, eroded %d px more), left border padded %s, ROIs "
-                "extended to the floor %s and %.2f m above it, side-by-side pieces split %s, stacked regions merged "
+                "extended to the floor %s and %.2f m above it, widened %s, side-by-side pieces split %s, stacked regions merged "
                 "%s, mask dilation %d px, densification %s, objects over frames %s",
                 use_epipolar_test ? "on" : "off", use_depth_test ? "on" : "off",
                 full_frame_disparity ? "whole frame (debug)" : "points + ROIs", max_rois, roi_disparity_margin_px,
                 roi_scale, half_scale_min_area_px, half_scale_erode_px, pad_left_border ? "on" : "off", extend_to_floor ? "on" : "off",
-                extend_to_height_m, split_side_by_side ? "on" : "off", merge_stacked_regions ? "on" : "off",
+                extend_to_height_m, widen_text, split_side_by_side ? "on" : "off", merge_stacked_regions ? "on" : "off",
                 mask_dilation_px, densify_text, objects_text);
   return buf;
 }
@@ -465,16 +479,19 @@ void DynamicDetector::detect(const StereoFrame& frame, DetectorResult& result) {
         const bool half = config_.regions.mask_mode == MaskMode::kDisparity && opt.half_scale_min_area_px > 0 &&
                           seg.roi.area() > opt.half_scale_min_area_px;
         seg.half_scale = half || opt.roi_scale != 1.0;
-        roi_disparity(frame, seg.roi, static_cast<int>(std::ceil(max_d + opt.roi_disparity_margin_px)),
-                      half ? 0.5 : opt.roi_scale, seg.disparity_px);
+        roi_max_disparity_px_ = static_cast<int>(std::ceil(max_d + opt.roi_disparity_margin_px));
+        roi_scale_used_ = half ? 0.5 : opt.roi_scale;
+        roi_disparity(frame, seg.roi, roi_max_disparity_px_, roi_scale_used_, seg.disparity_px);
       }
       tm.roi_disparity_ms += ms_since(t);
 
       if (config_.regions.mask_mode == MaskMode::kDisparity) {
         // The outline from the ROI's disparity (no SLIC, planes or boundaries).
         t = Clock::now();
+        widen_ms_ = 0;
         outline_region(frame, result, seg, next_instance);
-        tm.regions_ms += ms_since(t);
+        tm.regions_ms += ms_since(t) - widen_ms_;
+        tm.roi_disparity_ms += widen_ms_;
         return;
       }
 
@@ -560,7 +577,8 @@ void DynamicDetector::detect(const StereoFrame& frame, DetectorResult& result) {
     keep_.assign(history_.size(), 0);
     const std::size_t n = tracked_.size();
     for (std::size_t i = 0; i < history_.size(); ++i) {
-      keep_[i] = i < n ? tracked_[i] : 1;  // beyond n: densified tracks (all tracked)
+      // Beyond n: densified tracks (all tracked); static ones continue only with densify_keep_static.
+      keep_[i] = i < n ? tracked_[i] : (opt.densify_keep_static || result.points[i].dynamic ? 1 : 0);
       if (!keep_[i]) continue;
       cv::Point2f p;
       float d = 0;
@@ -637,6 +655,46 @@ void DynamicDetector::outline_region(const StereoFrame& frame, DetectorResult& r
   seg.outline_stats = outliner_.outline(seg.disparity_px, seg.roi.tl(), group_pts_, group_disp_, static_pts_,
                                         static_disp_, result.ground_plane.valid ? &result.ground_plane : nullptr,
                                         calibration_.bf(), seg.outline);
+  // An outline cut by the ROI's left or right side: widen the ROI there, match the new strip, outline again.
+  const DetectorOptions& dopt = config_.detector;
+  for (int round = 0; round < dopt.extend_max_rounds && seg.outline_stats.object_pixels > 0 && !dopt.full_frame_disparity;
+       ++round) {
+    // Rows with outline in the two outermost columns of each side.
+    const int w = seg.outline.cols;
+    int rows_left = 0, rows_right = 0;
+    for (int y = 0; y < seg.outline.rows; ++y) {
+      const uint8_t* row = seg.outline.ptr<uint8_t>(y);
+      rows_left += (row[0] || (w > 1 && row[1])) ? 1 : 0;
+      rows_right += (row[w - 1] || (w > 1 && row[w - 2])) ? 1 : 0;
+    }
+    const bool widen_left = seg.roi.x > 0 && rows_left >= dopt.extend_min_rows;
+    const bool widen_right = seg.roi.br().x < frame.left.cols && rows_right >= dopt.extend_min_rows;
+    if (!widen_left && !widen_right) break;
+    const double d = seg.outline_stats.median_disparity_px > 0 ? seg.outline_stats.median_disparity_px : 8.0;
+    const int step = std::max(16, static_cast<int>(std::lround(dopt.extend_step_m * d / calibration_.baseline_m)));
+    const auto t_widen = Clock::now();
+    const int add_left = widen_left ? std::min(step, seg.roi.x) : 0;
+    const int add_right = widen_right ? std::min(step, frame.left.cols - seg.roi.br().x) : 0;
+    const cv::Rect widened(seg.roi.x - add_left, seg.roi.y, seg.roi.width + add_left + add_right, seg.roi.height);
+    widened_disparity_.create(widened.size(), CV_32FC1);
+    seg.disparity_px.copyTo(widened_disparity_(cv::Rect(add_left, 0, seg.roi.width, seg.roi.height)));
+    if (add_left > 0) {
+      roi_disparity(frame, cv::Rect(widened.x, widened.y, add_left, widened.height), roi_max_disparity_px_, roi_scale_used_,
+                    strip_disparity_);
+      strip_disparity_.copyTo(widened_disparity_(cv::Rect(0, 0, add_left, widened.height)));
+    }
+    if (add_right > 0) {
+      roi_disparity(frame, cv::Rect(seg.roi.br().x, widened.y, add_right, widened.height), roi_max_disparity_px_,
+                    roi_scale_used_, strip_disparity_);
+      strip_disparity_.copyTo(widened_disparity_(cv::Rect(add_left + seg.roi.width, 0, add_right, widened.height)));
+    }
+    std::swap(seg.disparity_px, widened_disparity_);
+    seg.roi = widened;
+    widen_ms_ += ms_since(t_widen);
+    seg.outline_stats = outliner_.outline(seg.disparity_px, seg.roi.tl(), group_pts_, group_disp_, static_pts_,
+                                          static_disp_, result.ground_plane.valid ? &result.ground_plane : nullptr,
+                                          calibration_.bf(), seg.outline);
+  }
   // Post-processing of the outline; its pixel count is taken again once at the end.
   const bool has_pixels = seg.outline_stats.object_pixels > 0;
   bool reshaped = false;
@@ -689,8 +747,10 @@ void DynamicDetector::outline_region(const StereoFrame& frame, DetectorResult& r
   const OutlineStats& st = seg.outline_stats;
   const OutlineConfig& oc = config_.outline;
   seg.outline_stats.median_offset_px = median_of(inside_offsets_);
-  const bool mostly_static = !seg.coasted && st.tracked_inside >= oc.min_tracked_for_fraction &&
-                             st.dynamic_inside < oc.min_dynamic_fraction * st.tracked_inside;
+  const bool mostly_static = !seg.coasted && ((st.tracked_inside >= oc.min_tracked_for_fraction &&
+                                               st.dynamic_inside < oc.min_dynamic_fraction * st.tracked_inside) ||
+                                              (oc.aggregate_min_tracks > 0 && oc.aggregate_ratio > 0 &&
+                                               static_cast<int>(inside_offsets_.size()) >= oc.aggregate_min_tracks));
   // ... unless they move together (outline.aggregate_*): their median offset against the frame's static tracks',
   // taken once per frame and only when an outline needs it.
   bool moves_together = false;
@@ -911,10 +971,10 @@ void DynamicDetector::densify(const StereoFrame& frame, DetectorResult& result) 
     seed_disp_.push_back(dyn_disp_[k]);
     seed_index_.push_back(dyn_index_[k]);
   }
-  if (seed_pts_.size() < 2) return;
+  if (static_cast<int>(seed_pts_.size()) < opt.densify_min_seeds) return;
   const int min_points = config_.grouping.min_points;
   RoiGroupingConfig small = config_.grouping;
-  small.min_points = 2;
+  small.min_points = opt.densify_min_seeds;
   const std::vector<DynamicGroup> groups =
       group_dynamic_points(seed_pts_, seed_disp_, frame.left.size(), small, calibration_.baseline_m);
   const int b = config_.features.border_px;
@@ -955,7 +1015,7 @@ void DynamicDetector::densify(const StereoFrame& frame, DetectorResult& result) 
     const std::size_t first_new = extra_prev_.size();
     for (const cv::KeyPoint& kp : keypoints_) {
       if (static_cast<int>(extra_prev_.size() - first_new) >= opt.densify_max_points) break;
-      if (static_cast<int>(prev_pts_.size() + extra_prev_.size()) >= config_.tracking.max_tracks) break;
+      if (static_cast<int>(prev_pts_.size() + extra_prev_.size()) >= config_.tracking.max_tracks + opt.densify_extra_tracks) break;
       const cv::Point2f p(kp.pt.x + static_cast<float>(window.x), kp.pt.y + static_cast<float>(window.y));
       bool near = false;
       for (const cv::Point2f& q : prev_pts_) {

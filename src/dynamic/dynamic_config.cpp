@@ -161,7 +161,7 @@ DynamicDetectorConfig load_dynamic_config(const std::string& path) {
   in.check_keys("outline", {"seed_radius_px", "seed_tolerance_px", "seed_tolerance_rel", "step_tolerance_px",
                             "step_tolerance_rel", "depth_band_m", "ground_tolerance_px", "ground_tolerance_rel",
                             "static_competition", "max_hole_invalid_fraction", "min_hole_fill_px", "erode_px", "min_pixels",
-                            "min_dynamic_fraction", "min_tracked_for_fraction", "aggregate_ratio", "aggregate_min_px", "max_height_m", "close_far_m",
+                            "min_dynamic_fraction", "min_tracked_for_fraction", "aggregate_ratio", "aggregate_min_px", "aggregate_min_tracks", "max_height_m", "close_far_m",
                             "close_max_disparity_px", "left_band_touch_px"});
   OutlineConfig& o = c.outline;
   in.read("outline", "seed_radius_px", o.seed_radius_px, "an integer (px)");
@@ -181,6 +181,7 @@ DynamicDetectorConfig load_dynamic_config(const std::string& path) {
   in.read("outline", "min_tracked_for_fraction", o.min_tracked_for_fraction, integer);
   in.read("outline", "aggregate_ratio", o.aggregate_ratio, num);
   in.read("outline", "aggregate_min_px", o.aggregate_min_px, px);
+  in.read("outline", "aggregate_min_tracks", o.aggregate_min_tracks, "an integer");
   in.read("outline", "max_height_m", o.max_height_m, "a number (m)");
   in.read("outline", "close_far_m", o.close_far_m, "a number (m)");
   in.read("outline", "left_band_touch_px", o.left_band_touch_px, "an integer (px)");
@@ -198,9 +199,10 @@ DynamicDetectorConfig load_dynamic_config(const std::string& path) {
   in.read("photometric", "region_inset_px", c.photometric.region_inset_px, "an integer (px)");
 
   in.check_keys("detector", {"use_epipolar_test", "use_depth_test", "full_frame_disparity", "max_rois",
-                             "roi_disparity_margin_px", "roi_scale", "half_scale_min_area_px", "half_scale_erode_px", "extend_to_floor", "extend_to_height_m", "split_side_by_side", "mask_dilation_px", "densify",
+                             "roi_disparity_margin_px", "roi_scale", "extend_max_rounds", "extend_min_rows", "extend_step_m", "half_scale_min_area_px", "half_scale_erode_px", "extend_to_floor", "extend_to_height_m", "split_side_by_side", "mask_dilation_px", "densify",
                              "densify_radius_px",
                              "densify_radius_disparity_factor", "densify_max_points", "densify_min_distance_px",
+                             "densify_min_seeds", "densify_extra_tracks", "densify_keep_static",
                              "track_objects", "continue_min_points", "coast_max_frames", "coast_min_detections",
                              "coast_min_tracks", "coast_min_area_ratio", "pad_left_border", "merge_stacked_regions"});
   in.read("detector", "use_epipolar_test", c.detector.use_epipolar_test, flag);
@@ -208,6 +210,9 @@ DynamicDetectorConfig load_dynamic_config(const std::string& path) {
   in.read("detector", "full_frame_disparity", c.detector.full_frame_disparity, flag);
   in.read("detector", "max_rois", c.detector.max_rois, integer);
   in.read("detector", "roi_disparity_margin_px", c.detector.roi_disparity_margin_px, px);
+  in.read("detector", "extend_max_rounds", c.detector.extend_max_rounds, integer);
+  in.read("detector", "extend_min_rows", c.detector.extend_min_rows, integer);
+  in.read("detector", "extend_step_m", c.detector.extend_step_m, "a number (m)");
   in.read("detector", "roi_scale", c.detector.roi_scale, "1 or 0.5");
   in.read("detector", "half_scale_min_area_px", c.detector.half_scale_min_area_px, "an integer (px)");
   in.read("detector", "half_scale_erode_px", c.detector.half_scale_erode_px, "an integer (px)");
@@ -220,6 +225,9 @@ DynamicDetectorConfig load_dynamic_config(const std::string& path) {
   in.read("detector", "densify_radius_disparity_factor", c.detector.densify_radius_disparity_factor, num);
   in.read("detector", "densify_max_points", c.detector.densify_max_points, integer);
   in.read("detector", "densify_min_distance_px", c.detector.densify_min_distance_px, px);
+  in.read("detector", "densify_min_seeds", c.detector.densify_min_seeds, integer);
+  in.read("detector", "densify_extra_tracks", c.detector.densify_extra_tracks, integer);
+  in.read("detector", "densify_keep_static", c.detector.densify_keep_static, flag);
   in.read("detector", "track_objects", c.detector.track_objects, flag);
   in.read("detector", "continue_min_points", c.detector.continue_min_points, integer);
   in.read("detector", "coast_max_frames", c.detector.coast_max_frames, "an integer (frames)");

@@ -35,23 +35,24 @@ void OutlineConfig::validate(const std::string& source) const {
           "expected an integer in [-1, 100] px (-1: off)");
   require(min_tracked_for_fraction >= 1 && min_tracked_for_fraction <= 100000, "min_tracked_for_fraction",
           "expected an integer in [1, 100000]");
+  require(aggregate_min_tracks >= 0 && aggregate_min_tracks <= 10000, "aggregate_min_tracks", "expected an integer in [0, 10000] (0: off)");
   require(aggregate_ratio >= 0 && aggregate_ratio <= 1000, "aggregate_ratio", "expected a number in [0, 1000] (0: off)");
   require(aggregate_min_px >= 0 && aggregate_min_px <= 100, "aggregate_min_px", "expected a number in [0, 100] px");
 }
 
 std::string OutlineConfig::describe() const {
-  char buf[900];
+  char buf[1200];
   std::snprintf(buf, sizeof(buf),
                 "outline: seeds within %d px agreeing to %.2f + %.3f d px; flood steps <= %.2f + %.3f d px within "
                 "%.2f m of the seed's depth; floor within %.2f + %.3f d px of the ground plane; static competition %s; "
                 "enclosed parts join when >= %.0f %% without disparity or < %d px; eroded by %d px; kept when >= %d px "
                 "and (< %d tracks inside or >= %.0f %% of them dynamic or their median offset >= %.2f px and %.1fx the "
-                "static tracks', 0: off) and <= %.1f m tall; far ones (d <= %.1f px) closed "
+                "static tracks', 0: off; an outline with >= %d such tracks must always move so, 0: off) and <= %.1f m tall; far ones (d <= %.1f px) closed "
                 "over %.2f m; rows within %d px of the unmatched left band filled to the border (-1: off)",
                 seed_radius_px, seed_tolerance_px, seed_tolerance_rel, step_tolerance_px, step_tolerance_rel, depth_band_m,
                 ground_tolerance_px, ground_tolerance_rel, static_competition ? "on" : "off",
                 100 * max_hole_invalid_fraction, min_hole_fill_px, erode_px, min_pixels, min_tracked_for_fraction,
-                100 * min_dynamic_fraction, aggregate_min_px, aggregate_ratio, max_height_m, close_max_disparity_px, close_far_m, left_band_touch_px);
+                100 * min_dynamic_fraction, aggregate_min_px, aggregate_ratio, aggregate_min_tracks, max_height_m, close_max_disparity_px, close_far_m, left_band_touch_px);
   return buf;
 }
 

@@ -320,5 +320,39 @@ TEST(DynamicDetector, BoxAtTheLeftBorderIsCompletedIntoTheUnmatchedBand) {
               with_band, gt_band, with_false, iou_with, iou_without);
 }
 
+
+TEST(DynamicDetector, OutlineCutByTheRoiSideIsWidened) {
+  // A 1.2 m wide box 3 m away (~184 px) whose left half has a faint texture: no FAST corner there, so the ROI
+  // (the tracks' box plus its margin) ends ~25 px left of the textured half, but SGBM matches the faint half.
+  // The outline reaches the ROI's left side over many rows; widened there (detector.extend_*) it covers the
+  // whole box, without widening (the default, see params/dynamic.yaml) it stops at the ROI.
+  CorridorScene scene;
+  scene.box.origin = {-0.6, -1.1, 3.0};
+  scene.box.width_m = 1.2;
+  cv::Mat texture = make_texture(200, 175, 110, 15);
+  make_texture(200, 175, 10, 16).colRange(0, 100).copyTo(texture.colRange(0, 100));
+  scene.box.texture = texture;
+  scene.box.metres_per_texel = 0.006;
+  DynamicDetectorConfig narrow;
+  narrow.detector.extend_max_rounds = 0;
+  DynamicDetectorConfig widened;
+  widened.detector.extend_max_rounds = 2;
+  const SE3d pose1 = camera_pose(0.0, 0, 0.08);
+  const Eigen::Vector3d motion(0.10, -0.04, 0);
+  const RunOutcome with = run_two_frames(widened, pose1, motion, true, scene);
+  const RunOutcome without = run_two_frames(narrow, pose1, motion, true, scene);
+  // The tracks' ROI starts well inside the box (the faint half has no corner).
+  const cv::Rect box_px = cv::boundingRect(with.gt_mask);
+  ASSERT_EQ(without.result.rois.size(), 1u) << summary(without.result);
+  ASSERT_EQ(with.result.rois.size(), 1u) << summary(with.result);
+  EXPECT_GT(without.result.rois[0].roi.x, box_px.x + box_px.width / 5) << summary(without.result);
+  EXPECT_LT(with.result.rois[0].roi.x, box_px.x) << summary(with.result);
+  const double iou_with = iou(with.result.mask.image, with.gt_mask);
+  const double iou_without = iou(without.result.mask.image, without.gt_mask);
+  EXPECT_GE(iou_with, 0.8) << summary(with.result);
+  EXPECT_LT(iou_without, 0.75) << summary(without.result);
+  std::printf("box with a faint half: IoU %.3f widened, %.3f not\n", iou_with, iou_without);
+}
+
 }  // namespace
 }  // namespace agvslam::dynamic

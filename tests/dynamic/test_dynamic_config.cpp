@@ -79,7 +79,14 @@ TEST(DynamicConfig, BadValuesNameFileAndField) {
   expect_error("outline:\n  left_band_touch_px: -2\n", "outline.left_band_touch_px");
   expect_error("outline:\n  aggregate_ratio: -1\n", "outline.aggregate_ratio");
   expect_error("outline:\n  aggregate_min_px: many\n", "outline.aggregate_min_px");
+  expect_error("outline:\n  aggregate_min_tracks: -3\n", "outline.aggregate_min_tracks");
   expect_error("detector:\n  coast_max_frames: -1\n", "detector.coast_max_frames");
+  expect_error("detector:\n  extend_max_rounds: -1\n", "detector.extend_max_rounds");
+  expect_error("detector:\n  extend_min_rows: 0\n", "detector.extend_min_rows");
+  expect_error("detector:\n  extend_step_m: 0\n", "detector.extend_step_m");
+  expect_error("detector:\n  densify_min_seeds: 0\n", "detector.densify_min_seeds");
+  expect_error("detector:\n  densify_extra_tracks: -5\n", "detector.densify_extra_tracks");
+  expect_error("detector:\n  densify_keep_static: maybe\n", "detector.densify_keep_static");
   expect_error("detector:\n  coast_min_tracks: 0\n", "detector.coast_min_tracks");
   expect_error("detector:\n  coast_min_area_ratio: 1.5\n", "detector.coast_min_area_ratio");
   expect_error("detector:\n  coast_min_detections: 0\n", "detector.coast_min_detections");

@@ -65,6 +65,13 @@ struct DetectorOptions {
   // ... and their outline loses this many more pixels at its edge (the half-resolution SGBM block fattens the
   // foreground twice as far in full-resolution pixels).
   int half_scale_erode_px = 0;
+  // mask_mode disparity (beyond the paper): an outline that reaches the left or right side of its ROI over at
+  // least extend_min_rows rows (the ROI comes from the tracks, and a person's side without corners lies beyond
+  // it) is cut there: the ROI is widened on that side by extend_step_m at the outline's depth (at least 16 px),
+  // the new strip matched, and the outline redone, up to extend_max_rounds times (0 = off).
+  int extend_max_rounds = 0;
+  int extend_min_rows = 20;
+  double extend_step_m = 0.3;
   // StereoSGBM leaves the leftmost num_disparities columns of what it matches without disparity, so a ROI at the
   // left image border (a person entering or leaving there, or passing close in a turn) lost its outline left of
   // x ~ 32-64. With this, such a ROI is matched in images padded on the left (edge replicated): its pixels get a
@@ -95,6 +102,9 @@ struct DetectorOptions {
   double densify_radius_disparity_factor = 1.0;
   int densify_max_points = 24;
   double densify_min_distance_px = 5;  // from existing tracks and from each other
+  int densify_min_seeds = 2;           // seed points a group needs to be densified (1: a lone strong seed too)
+  int densify_extra_tracks = 150;        // tracks densification may add beyond tracking.max_tracks (0: none)
+  bool densify_keep_static = false;     // densified tracks the tests pass as static continue into the next frame
   // Objects over frames (beyond the paper, mask_mode disparity): the tracks inside a region's outline belong to
   // its object in the next frame. A group of dynamic points of which at least continue_min_points belong to one
   // object of the previous frame is a ROI even when it is smaller than grouping.min_points (a person who showed
@@ -323,6 +333,10 @@ class DynamicDetector {
   std::vector<uint8_t> coast_group_;  // per group: coasted
   cv::Mat region_mask_;
   cv::Mat padded_left_, padded_right_;
+  cv::Mat strip_disparity_, widened_disparity_;
+  int roi_max_disparity_px_ = 0;  // the search range of the ROI being outlined (for its widening)
+  double roi_scale_used_ = 1.0;
+  double widen_ms_ = 0;           // time spent matching widened strips (counted as ROI disparity)
   struct KeptRegion {
     cv::Rect rect;
     double median_disparity_px;

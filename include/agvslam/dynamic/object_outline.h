@@ -58,6 +58,9 @@ struct OutlineConfig {
   // way; a static surface flooded from a depth edge keeps the static tracks' offsets. 0 = off.
   double aggregate_ratio = 3.0;
   double aggregate_min_px = 0.45;
+  // An outline holding at least this many tracks with a depth-test offset must move together as above even when
+  // more than min_dynamic_fraction of them are dynamic (0 = only for mostly static outlines).
+  int aggregate_min_tracks = 5;
   // ... or one taller than max_height_m at its median disparity (people, forklifts and AGVs are lower; a rack
   // upright flooded from a few false tracks at its edge is not). 0 = no limit.
   double max_height_m = 3.0;
