@@ -34,6 +34,8 @@ void DetectorOptions::validate(const std::string& source) const {
   require(extend_max_rounds >= 0 && extend_max_rounds <= 100, "extend_max_rounds", "expected an integer in [0, 100] (0: off)");
   require(extend_min_rows >= 1 && extend_min_rows <= 10000, "extend_min_rows", "expected an integer in [1, 10000]");
   require(extend_step_m > 0 && extend_step_m <= 100, "extend_step_m", "expected a number in (0, 100] m");
+  require(extend_static_guard_px >= 0 && extend_static_guard_px <= 10000, "extend_static_guard_px",
+          "expected an integer in [0, 10000] px (0: off)");
   require(roi_scale == 1.0 || roi_scale == 0.5, "roi_scale", "expected 1 or 0.5");
   require(densify_radius_px >= 0 && densify_radius_px <= 500, "densify_radius_px", "expected a number in [0, 500] px");
   require(densify_radius_disparity_factor >= 0 && densify_radius_disparity_factor <= 50, "densify_radius_disparity_factor",
@@ -59,10 +61,11 @@ void DetectorOptions::validate(const std::string& source) const {
 
 std::string DetectorOptions::describe() const {
   char densify_text[240] = "off";
-  char widen_text[120] = "off";
+  char widen_text[200] = "off";
   if (extend_max_rounds > 0) {
-    std::snprintf(widen_text, sizeof(widen_text), "<= %d times by %.2f m when the outline reaches a side over >= %d rows",
-                  extend_max_rounds, extend_step_m, extend_min_rows);
+    std::snprintf(widen_text, sizeof(widen_text),
+                  "<= %d times by %.2f m when the outline reaches a side over >= %d rows without a static track within %d px",
+                  extend_max_rounds, extend_step_m, extend_min_rows, extend_static_guard_px);
   }
   if (densify) {
     std::snprintf(densify_text, sizeof(densify_text),
@@ -667,11 +670,26 @@ void DynamicDetector::outline_region(const StereoFrame& frame, DetectorResult& r
       rows_left += (row[0] || (w > 1 && row[1])) ? 1 : 0;
       rows_right += (row[w - 1] || (w > 1 && row[w - 2])) ? 1 : 0;
     }
-    const bool widen_left = seg.roi.x > 0 && rows_left >= dopt.extend_min_rows;
-    const bool widen_right = seg.roi.br().x < frame.left.cols && rows_right >= dopt.extend_min_rows;
+    bool widen_left = seg.roi.x > 0 && rows_left >= dopt.extend_min_rows;
+    bool widen_right = seg.roi.br().x < frame.left.cols && rows_right >= dopt.extend_min_rows;
     if (!widen_left && !widen_right) break;
     const double d = seg.outline_stats.median_disparity_px > 0 ? seg.outline_stats.median_disparity_px : 8.0;
     const int step = std::max(16, static_cast<int>(std::lround(dopt.extend_step_m * d / calibration_.baseline_m)));
+    // A side whose outline holds static tracks near it has flooded a static surface at the object's depth (a wall
+    // behind a board, a shelf beside a person), not run into the object's side without corners: not widened.
+    if (dopt.extend_static_guard_px > 0) {
+      int static_left = 0, static_right = 0;
+      for (const TrackedPoint& p : result.points) {
+        if (!p.tracked || p.dynamic || p.reprojection_px < 0) continue;
+        const cv::Point q(cvRound(p.cur_px.x) - seg.roi.x, cvRound(p.cur_px.y) - seg.roi.y);
+        if (q.x < 0 || q.y < 0 || q.x >= w || q.y >= seg.outline.rows || !seg.outline.at<uint8_t>(q)) continue;
+        static_left += q.x < dopt.extend_static_guard_px ? 1 : 0;
+        static_right += q.x >= w - dopt.extend_static_guard_px ? 1 : 0;
+      }
+      widen_left = widen_left && static_left == 0;
+      widen_right = widen_right && static_right == 0;
+      if (!widen_left && !widen_right) break;
+    }
     const auto t_widen = Clock::now();
     const int add_left = widen_left ? std::min(step, seg.roi.x) : 0;
     const int add_right = widen_right ? std::min(step, frame.left.cols - seg.roi.br().x) : 0;
@@ -747,6 +765,8 @@ void DynamicDetector::outline_region(const StereoFrame& frame, DetectorResult& r
   const OutlineStats& st = seg.outline_stats;
   const OutlineConfig& oc = config_.outline;
   seg.outline_stats.median_offset_px = median_of(inside_offsets_);
+  // An outline mostly of static tracks, or (outline.aggregate_min_tracks) one with enough tracks to judge them
+  // together, is kept only when its tracks move together (reported as "mostly static tracks" otherwise).
   const bool mostly_static = !seg.coasted && ((st.tracked_inside >= oc.min_tracked_for_fraction &&
                                                st.dynamic_inside < oc.min_dynamic_fraction * st.tracked_inside) ||
                                               (oc.aggregate_min_tracks > 0 && oc.aggregate_ratio > 0 &&

@@ -320,7 +320,6 @@ TEST(DynamicDetector, BoxAtTheLeftBorderIsCompletedIntoTheUnmatchedBand) {
               with_band, gt_band, with_false, iou_with, iou_without);
 }
 
-
 TEST(DynamicDetector, OutlineCutByTheRoiSideIsWidened) {
   // A 1.2 m wide box 3 m away (~184 px) whose left half has a faint texture: no FAST corner there, so the ROI
   // (the tracks' box plus its margin) ends ~25 px left of the textured half, but SGBM matches the faint half.

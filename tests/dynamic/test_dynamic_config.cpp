@@ -84,6 +84,7 @@ TEST(DynamicConfig, BadValuesNameFileAndField) {
   expect_error("detector:\n  extend_max_rounds: -1\n", "detector.extend_max_rounds");
   expect_error("detector:\n  extend_min_rows: 0\n", "detector.extend_min_rows");
   expect_error("detector:\n  extend_step_m: 0\n", "detector.extend_step_m");
+  expect_error("detector:\n  extend_static_guard_px: -1\n", "detector.extend_static_guard_px");
   expect_error("detector:\n  densify_min_seeds: 0\n", "detector.densify_min_seeds");
   expect_error("detector:\n  densify_extra_tracks: -5\n", "detector.densify_extra_tracks");
   expect_error("detector:\n  densify_keep_static: maybe\n", "detector.densify_keep_static");

@@ -72,6 +72,9 @@ struct DetectorOptions {
   int extend_max_rounds = 0;
   int extend_min_rows = 20;
   double extend_step_m = 0.3;
+  // A side is not widened when a static track (tested, not dynamic) lies in the outline within this many px of it:
+  // the outline has flooded a static surface at the object's depth (0 = no such check).
+  int extend_static_guard_px = 24;
   // StereoSGBM leaves the leftmost num_disparities columns of what it matches without disparity, so a ROI at the
   // left image border (a person entering or leaving there, or passing close in a turn) lost its outline left of
   // x ~ 32-64. With this, such a ROI is matched in images padded on the left (edge replicated): its pixels get a
@@ -92,19 +95,21 @@ struct DetectorOptions {
   // people walking apart inside one ROI) gives one object per piece in DynamicMask::instances.
   bool split_side_by_side = true;
   // Densification (beyond the paper): a small object gets only a few of the N quadtree points, fewer than a
-  // ROI needs. Around each small group (2 .. grouping.min_points - 1) of seed points, up to
+  // ROI needs. Around each small group (densify_min_seeds .. grouping.min_points - 1) of seed points, up to
   // densify_max_points extra FAST corners (features.min_threshold) of the previous frame within
   // densify_radius_px + densify_radius_disparity_factor * d of the group are tracked and tested with this
   // frame's F, motion and thresholds. Seeds are the points both tests flag (when both ran): a track that slid
   // along an edge can fool one test, rarely both. Isolated single points (usually noise) are not densified.
+  // The persistent tracks keep tracking.max_tracks full, so densified tracks may go densify_extra_tracks beyond
+  // it; those the tests pass as static end with the frame unless densify_keep_static.
   bool densify = true;
   double densify_radius_px = 24;
   double densify_radius_disparity_factor = 1.0;
   int densify_max_points = 24;
   double densify_min_distance_px = 5;  // from existing tracks and from each other
   int densify_min_seeds = 2;           // seed points a group needs to be densified (1: a lone strong seed too)
-  int densify_extra_tracks = 150;        // tracks densification may add beyond tracking.max_tracks (0: none)
-  bool densify_keep_static = false;     // densified tracks the tests pass as static continue into the next frame
+  int densify_extra_tracks = 150;      // tracks densification may add beyond tracking.max_tracks (0: none)
+  bool densify_keep_static = false;    // densified tracks the tests pass as static continue into the next frame
   // Objects over frames (beyond the paper, mask_mode disparity): the tracks inside a region's outline belong to
   // its object in the next frame. A group of dynamic points of which at least continue_min_points belong to one
   // object of the previous frame is a ROI even when it is smaller than grouping.min_points (a person who showed
