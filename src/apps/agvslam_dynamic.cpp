@@ -15,8 +15,8 @@
 // (eqs. 12-14, objects matched by IoU >= 0.5; each detector region is one detected object; with instance_0/ each
 // ground-truth object is its own visible pixels, also where objects overlap; see agvslam/eval/detection_scoring.h).
 // The first line of stdout is `PRECISION <p> RECALL <r> IOU <iou>` (fractions; nan without ground truth),
-// followed by the counts, regions per frame and per-stage median/p95 times. Exit status: 0 on success, 2 on bad input (the message
-// names the option, file or folder), 1 on any other failure.
+// followed by the counts, regions per frame and per-stage median/p95 times. Exit status: 0 on success, 2 on bad
+// input (the message names the option, file or folder), 1 on any other failure.
 
 #include <CLI/CLI.hpp>
 #include <spdlog/sinks/stdout_color_sinks.h>

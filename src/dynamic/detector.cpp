@@ -31,7 +31,8 @@ void DetectorOptions::validate(const std::string& source) const {
   require(use_epipolar_test || use_depth_test, "use_epipolar_test", "expected at least one of the two tests enabled");
   require(max_rois >= 0 && max_rois <= 256, "max_rois", "expected an integer in [0, 256]");
   require(mask_dilation_px >= 0 && mask_dilation_px <= 64, "mask_dilation_px", "expected an integer in [0, 64] px");
-  require(extend_max_rounds >= 0 && extend_max_rounds <= 100, "extend_max_rounds", "expected an integer in [0, 100] (0: off)");
+  require(extend_max_rounds >= 0 && extend_max_rounds <= 100, "extend_max_rounds",
+          "expected an integer in [0, 100] (0: off)");
   require(extend_min_rows >= 1 && extend_min_rows <= 10000, "extend_min_rows", "expected an integer in [1, 10000]");
   require(extend_step_m > 0 && extend_step_m <= 100, "extend_step_m", "expected a number in (0, 100] m");
   require(extend_static_guard_px >= 0 && extend_static_guard_px <= 10000, "extend_static_guard_px",
@@ -655,13 +656,16 @@ void DynamicDetector::outline_region(const StereoFrame& frame, DetectorResult& r
       static_disp_.push_back(p.cur_disparity_px);
     }
   }
-  seg.outline_stats = outliner_.outline(seg.disparity_px, seg.roi.tl(), group_pts_, group_disp_, static_pts_,
-                                        static_disp_, result.ground_plane.valid ? &result.ground_plane : nullptr,
-                                        calibration_.bf(), seg.outline);
+  const auto outline_roi = [&]() {
+    seg.outline_stats = outliner_.outline(seg.disparity_px, seg.roi.tl(), group_pts_, group_disp_, static_pts_,
+                                          static_disp_, result.ground_plane.valid ? &result.ground_plane : nullptr,
+                                          calibration_.bf(), seg.outline);
+  };
+  outline_roi();
   // An outline cut by the ROI's left or right side: widen the ROI there, match the new strip, outline again.
   const DetectorOptions& dopt = config_.detector;
-  for (int round = 0; round < dopt.extend_max_rounds && seg.outline_stats.object_pixels > 0 && !dopt.full_frame_disparity;
-       ++round) {
+  for (int round = 0;
+       round < dopt.extend_max_rounds && seg.outline_stats.object_pixels > 0 && !dopt.full_frame_disparity; ++round) {
     // Rows with outline in the two outermost columns of each side.
     const int w = seg.outline.cols;
     int rows_left = 0, rows_right = 0;
@@ -697,8 +701,8 @@ void DynamicDetector::outline_region(const StereoFrame& frame, DetectorResult& r
     widened_disparity_.create(widened.size(), CV_32FC1);
     seg.disparity_px.copyTo(widened_disparity_(cv::Rect(add_left, 0, seg.roi.width, seg.roi.height)));
     if (add_left > 0) {
-      roi_disparity(frame, cv::Rect(widened.x, widened.y, add_left, widened.height), roi_max_disparity_px_, roi_scale_used_,
-                    strip_disparity_);
+      roi_disparity(frame, cv::Rect(widened.x, widened.y, add_left, widened.height), roi_max_disparity_px_,
+                    roi_scale_used_, strip_disparity_);
       strip_disparity_.copyTo(widened_disparity_(cv::Rect(0, 0, add_left, widened.height)));
     }
     if (add_right > 0) {
@@ -709,9 +713,7 @@ void DynamicDetector::outline_region(const StereoFrame& frame, DetectorResult& r
     std::swap(seg.disparity_px, widened_disparity_);
     seg.roi = widened;
     widen_ms_ += ms_since(t_widen);
-    seg.outline_stats = outliner_.outline(seg.disparity_px, seg.roi.tl(), group_pts_, group_disp_, static_pts_,
-                                          static_disp_, result.ground_plane.valid ? &result.ground_plane : nullptr,
-                                          calibration_.bf(), seg.outline);
+    outline_roi();
   }
   // Post-processing of the outline; its pixel count is taken again once at the end.
   const bool has_pixels = seg.outline_stats.object_pixels > 0;
@@ -1035,7 +1037,8 @@ void DynamicDetector::densify(const StereoFrame& frame, DetectorResult& result) 
     const std::size_t first_new = extra_prev_.size();
     for (const cv::KeyPoint& kp : keypoints_) {
       if (static_cast<int>(extra_prev_.size() - first_new) >= opt.densify_max_points) break;
-      if (static_cast<int>(prev_pts_.size() + extra_prev_.size()) >= config_.tracking.max_tracks + opt.densify_extra_tracks) break;
+      const int track_cap = config_.tracking.max_tracks + opt.densify_extra_tracks;
+      if (static_cast<int>(prev_pts_.size() + extra_prev_.size()) >= track_cap) break;
       const cv::Point2f p(kp.pt.x + static_cast<float>(window.x), kp.pt.y + static_cast<float>(window.y));
       bool near = false;
       for (const cv::Point2f& q : prev_pts_) {

@@ -35,7 +35,8 @@ void OutlineConfig::validate(const std::string& source) const {
           "expected an integer in [-1, 100] px (-1: off)");
   require(min_tracked_for_fraction >= 1 && min_tracked_for_fraction <= 100000, "min_tracked_for_fraction",
           "expected an integer in [1, 100000]");
-  require(aggregate_min_tracks >= 0 && aggregate_min_tracks <= 10000, "aggregate_min_tracks", "expected an integer in [0, 10000] (0: off)");
+  require(aggregate_min_tracks >= 0 && aggregate_min_tracks <= 10000, "aggregate_min_tracks",
+          "expected an integer in [0, 10000] (0: off)");
   require(aggregate_ratio >= 0 && aggregate_ratio <= 1000, "aggregate_ratio", "expected a number in [0, 1000] (0: off)");
   require(aggregate_min_px >= 0 && aggregate_min_px <= 100, "aggregate_min_px", "expected a number in [0, 100] px");
 }
