@@ -38,6 +38,8 @@ void DetectorOptions::validate(const std::string& source) const {
   require(extend_static_guard_px >= 0 && extend_static_guard_px <= 10000, "extend_static_guard_px",
           "expected an integer in [0, 10000] px (0: off)");
   require(roi_scale == 1.0 || roi_scale == 0.5, "roi_scale", "expected 1 or 0.5");
+  require(roi_row_step == 1 || roi_row_step == 2, "roi_row_step", "expected 1 or 2 (rows per matched row)");
+  require(roi_row_step_min_area_px >= 0, "roi_row_step_min_area_px", "expected an integer >= 0 px");
   require(densify_radius_px >= 0 && densify_radius_px <= 500, "densify_radius_px", "expected a number in [0, 500] px");
   require(densify_radius_disparity_factor >= 0 && densify_radius_disparity_factor <= 50, "densify_radius_disparity_factor",
           "expected a number in [0, 50]");
@@ -85,12 +87,12 @@ std::string DetectorOptions::describe() const {
   char buf[1100];
   std::snprintf(buf, sizeof(buf),
                 "detector: epipolar test %s, depth test %s, disparity %s, <= %d ROIs searched up to max point "
-                "disparity + %.1f px at scale %.1f (half scale above %d px, 0 = never, eroded %d px more), left border padded %s, ROIs "
+                "disparity + %.1f px at scale %.1f, %d row(s) per matched row for ROIs >= %d px (half scale above %d px, 0 = never, eroded %d px more), left border padded %s, ROIs "
                 "extended to the floor %s and %.2f m above it, widened %s, side-by-side pieces split %s, stacked regions merged "
                 "%s, mask dilation %d px, densification %s, objects over frames %s",
                 use_epipolar_test ? "on" : "off", use_depth_test ? "on" : "off",
                 full_frame_disparity ? "whole frame (debug)" : "points + ROIs", max_rois, roi_disparity_margin_px,
-                roi_scale, half_scale_min_area_px, half_scale_erode_px, pad_left_border ? "on" : "off", extend_to_floor ? "on" : "off",
+                roi_scale, roi_row_step, roi_row_step_min_area_px, half_scale_min_area_px, half_scale_erode_px, pad_left_border ? "on" : "off", extend_to_floor ? "on" : "off",
                 extend_to_height_m, widen_text, split_side_by_side ? "on" : "off", merge_stacked_regions ? "on" : "off",
                 mask_dilation_px, densify_text, objects_text);
   return buf;
@@ -485,6 +487,8 @@ void DynamicDetector::detect(const StereoFrame& frame, DetectorResult& result) {
         seg.half_scale = half || opt.roi_scale != 1.0;
         roi_max_disparity_px_ = static_cast<int>(std::ceil(max_d + opt.roi_disparity_margin_px));
         roi_scale_used_ = half ? 0.5 : opt.roi_scale;
+        // Widening strips are matched like their ROI.
+        roi_row_step_used_ = seg.roi.area() >= opt.roi_row_step_min_area_px ? opt.roi_row_step : 1;
         roi_disparity(frame, seg.roi, roi_max_disparity_px_, roi_scale_used_, seg.disparity_px);
       }
       tm.roi_disparity_ms += ms_since(t);
@@ -963,10 +967,11 @@ void DynamicDetector::roi_disparity(const StereoFrame& frame, const cv::Rect& ro
                                     cv::Mat& out) {
   const stereo::SgbmConfig& sc = stereo_config_.sgbm;
   const cv::Rect r = roi & cv::Rect(cv::Point(0, 0), frame.left.size());
+  const int row_step = scale == 1.0 ? roi_row_step_used_ : 1;
   // What compute_roi reaches left of the ROI (search range, context margin, half block) and a little more.
   const int reach = sc.min_disparity + sc.num_disparities + sc.roi_margin_px + sc.block_size + 2;
   if (!config_.detector.pad_left_border || r.empty() || r.x >= reach) {
-    sgbm_.compute_roi(frame.left, frame.right, r, out, max_disparity_px, scale);
+    sgbm_.compute_roi(frame.left, frame.right, r, out, max_disparity_px, scale, row_step);
     return;
   }
   const int pad = reach - r.x;
@@ -975,7 +980,7 @@ void DynamicDetector::roi_disparity(const StereoFrame& frame, const cv::Rect& ro
   const cv::Rect strip(0, 0, width, frame.left.rows);
   cv::copyMakeBorder(frame.left(strip), padded_left_, 0, 0, pad, 0, cv::BORDER_REPLICATE);
   cv::copyMakeBorder(frame.right(strip), padded_right_, 0, 0, pad, 0, cv::BORDER_REPLICATE);
-  sgbm_.compute_roi(padded_left_, padded_right_, r + cv::Point(pad, 0), out, max_disparity_px, scale);
+  sgbm_.compute_roi(padded_left_, padded_right_, r + cv::Point(pad, 0), out, max_disparity_px, scale, row_step);
 }
 
 void DynamicDetector::densify(const StereoFrame& frame, DetectorResult& result) {

@@ -199,7 +199,7 @@ DynamicDetectorConfig load_dynamic_config(const std::string& path) {
   in.read("photometric", "region_inset_px", c.photometric.region_inset_px, "an integer (px)");
 
   in.check_keys("detector", {"use_epipolar_test", "use_depth_test", "full_frame_disparity", "max_rois",
-                             "roi_disparity_margin_px", "roi_scale", "extend_max_rounds", "extend_min_rows", "extend_step_m", "extend_static_guard_px", "half_scale_min_area_px", "half_scale_erode_px", "extend_to_floor", "extend_to_height_m", "split_side_by_side", "mask_dilation_px", "densify",
+                             "roi_disparity_margin_px", "roi_scale", "roi_row_step", "roi_row_step_min_area_px", "extend_max_rounds", "extend_min_rows", "extend_step_m", "extend_static_guard_px", "half_scale_min_area_px", "half_scale_erode_px", "extend_to_floor", "extend_to_height_m", "split_side_by_side", "mask_dilation_px", "densify",
                              "densify_radius_px",
                              "densify_radius_disparity_factor", "densify_max_points", "densify_min_distance_px",
                              "densify_min_seeds", "densify_extra_tracks", "densify_keep_static",
@@ -215,6 +215,8 @@ DynamicDetectorConfig load_dynamic_config(const std::string& path) {
   in.read("detector", "extend_step_m", c.detector.extend_step_m, "a number (m)");
   in.read("detector", "extend_static_guard_px", c.detector.extend_static_guard_px, "an integer (px)");
   in.read("detector", "roi_scale", c.detector.roi_scale, "1 or 0.5");
+  in.read("detector", "roi_row_step", c.detector.roi_row_step, "1 or 2");
+  in.read("detector", "roi_row_step_min_area_px", c.detector.roi_row_step_min_area_px, "an integer (px)");
   in.read("detector", "half_scale_min_area_px", c.detector.half_scale_min_area_px, "an integer (px)");
   in.read("detector", "half_scale_erode_px", c.detector.half_scale_erode_px, "an integer (px)");
   in.read("detector", "extend_to_floor", c.detector.extend_to_floor, flag);

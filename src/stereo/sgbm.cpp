@@ -135,8 +135,9 @@ cv::Rect StereoSgbm::crop_for(const cv::Rect& roi, cv::Size image_size, int num_
 }
 
 void StereoSgbm::compute_roi(const cv::Mat& left, const cv::Mat& right, const cv::Rect& roi,
-                             cv::Mat& roi_disparity_px, int max_disparity_px, double scale) {
+                             cv::Mat& roi_disparity_px, int max_disparity_px, double scale, int row_step) {
   CV_Assert(scale == 1.0 || scale == 0.5);
+  CV_Assert(row_step == 1 || row_step == 2);
   const cv::Rect image_rect(cv::Point(0, 0), left.size());
   const cv::Rect clipped = roi & image_rect;
   if (clipped.empty()) {
@@ -147,7 +148,16 @@ void StereoSgbm::compute_roi(const cv::Mat& left, const cv::Mat& right, const cv
   const cv::Rect crop = crop_for(clipped, left.size(), num);
   if (scale == 1.0) {
     if (num != config_.num_disparities) sgbm_->setNumDisparities(num);
-    run(left(crop), right(crop), crop_disparity_);
+    if (row_step == 1) {
+      run(left(crop), right(crop), crop_disparity_);
+    } else {
+      const cv::Size rows_halved(crop.width, (crop.height + 1) / 2);
+      cv::resize(left(crop), small_left_, rows_halved, 0, 0, cv::INTER_AREA);
+      cv::resize(right(crop), small_right_, rows_halved, 0, 0, cv::INTER_AREA);
+      run(small_left_, small_right_, small_disparity_);
+      crop_disparity_.create(crop.size(), CV_32FC1);
+      for (int y = 0; y < crop.height; ++y) small_disparity_.row(y / 2).copyTo(crop_disparity_.row(y));
+    }
     if (num != config_.num_disparities) sgbm_->setNumDisparities(config_.num_disparities);
   } else {
     // Half resolution: half the disparities (rounded up to 16), then back to full-resolution pixels.

@@ -59,6 +59,10 @@ struct DetectorOptions {
   double roi_disparity_margin_px = 8; // ROI SGBM searches [0, max point disparity + margin] (<= configured range)
   double roi_scale = 1.0;             // 1 or 0.5: SGBM and SLIC of the ROIs at this resolution (planes, boundaries
                                       // and regions stay at full resolution)
+  // 1 or 2 (roi_scale 1): ROI SGBM on every column but pairs of rows averaged, half the matching work. An
+  // upright object's outline is decided by its sides, which keep full horizontal resolution.
+  int roi_row_step = 2;
+  int roi_row_step_min_area_px = 20000;  // ... for ROIs of at least this many px (smaller ones: every row; 0 = all)
   // mask_mode disparity: ROIs larger than this (px) get their SGBM at half resolution anyway (near objects: the
   // half-resolution block's fattening is small against their width; 0 = never).
   int half_scale_min_area_px = 0;
@@ -69,7 +73,7 @@ struct DetectorOptions {
   // least extend_min_rows rows (the ROI comes from the tracks, and a person's side without corners lies beyond
   // it) is cut there: the ROI is widened on that side by extend_step_m at the outline's depth (at least 16 px),
   // the new strip matched, and the outline redone, up to extend_max_rounds times (0 = off).
-  int extend_max_rounds = 0;
+  int extend_max_rounds = 2;
   int extend_min_rows = 20;
   double extend_step_m = 0.3;
   // A side is not widened when a static track (tested, not dynamic) lies in the outline within this many px of it:
@@ -341,6 +345,7 @@ class DynamicDetector {
   cv::Mat strip_disparity_, widened_disparity_;
   int roi_max_disparity_px_ = 0;  // the search range of the ROI being outlined (for its widening)
   double roi_scale_used_ = 1.0;
+  int roi_row_step_used_ = 1;
   double widen_ms_ = 0;           // time spent matching widened strips (counted as ROI disparity)
   struct KeptRegion {
     cv::Rect rect;

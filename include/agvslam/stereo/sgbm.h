@@ -62,8 +62,11 @@ class StereoSgbm {
   // dynamic points' disparities) this makes the crop narrower and the matching proportionally cheaper.
   // scale = 0.5 matches the crop at half resolution (a quarter of the pixels, half the disparities, about
   // 1/8 of the work); the result is upsampled (nearest) to the ROI and given in full-resolution pixels.
+  // row_step = 2 (scale 1 only) matches every column but pairs of rows averaged (half the work): disparity
+  // keeps its full horizontal resolution (an upright object's sides, where the outline's IoU is decided) and
+  // each result row serves two image rows.
   void compute_roi(const cv::Mat& left, const cv::Mat& right, const cv::Rect& roi, cv::Mat& roi_disparity_px,
-                   int max_disparity_px = 0, double scale = 1.0);
+                   int max_disparity_px = 0, double scale = 1.0, int row_step = 1);
 
   // The number of disparities compute_roi searches for a given max_disparity_px.
   int roi_num_disparities(int max_disparity_px) const;
