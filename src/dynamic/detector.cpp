@@ -602,12 +602,41 @@ void DynamicDetector::detect(const StereoFrame& frame, DetectorResult& result) {
   features_.detect(frame.left, corners_);
   new_pts_.clear();
   const float min_d2 = static_cast<float>(trk.min_track_distance_px * trk.min_track_distance_px);
+  // The tracks binned in cells of min_track_distance_px: a corner is near a track only in its own or a
+  // neighbouring cell.
+  const float cell_px = static_cast<float>(std::max(1.0, trk.min_track_distance_px));
+  const int cells_x = static_cast<int>(size.width / cell_px) + 1, cells_y = static_cast<int>(size.height / cell_px) + 1;
+  auto cell_of = [&](const cv::Point2f& p, int& cx, int& cy) {
+    cx = std::clamp(static_cast<int>(p.x / cell_px), 0, cells_x - 1);
+    cy = std::clamp(static_cast<int>(p.y / cell_px), 0, cells_y - 1);
+  };
+  cell_start_.assign(static_cast<std::size_t>(cells_x * cells_y) + 1, 0);
+  for (const cv::Point2f& p : prev_pts_) {
+    int cx, cy;
+    cell_of(p, cx, cy);
+    ++cell_start_[static_cast<std::size_t>(cy * cells_x + cx) + 1];
+  }
+  for (std::size_t k = 1; k < cell_start_.size(); ++k) cell_start_[k] += cell_start_[k - 1];
+  cell_fill_.assign(cell_start_.begin(), cell_start_.end() - 1);
+  cell_points_.resize(prev_pts_.size());
+  for (const cv::Point2f& p : prev_pts_) {
+    int cx, cy;
+    cell_of(p, cx, cy);
+    cell_points_[static_cast<std::size_t>(cell_fill_[static_cast<std::size_t>(cy * cells_x + cx)]++)] = p;
+  }
   for (const Corner& c : corners_) {
     if (static_cast<int>(prev_pts_.size() + new_pts_.size()) >= trk.max_tracks) break;
+    int cx, cy;
+    cell_of(c.pt, cx, cy);
     bool near = false;
-    for (std::size_t k = 0; k < prev_pts_.size() && !near; ++k) {
-      const cv::Point2f e = prev_pts_[k] - c.pt;
-      near = e.dot(e) < min_d2;
+    for (int y = std::max(0, cy - 1); y <= std::min(cells_y - 1, cy + 1) && !near; ++y) {
+      for (int x = std::max(0, cx - 1); x <= std::min(cells_x - 1, cx + 1) && !near; ++x) {
+        const std::size_t cell = static_cast<std::size_t>(y * cells_x + x);
+        for (int k = cell_start_[cell]; k < cell_start_[cell + 1] && !near; ++k) {
+          const cv::Point2f e = cell_points_[static_cast<std::size_t>(k)] - c.pt;
+          near = e.dot(e) < min_d2;
+        }
+      }
     }
     if (!near) new_pts_.push_back(c.pt);
   }

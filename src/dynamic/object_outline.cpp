@@ -152,15 +152,20 @@ OutlineStats ObjectOutliner::outline(const cv::Mat& disparity_px, cv::Point orig
     for (int x = 0; x < w; ++x) m[x] = l[x] == 1 ? 255 : 0;
   }
 
-  // Enclosed parts: the complement's 4-connected components that do not reach the ROI border.
-  cv::bitwise_not(mask, holes_);
-  const int count = cv::connectedComponentsWithStats(holes_, hole_labels_, hole_stats_, hole_centroids_, 4, CV_32S);
+  // Enclosed parts: the complement's 4-connected components that do not reach the ROI border. Only the mask's
+  // bounding box and a 1 px ring around it can hold one (everything beyond is one component with the ring),
+  // so the components are labelled there; the ring's side is the ROI border where the box reaches it.
+  const cv::Rect box = cv::boundingRect(mask);
+  const cv::Rect area = cv::Rect(box.x - 1, box.y - 1, box.width + 2, box.height + 2) & cv::Rect(0, 0, w, h);
+  cv::bitwise_not(mask(area), holes_);
+  const int count = area.empty() ? 0 : cv::connectedComponentsWithStats(holes_, hole_labels_, hole_stats_, hole_centroids_, 4, CV_32S);
   if (count > 1) {
+    const int aw = area.width, ah = area.height;
     invalid_count_.assign(static_cast<std::size_t>(count), 0);
-    for (int y = 0; y < h; ++y) {
+    for (int y = 0; y < ah; ++y) {
       const int* l = hole_labels_.ptr<int>(y);
-      const float* d = disparity_px.ptr<float>(y);
-      for (int x = 0; x < w; ++x) {
+      const float* d = disparity_px.ptr<float>(y + area.y) + area.x;
+      for (int x = 0; x < aw; ++x) {
         if (l[x] > 0 && !(d[x] > 0)) ++invalid_count_[static_cast<std::size_t>(l[x])];
       }
     }
@@ -170,19 +175,19 @@ OutlineStats ObjectOutliner::outline(const cv::Mat& disparity_px, cv::Point orig
     for (int k = 1; k < count; ++k) {
       const int x0 = hole_stats_.at<int>(k, cv::CC_STAT_LEFT), y0 = hole_stats_.at<int>(k, cv::CC_STAT_TOP);
       const int x1 = x0 + hole_stats_.at<int>(k, cv::CC_STAT_WIDTH), y1 = y0 + hole_stats_.at<int>(k, cv::CC_STAT_HEIGHT);
-      if (x0 == 0 || y0 == 0 || x1 == w || y1 == h) continue;  // reaches the border: outside
-      const int area = hole_stats_.at<int>(k, cv::CC_STAT_AREA);
-      const bool mostly_invalid = invalid_count_[static_cast<std::size_t>(k)] >= c.max_hole_invalid_fraction * area;
-      if (mostly_invalid || area < c.min_hole_fill_px) {
+      if (x0 == 0 || y0 == 0 || x1 == aw || y1 == ah) continue;  // reaches the ring or the ROI border: outside
+      const int hole_area = hole_stats_.at<int>(k, cv::CC_STAT_AREA);
+      const bool mostly_invalid = invalid_count_[static_cast<std::size_t>(k)] >= c.max_hole_invalid_fraction * hole_area;
+      if (mostly_invalid || hole_area < c.min_hole_fill_px) {
         fill[static_cast<std::size_t>(k)] = 1;
         any = true;
       }
     }
     if (any) {
-      for (int y = 0; y < h; ++y) {
+      for (int y = 0; y < ah; ++y) {
         const int* l = hole_labels_.ptr<int>(y);
-        uint8_t* m = mask.ptr<uint8_t>(y);
-        for (int x = 0; x < w; ++x) {
+        uint8_t* m = mask.ptr<uint8_t>(y + area.y) + area.x;
+        for (int x = 0; x < aw; ++x) {
           if (l[x] > 0 && fill[static_cast<std::size_t>(l[x])]) m[x] = 255;
         }
       }

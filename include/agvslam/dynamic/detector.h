@@ -297,6 +297,8 @@ class DynamicDetector {
   bool has_previous_ = false;
   std::vector<cv::Mat> prev_pyramid_, cur_pyramid_;
   std::vector<Corner> corners_;
+  std::vector<int> cell_start_, cell_fill_;   // the tracks binned for the new corners' distance test
+  std::vector<cv::Point2f> cell_points_;
   std::vector<cv::Point2f> prev_pts_;        // corners of the previous frame
   std::vector<float> prev_disparity_px_;     // their disparity in the previous frame
   std::vector<cv::Point2f> cur_pts_;
