@@ -413,7 +413,7 @@ int run(const Options& o) {
   eval::DetectionScore score;
   std::map<std::string, StageSeries> timings;
   std::vector<std::string> stage_order;
-  int regions_total = 0, frames_detected = 0, frames_with_regions = 0;
+  int regions_total = 0, frames_detected = 0, frames_with_regions = 0, unconfirmed_total = 0;
   int instances_scored = 0;  // frames whose objects were scored with instance_0/ (their own pixels only)
   RecallBreakdown breakdown;
   nlohmann::json per_frame = nlohmann::json::array();
@@ -444,6 +444,8 @@ int run(const Options& o) {
       regions_total += n_regions;
       frames_with_regions += n_regions > 0 ? 1 : 0;
       jf["regions"] = n_regions;
+      jf["unconfirmed_objects"] = result.unconfirmed_objects;  // found, not reported (detector.confirm_min_box_iou)
+      unconfirmed_total += result.unconfirmed_objects;
       jf["dynamic_points"] = result.dynamic_point_count();
       {
         int tracked = 0, epi = 0, depth = 0, multi = 0;
@@ -556,7 +558,8 @@ int run(const Options& o) {
     nlohmann::json j;
     j["dataset"] = dataset->root();
     j["frames"] = {{"first", first}, {"last", last}, {"detected", frames_detected}};
-    j["regions"] = {{"total", regions_total}, {"per_frame", frames_detected > 0 ? static_cast<double>(regions_total) / frames_detected : 0.0}};
+    j["regions"] = {{"total", regions_total}, {"per_frame", frames_detected > 0 ? static_cast<double>(regions_total) / frames_detected : 0.0},
+                    {"unconfirmed_objects", unconfirmed_total}};
     if (scored) {
       j["scoring"] = {{"min_iou", scoring.min_iou}, {"min_object_pixels", scoring.min_object_pixels},
                       {"instance_frames", instances_scored}};

@@ -55,6 +55,8 @@ void DetectorOptions::validate(const std::string& source) const {
           "expected an integer in [1, 1000] frames");
   require(coast_min_tracks >= 1 && coast_min_tracks <= 1000, "coast_min_tracks", "expected an integer in [1, 1000]");
   require(coast_min_area_ratio >= 0 && coast_min_area_ratio <= 1, "coast_min_area_ratio", "expected a number in [0, 1]");
+  require(confirm_min_box_iou >= 0 && confirm_min_box_iou <= 1, "confirm_min_box_iou",
+          "expected a number in [0, 1] (0: off)");
   require(half_scale_min_area_px >= 0, "half_scale_min_area_px", "expected an integer >= 0 px");
   require(half_scale_erode_px >= 0 && half_scale_erode_px <= 10, "half_scale_erode_px", "expected an integer in [0, 10] px");
   require(extend_to_height_m >= 0 && extend_to_height_m <= 20, "extend_to_height_m", "expected a number in [0, 20] m");
@@ -84,17 +86,18 @@ std::string DetectorOptions::describe() const {
                   ">= %.2f of its area)",
                   continue_min_points, coast_min_detections, coast_max_frames, coast_min_tracks, coast_min_area_ratio);
   }
-  char buf[1100];
+  char buf[1400];
   std::snprintf(buf, sizeof(buf),
                 "detector: epipolar test %s, depth test %s, disparity %s, <= %d ROIs searched up to max point "
                 "disparity + %.1f px at scale %.1f, %d row(s) per matched row for ROIs >= %d px (half scale above %d px, 0 = never, eroded %d px more), left border padded %s, ROIs "
                 "extended to the floor %s and %.2f m above it, widened %s, side-by-side pieces split %s, stacked regions merged "
-                "%s, mask dilation %d px, densification %s, objects over frames %s",
+                "%s, mask dilation %d px, densification %s, objects over frames %s, reported when their box overlaps "
+                "one of the previous frame by IoU >= %.2f (0: always)",
                 use_epipolar_test ? "on" : "off", use_depth_test ? "on" : "off",
                 full_frame_disparity ? "whole frame (debug)" : "points + ROIs", max_rois, roi_disparity_margin_px,
                 roi_scale, roi_row_step, roi_row_step_min_area_px, half_scale_min_area_px, half_scale_erode_px, pad_left_border ? "on" : "off", extend_to_floor ? "on" : "off",
                 extend_to_height_m, widen_text, split_side_by_side ? "on" : "off", merge_stacked_regions ? "on" : "off",
-                mask_dilation_px, densify_text, objects_text);
+                mask_dilation_px, densify_text, objects_text, confirm_min_box_iou);
   return buf;
 }
 
@@ -192,6 +195,7 @@ void DynamicDetector::reset() {
   multiframe_.reset();
   track_object_.clear();
   objects_.clear();
+  prev_object_boxes_.clear();
 }
 
 DetectorResult DynamicDetector::detect(const StereoFrame& frame) {
@@ -664,6 +668,7 @@ void DynamicDetector::detect(const StereoFrame& frame, DetectorResult& result) {
     }
   }
   tm.point_disparity_ms += ms_since(t);
+  confirm_objects(result);
 
   std::swap(prev_pyramid_, cur_pyramid_);
   if (opt.densify || config_.photometric.enabled) {
@@ -672,6 +677,65 @@ void DynamicDetector::detect(const StereoFrame& frame, DetectorResult& result) {
   }
   has_previous_ = true;
   tm.total_ms = ms_since(t_start);
+}
+
+void DynamicDetector::confirm_objects(DetectorResult& result) {
+  result.unconfirmed_objects = 0;
+  const double min_iou = config_.detector.confirm_min_box_iou;
+  cv::Mat& inst = result.mask.instances;
+  // Each object's bounding box (instances 1..255).
+  object_boxes_.assign(256, cv::Rect());
+  int max_instance = 0;
+  if (!result.mask.regions.empty()) {
+    for (int y = 0; y < inst.rows; ++y) {
+      const uint8_t* row = inst.ptr<uint8_t>(y);
+      for (int x = 0; x < inst.cols; ++x) {
+        const int k = row[x];
+        if (k == 0) continue;
+        cv::Rect& b = object_boxes_[static_cast<std::size_t>(k)];
+        b = b.empty() ? cv::Rect(x, y, 1, 1) : (b | cv::Rect(x, y, 1, 1));
+        max_instance = std::max(max_instance, k);
+      }
+    }
+  }
+  object_boxes_.resize(static_cast<std::size_t>(max_instance) + 1);
+  if (min_iou > 0 && max_instance > 0) {
+    std::vector<uint8_t> drop(object_boxes_.size(), 0);
+    for (int k = 1; k <= max_instance; ++k) {
+      const cv::Rect& b = object_boxes_[static_cast<std::size_t>(k)];
+      if (b.empty()) continue;
+      bool confirmed = false;
+      for (const cv::Rect& p : prev_object_boxes_) {
+        const double overlap = (b & p).area();
+        if (overlap > 0 && overlap >= min_iou * (b.area() + p.area() - overlap)) {
+          confirmed = true;
+          break;
+        }
+      }
+      if (!confirmed) {
+        drop[static_cast<std::size_t>(k)] = 1;
+        ++result.unconfirmed_objects;
+      }
+    }
+    if (result.unconfirmed_objects > 0) {
+      for (int y = 0; y < inst.rows; ++y) {
+        uint8_t* row = inst.ptr<uint8_t>(y);
+        for (int x = 0; x < inst.cols; ++x) {
+          if (row[x] && drop[row[x]]) row[x] = 0;
+        }
+      }
+      cv::compare(inst, 0, result.mask.image, cv::CMP_GT);
+      // The rectangles left without a reported pixel go too.
+      auto& regions = result.mask.regions;
+      regions.erase(std::remove_if(regions.begin(), regions.end(),
+                                   [&](const cv::Rect& r) { return cv::countNonZero(inst(r)) == 0; }),
+                    regions.end());
+    }
+  }
+  prev_object_boxes_.clear();
+  for (const cv::Rect& b : object_boxes_) {
+    if (!b.empty()) prev_object_boxes_.push_back(b);
+  }
 }
 
 void DynamicDetector::outline_region(const StereoFrame& frame, DetectorResult& result, RoiSegmentation& seg,

@@ -12,6 +12,14 @@ namespace agvslam::dynamic {
 namespace {
 using namespace agvslam::dynamic::testing;
 
+// The stages' tests look at the frame an object is found in: reporting waits for no confirmation (the
+// confirmation has its own test below).
+DynamicDetectorConfig per_frame() {
+  DynamicDetectorConfig config;
+  config.detector.confirm_min_box_iou = 0;
+  return config;
+}
+
 struct RunOutcome {
   DetectorResult result;
   cv::Mat gt_mask;
@@ -81,7 +89,7 @@ void expect_box_found(const RunOutcome& run, double min_iou) {
 }
 
 TEST(DynamicDetector, StaticSceneGivesAnEmptyMask) {
-  const DynamicDetectorConfig config;
+  const DynamicDetectorConfig config = per_frame();
   const RunOutcome run = run_two_frames(config, camera_pose(0.03, 0, 0.10, 0.5), Eigen::Vector3d::Zero(), true);
   EXPECT_EQ(run.result.mask.pixel_count(), 0) << summary(run.result);
   EXPECT_TRUE(run.result.mask.regions.empty());
@@ -99,7 +107,7 @@ TEST(DynamicDetector, StaticSceneGivesAnEmptyMask) {
 }
 
 TEST(DynamicDetector, PaperTestsFindABoxMovingAcrossTheEpipolarLines) {
-  DynamicDetectorConfig config;
+  DynamicDetectorConfig config = per_frame();
   config.detector.use_depth_test = false;  // the paper's pipeline alone
   const RunOutcome run =
       run_two_frames(config, camera_pose(0.03, 0, 0.10, 0.5), Eigen::Vector3d(-0.10, -0.08, 0.0), true);
@@ -107,7 +115,7 @@ TEST(DynamicDetector, PaperTestsFindABoxMovingAcrossTheEpipolarLines) {
 }
 
 TEST(DynamicDetector, BothTestsFindABoxMovingSideways) {
-  const DynamicDetectorConfig config;
+  const DynamicDetectorConfig config = per_frame();
   const RunOutcome run = run_two_frames(config, camera_pose(0.0, 0, 0.10, 0.0), Eigen::Vector3d(-0.12, 0, 0), true);
   expect_box_found(run, 0.7);
 }
@@ -115,18 +123,18 @@ TEST(DynamicDetector, BothTestsFindABoxMovingSideways) {
 TEST(DynamicDetector, DepthTestFindsMotionAlongTheEpipolarLines) {
   // The camera drives straight ahead and the box comes towards it along the optical axis: every image motion is
   // radial from the focus of expansion, on the epipolar lines, so the epipolar test cannot see it.
-  DynamicDetectorConfig epipolar_only;
+  DynamicDetectorConfig epipolar_only = per_frame();
   epipolar_only.detector.use_depth_test = false;
   const RunOutcome blind = run_two_frames(epipolar_only, camera_pose(0, 0, 0.10), Eigen::Vector3d(0, 0, -0.25), true);
   EXPECT_EQ(blind.result.mask.pixel_count(), 0) << summary(blind.result);
 
-  const DynamicDetectorConfig both;
+  const DynamicDetectorConfig both = per_frame();
   const RunOutcome run = run_two_frames(both, camera_pose(0, 0, 0.10), Eigen::Vector3d(0, 0, -0.25), true);
   expect_box_found(run, 0.7);
 }
 
 TEST(DynamicDetector, WholeFrameDisparityDebugModeAgrees) {
-  DynamicDetectorConfig config;
+  DynamicDetectorConfig config = per_frame();
   config.detector.full_frame_disparity = true;
   config.detector.roi_scale = 1.0;
   const RunOutcome run = run_two_frames(config, camera_pose(0.0, 0, 0.10, 0.0), Eigen::Vector3d(-0.12, 0, 0), true);
@@ -166,12 +174,12 @@ TEST(DynamicDetector, SmallFarObjectIsFoundThroughDensification) {
   scene.box.origin = {-0.4, -0.4, 5.0};
   scene.box.width_m = 0.5;
   scene.box.height_m = 0.9;
-  DynamicDetectorConfig sparse;
+  DynamicDetectorConfig sparse = per_frame();
   sparse.features.target_count = 120;
   sparse.detector.densify = false;
   const RunOutcome without =
       run_two_frames(sparse, camera_pose(0.0, 0, 0.08), Eigen::Vector3d(-0.12, -0.06, 0), true, scene);
-  DynamicDetectorConfig dense;
+  DynamicDetectorConfig dense = per_frame();
   dense.features.target_count = 120;
   const RunOutcome with = run_two_frames(dense, camera_pose(0.0, 0, 0.08), Eigen::Vector3d(-0.12, -0.06, 0), true, scene);
   int densified = 0;
@@ -199,7 +207,7 @@ TEST(DynamicDetector, MultiFrameTestFindsABoxKeepingItsDistanceAhead) {
                                         static_cast<std::size_t>(k), k == kFrames - 1 ? &gt_mask : nullptr));
   }
   auto run = [&](bool multiframe, DetectorResult& r) {
-    DynamicDetectorConfig config;
+    DynamicDetectorConfig config = per_frame();
     config.multiframe.enabled = multiframe;
     DynamicDetector detector(scene.calibration(), config);
     for (const StereoFrame& f : frames) detector.detect(f, r);
@@ -237,11 +245,32 @@ std::vector<DetectorResult> box_crossing_then_stopping(const DynamicDetectorConf
   return results;
 }
 
+TEST(DynamicDetector, AnObjectIsReportedOnceTheNextFrameConfirmsIt) {
+  // detector.confirm_min_box_iou (default 0.3): the crossing box is found in frame 1, reported from frame 2 on,
+  // when its box overlaps frame 1's; without the confirmation it is reported in frame 1 already.
+  const DynamicDetectorConfig confirming;
+  ASSERT_GT(confirming.detector.confirm_min_box_iou, 0);
+  std::vector<cv::Mat> gt;
+  const std::vector<DetectorResult> r = box_crossing_then_stopping(confirming, 5, 5, &gt);
+  EXPECT_EQ(r[1].mask.pixel_count(), 0) << summary(r[1]);
+  EXPECT_TRUE(r[1].mask.regions.empty());
+  EXPECT_EQ(cv::countNonZero(r[1].mask.instances), 0);
+  EXPECT_GE(r[1].unconfirmed_objects, 1);
+  for (std::size_t k = 2; k < r.size(); ++k) {
+    EXPECT_EQ(r[k].unconfirmed_objects, 0) << "frame " << k;
+    EXPECT_FALSE(r[k].mask.regions.empty()) << "frame " << k;
+    EXPECT_GE(iou(r[k].mask.image, gt[k]), 0.7) << "frame " << k << ": " << summary(r[k]);
+  }
+  const std::vector<DetectorResult> at_once = box_crossing_then_stopping(per_frame(), 2, 2, &gt);
+  EXPECT_EQ(at_once[1].unconfirmed_objects, 0);
+  EXPECT_GE(iou(at_once[1].mask.image, gt[1 + 5]), 0.7) << summary(at_once[1]);
+}
+
 TEST(DynamicDetector, ACoastedObjectMustShowItsMotion) {
   // The box is found while it crosses; when it stops, no test flags its points any more (the multi-frame test is
   // off here), so the detector tries to coast it on its tracks, and the photometric check finds its content where a
   // static surface would be: the coasted outline is dropped, the mask is empty from the first frame after the stop.
-  DynamicDetectorConfig config;
+  DynamicDetectorConfig config = per_frame();
   config.multiframe.enabled = false;
   config.detector.coast_max_frames = 4;
   constexpr int kFrames = 10, kStop = 6;
@@ -276,9 +305,9 @@ TEST(DynamicDetector, BoxAtTheLeftBorderGetsItsOutlineThere) {
   // StereoSGBM gives no disparity in the leftmost num_disparities columns of the crop it matches, so without
   // padding the outline (and the mask) starts at x ~ 32; matched in left-padded images, the box's pixels from
   // x = d on get their disparity.
-  DynamicDetectorConfig unpadded;
+  DynamicDetectorConfig unpadded = per_frame();
   unpadded.detector.pad_left_border = false;
-  const RunOutcome with = box_at_left_border(DynamicDetectorConfig{});
+  const RunOutcome with = box_at_left_border(per_frame());
   const RunOutcome without = box_at_left_border(unpadded);
   // Columns 24..31: matchable (x > d), left of what SGBM covers without padding.
   const cv::Rect band(24, 0, 8, 480);
@@ -300,10 +329,10 @@ TEST(DynamicDetector, BoxAtTheLeftBorderGetsItsOutlineThere) {
 TEST(DynamicDetector, BoxAtTheLeftBorderIsCompletedIntoTheUnmatchedBand) {
   // The same box: its pixels at x < d (22 px) have no match in the right image. Rows where the outline reaches
   // that band are filled to the border (outline.left_band_touch_px 6); off (the default), the band stays empty.
-  DynamicDetectorConfig filled;
+  DynamicDetectorConfig filled = per_frame();
   filled.outline.left_band_touch_px = 6;
   const RunOutcome with = box_at_left_border(filled);
-  const RunOutcome without = box_at_left_border(DynamicDetectorConfig{});
+  const RunOutcome without = box_at_left_border(per_frame());
   const cv::Rect band(0, 0, 18, 480);
   const int gt_band = cv::countNonZero(with.gt_mask(band));
   ASSERT_GT(gt_band, 18 * 150);
@@ -332,9 +361,9 @@ TEST(DynamicDetector, OutlineCutByTheRoiSideIsWidened) {
   make_texture(200, 175, 10, 16).colRange(0, 100).copyTo(texture.colRange(0, 100));
   scene.box.texture = texture;
   scene.box.metres_per_texel = 0.006;
-  DynamicDetectorConfig narrow;
+  DynamicDetectorConfig narrow = per_frame();
   narrow.detector.extend_max_rounds = 0;
-  DynamicDetectorConfig widened;
+  DynamicDetectorConfig widened = per_frame();
   widened.detector.extend_max_rounds = 2;
   const SE3d pose1 = camera_pose(0.0, 0, 0.08);
   const Eigen::Vector3d motion(0.10, -0.04, 0);

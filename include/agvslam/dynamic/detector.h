@@ -133,6 +133,11 @@ struct DetectorOptions {
   int coast_min_tracks = 3;
   double coast_min_area_ratio = 0.5;  // a coasted outline smaller than this part of the object's last one is a
                                       // fragment of it: dropped
+  // Beyond the paper: an object (an instance of the mask) is reported only when its bounding box overlaps, by at
+  // least this IoU, one found in the previous frame (a moving object persists; a false region seldom does). The
+  // first frame of each object is therefore not reported; unreported objects still confirm the next frame's
+  // (0 = off: every object is reported in the frame it is found).
+  double confirm_min_box_iou = 0.3;
 
   void validate(const std::string& source) const;
   std::string describe() const;
@@ -241,6 +246,8 @@ struct DetectorResult {
   DisparityPlane ground_plane;   // d = a x + b y + c of the floor from the static points (ground veto); may be invalid
   cv::Mat full_disparity_px;     // only with detector.full_frame_disparity
   StageTimings timings;
+  int unconfirmed_objects = 0;   // objects found but not reported: nothing overlapped them in the previous frame
+                                 // (detector.confirm_min_box_iou)
 
   int dynamic_point_count() const;
 };
@@ -297,6 +304,8 @@ class DynamicDetector {
   bool has_previous_ = false;
   std::vector<cv::Mat> prev_pyramid_, cur_pyramid_;
   std::vector<Corner> corners_;
+  std::vector<cv::Rect> prev_object_boxes_, object_boxes_;  // the objects found (reported or not) per frame
+  void confirm_objects(DetectorResult& result);
   std::vector<int> cell_start_, cell_fill_;   // the tracks binned for the new corners' distance test
   std::vector<cv::Point2f> cell_points_;
   std::vector<cv::Point2f> prev_pts_;        // corners of the previous frame
