@@ -57,6 +57,7 @@ void DetectorOptions::validate(const std::string& source) const {
   require(coast_min_area_ratio >= 0 && coast_min_area_ratio <= 1, "coast_min_area_ratio", "expected a number in [0, 1]");
   require(confirm_min_box_iou >= 0 && confirm_min_box_iou <= 1, "confirm_min_box_iou",
           "expected a number in [0, 1] (0: off)");
+  require(confirm_below_px >= 0, "confirm_below_px", "expected an integer >= 0 px (0: every object waits)");
   require(half_scale_min_area_px >= 0, "half_scale_min_area_px", "expected an integer >= 0 px");
   require(half_scale_erode_px >= 0 && half_scale_erode_px <= 10, "half_scale_erode_px", "expected an integer in [0, 10] px");
   require(extend_to_height_m >= 0 && extend_to_height_m <= 20, "extend_to_height_m", "expected a number in [0, 20] m");
@@ -92,12 +93,12 @@ std::string DetectorOptions::describe() const {
                 "disparity + %.1f px at scale %.1f, %d row(s) per matched row for ROIs >= %d px (half scale above %d px, 0 = never, eroded %d px more), left border padded %s, ROIs "
                 "extended to the floor %s and %.2f m above it, widened %s, side-by-side pieces split %s, stacked regions merged "
                 "%s, mask dilation %d px, densification %s, objects over frames %s, reported when their box overlaps "
-                "one of the previous frame by IoU >= %.2f (0: always)",
+                "one of the previous frame by IoU >= %.2f (0: always) or they hold >= %d px (0: none)",
                 use_epipolar_test ? "on" : "off", use_depth_test ? "on" : "off",
                 full_frame_disparity ? "whole frame (debug)" : "points + ROIs", max_rois, roi_disparity_margin_px,
                 roi_scale, roi_row_step, roi_row_step_min_area_px, half_scale_min_area_px, half_scale_erode_px, pad_left_border ? "on" : "off", extend_to_floor ? "on" : "off",
                 extend_to_height_m, widen_text, split_side_by_side ? "on" : "off", merge_stacked_regions ? "on" : "off",
-                mask_dilation_px, densify_text, objects_text, confirm_min_box_iou);
+                mask_dilation_px, densify_text, objects_text, confirm_min_box_iou, confirm_below_px);
   return buf;
 }
 
@@ -685,6 +686,7 @@ void DynamicDetector::confirm_objects(DetectorResult& result) {
   cv::Mat& inst = result.mask.instances;
   // Each object's bounding box (instances 1..255).
   object_boxes_.assign(256, cv::Rect());
+  object_pixels_.assign(256, 0);
   int max_instance = 0;
   if (!result.mask.regions.empty()) {
     for (int y = 0; y < inst.rows; ++y) {
@@ -694,6 +696,7 @@ void DynamicDetector::confirm_objects(DetectorResult& result) {
         if (k == 0) continue;
         cv::Rect& b = object_boxes_[static_cast<std::size_t>(k)];
         b = b.empty() ? cv::Rect(x, y, 1, 1) : (b | cv::Rect(x, y, 1, 1));
+        ++object_pixels_[static_cast<std::size_t>(k)];
         max_instance = std::max(max_instance, k);
       }
     }
@@ -704,8 +707,10 @@ void DynamicDetector::confirm_objects(DetectorResult& result) {
     for (int k = 1; k <= max_instance; ++k) {
       const cv::Rect& b = object_boxes_[static_cast<std::size_t>(k)];
       if (b.empty()) continue;
-      bool confirmed = false;
+      const int near_px = config_.detector.confirm_below_px;
+      bool confirmed = near_px > 0 && object_pixels_[static_cast<std::size_t>(k)] >= near_px;
       for (const cv::Rect& p : prev_object_boxes_) {
+        if (confirmed) break;
         const double overlap = (b & p).area();
         if (overlap > 0 && overlap >= min_iou * (b.area() + p.area() - overlap)) {
           confirmed = true;

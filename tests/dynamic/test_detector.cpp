@@ -246,10 +246,11 @@ std::vector<DetectorResult> box_crossing_then_stopping(const DynamicDetectorConf
 }
 
 TEST(DynamicDetector, AnObjectIsReportedOnceTheNextFrameConfirmsIt) {
-  // detector.confirm_min_box_iou (default 0.3): the crossing box is found in frame 1, reported from frame 2 on,
-  // when its box overlaps frame 1's; without the confirmation it is reported in frame 1 already.
-  const DynamicDetectorConfig confirming;
+  // detector.confirm_min_box_iou: the crossing box (~37500 px) is found in frame 1 and, when every object must
+  // wait for confirmation (confirm_below_px 0), reported from frame 2 on, when its box overlaps frame 1's.
+  DynamicDetectorConfig confirming;
   ASSERT_GT(confirming.detector.confirm_min_box_iou, 0);
+  confirming.detector.confirm_below_px = 0;
   std::vector<cv::Mat> gt;
   const std::vector<DetectorResult> r = box_crossing_then_stopping(confirming, 5, 5, &gt);
   EXPECT_EQ(r[1].mask.pixel_count(), 0) << summary(r[1]);
@@ -261,9 +262,21 @@ TEST(DynamicDetector, AnObjectIsReportedOnceTheNextFrameConfirmsIt) {
     EXPECT_FALSE(r[k].mask.regions.empty()) << "frame " << k;
     EXPECT_GE(iou(r[k].mask.image, gt[k]), 0.7) << "frame " << k << ": " << summary(r[k]);
   }
-  const std::vector<DetectorResult> at_once = box_crossing_then_stopping(per_frame(), 2, 2, &gt);
-  EXPECT_EQ(at_once[1].unconfirmed_objects, 0);
-  EXPECT_GE(iou(at_once[1].mask.image, gt[1 + 5]), 0.7) << summary(at_once[1]);
+  // With the defaults an object this large (near) is reported in the frame it is found, as without confirmation;
+  // one smaller than confirm_below_px waits.
+  const DynamicDetectorConfig defaults;
+  ASSERT_GT(defaults.detector.confirm_below_px, 0);
+  ASSERT_LT(defaults.detector.confirm_below_px, cv::countNonZero(gt[1]));
+  for (const DynamicDetectorConfig& c : {defaults, per_frame()}) {
+    const std::vector<DetectorResult> at_once = box_crossing_then_stopping(c, 2, 2);
+    EXPECT_EQ(at_once[1].unconfirmed_objects, 0);
+    EXPECT_GE(iou(at_once[1].mask.image, gt[1]), 0.7) << summary(at_once[1]);
+  }
+  DynamicDetectorConfig larger = defaults;
+  larger.detector.confirm_below_px = cv::countNonZero(gt[1]) * 2;
+  const std::vector<DetectorResult> waits = box_crossing_then_stopping(larger, 3, 3);
+  EXPECT_EQ(waits[1].mask.pixel_count(), 0) << summary(waits[1]);
+  EXPECT_GE(iou(waits[2].mask.image, gt[2]), 0.7) << summary(waits[2]);
 }
 
 TEST(DynamicDetector, ACoastedObjectMustShowItsMotion) {

@@ -84,6 +84,7 @@ TEST(DynamicConfig, BadValuesNameFileAndField) {
   expect_error("detector:\n  extend_max_rounds: -1\n", "detector.extend_max_rounds");
   expect_error("detector:\n  roi_row_step: 3\n", "detector.roi_row_step");
   expect_error("detector:\n  confirm_min_box_iou: 1.5\n", "detector.confirm_min_box_iou");
+  expect_error("detector:\n  confirm_below_px: -1\n", "detector.confirm_below_px");
   expect_error("detector:\n  roi_row_step_min_area_px: -1\n", "detector.roi_row_step_min_area_px");
   expect_error("detector:\n  extend_min_rows: 0\n", "detector.extend_min_rows");
   expect_error("detector:\n  extend_step_m: 0\n", "detector.extend_step_m");

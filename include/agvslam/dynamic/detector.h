@@ -138,6 +138,7 @@ struct DetectorOptions {
   // first frame of each object is therefore not reported; unreported objects still confirm the next frame's
   // (0 = off: every object is reported in the frame it is found).
   double confirm_min_box_iou = 0.3;
+  int confirm_below_px = 30000;  // ... objects of this many px or more (near ones) are reported at once (0: all wait)
 
   void validate(const std::string& source) const;
   std::string describe() const;
@@ -305,6 +306,7 @@ class DynamicDetector {
   std::vector<cv::Mat> prev_pyramid_, cur_pyramid_;
   std::vector<Corner> corners_;
   std::vector<cv::Rect> prev_object_boxes_, object_boxes_;  // the objects found (reported or not) per frame
+  std::vector<int> object_pixels_;
   void confirm_objects(DetectorResult& result);
   std::vector<int> cell_start_, cell_fill_;   // the tracks binned for the new corners' distance test
   std::vector<cv::Point2f> cell_points_;
