@@ -48,23 +48,28 @@ void TrackingConfig::validate(const std::string& source) const {
   require(keyframe_revisit_shared > 0 && keyframe_revisit_shared <= 1, "keyframe_revisit_shared",
           "expected a ratio in (0, 1]");
   require(keyframe_revisit_min_age_s >= 0, "keyframe_revisit_min_age_s", "expected a time >= 0 s");
+  require(keyframe_stop_speed_mps >= 0 && keyframe_stop_speed_mps <= 10, "keyframe_stop_speed_mps",
+          "expected a speed in [0, 10] m/s");
+  require(keyframe_stop_distance_m >= 0 && keyframe_stop_distance_m <= 100, "keyframe_stop_distance_m",
+          "expected a distance in [0, 100] m (0: off)");
   require(reset_max_keyframes >= 0, "reset_max_keyframes", "expected an integer >= 0");
   require(reset_after_lost_frames >= 1, "reset_after_lost_frames", "expected an integer >= 1");
 }
 
 std::string TrackingConfig::describe() const {
-  char buf[768];
+  char buf[1024];
   std::snprintf(buf, sizeof(buf),
                 "tracking: close points < %.0f baselines, init > %d features (>= %d stereo), motion model window %d px "
                 "(>= %d matches), >= %d frame inliers, reference matching ratio %.2f (>= %d), local map window x%.1f "
                 "(>= %d inliers, <= %d keyframes), keyframe every <= %d frames (0 = rate), ref ratio %.2f, close "
                 "%d/%d, >= %d new points; revisits: none within %.2f m / %.0f deg of a keyframe >= %.1f s old "
-                "sharing >= %.2f of the inliers; reset after %d lost frames with <= %d keyframes",
+                "sharing >= %.2f of the inliers; one where it stops (<= %.2f m/s) >= %.2f m from the last (0: off); reset after %d lost frames with <= %d keyframes",
                 close_depth_baselines, min_init_features, min_init_stereo, motion_model_radius_px, min_motion_model_matches,
                 min_frame_inliers, reference_ratio, min_reference_matches, local_map_radius, min_local_map_inliers,
                 max_local_keyframes, keyframe_max_frames, keyframe_ref_ratio, keyframe_close_tracked,
                 keyframe_close_untracked, keyframe_max_new_points, keyframe_revisit_distance_m, keyframe_revisit_angle_deg,
-                keyframe_revisit_min_age_s, keyframe_revisit_shared, reset_after_lost_frames, reset_max_keyframes);
+                keyframe_revisit_min_age_s, keyframe_revisit_shared, keyframe_stop_speed_mps, keyframe_stop_distance_m,
+                reset_after_lost_frames, reset_max_keyframes);
   return buf;
 }
 
@@ -205,7 +210,8 @@ SlamConfig load_slam_config(const std::string& path) {
                  "min_local_map_inliers", "max_local_keyframes", "keyframe_max_frames", "keyframe_min_frames",
                  "keyframe_ref_ratio", "keyframe_close_tracked", "keyframe_close_untracked",
                  "keyframe_max_new_points", "keyframe_revisit_distance_m", "keyframe_revisit_angle_deg",
-                 "keyframe_revisit_shared", "keyframe_revisit_min_age_s", "reset_max_keyframes", "reset_after_lost_frames"});
+                 "keyframe_revisit_shared", "keyframe_revisit_min_age_s", "keyframe_stop_speed_mps",
+                 "keyframe_stop_distance_m", "reset_max_keyframes", "reset_after_lost_frames"});
   in.read("tracking", "close_depth_baselines", t.close_depth_baselines, "a number (baselines)");
   in.read("tracking", "min_init_features", t.min_init_features, "an integer");
   in.read("tracking", "min_init_stereo", t.min_init_stereo, "an integer");
@@ -228,6 +234,8 @@ SlamConfig load_slam_config(const std::string& path) {
   in.read("tracking", "keyframe_revisit_angle_deg", t.keyframe_revisit_angle_deg, "a number (degrees)");
   in.read("tracking", "keyframe_revisit_shared", t.keyframe_revisit_shared, "a number (ratio)");
   in.read("tracking", "keyframe_revisit_min_age_s", t.keyframe_revisit_min_age_s, "a number (s)");
+  in.read("tracking", "keyframe_stop_speed_mps", t.keyframe_stop_speed_mps, "a number (m/s)");
+  in.read("tracking", "keyframe_stop_distance_m", t.keyframe_stop_distance_m, "a number (m)");
   in.read("tracking", "reset_max_keyframes", t.reset_max_keyframes, "an integer");
   in.read("tracking", "reset_after_lost_frames", t.reset_after_lost_frames, "an integer (frames)");
 

@@ -185,6 +185,7 @@ bool Tracking::stereo_initialisation() {
   reference_kf_ = kf;
   current_.reference_keyframe = kf;
   last_keyframe_frame_id_ = current_.id;
+  last_keyframe_center_w_ = current_.T_w_c().translation();
   local_keyframes_.assign(1, kf.get());
   local_points_.clear();
   for (const MapPointPtr& p : kf->map_points()) {
@@ -571,7 +572,17 @@ bool Tracking::need_new_keyframe() {
   const bool weak = inliers_ < ref_matches * 0.25;
   const bool c1c = weak || need_close;
   const bool c2 = (inliers_ < ref_matches * ref_ratio || need_close) && inliers_ > 15;
-  if (!((c1a || c1b || c1c) && c2)) return false;
+  // A stop (beyond ORB-SLAM2): the camera has come to rest keyframe_stop_distance_m or more from where the last
+  // keyframe was made. Slowing down keeps most of the reference's points in view, so c2 would make none, and the
+  // place where an AGV stops (a station, the start of a loop) is where the map must hold a keyframe.
+  const TrackingConfig& tc = config_.tracking;
+  bool stopped = false;
+  if (tc.keyframe_stop_distance_m > 0 && has_velocity_ && velocity_dt_ns_ > 0) {
+    const double speed_mps = velocity_.translation().norm() / (1e-9 * static_cast<double>(velocity_dt_ns_));
+    stopped = speed_mps <= tc.keyframe_stop_speed_mps &&
+              (current_.T_w_c().translation() - last_keyframe_center_w_).norm() >= tc.keyframe_stop_distance_m;
+  }
+  if (!((c1a || c1b || c1c) && c2) && !stopped) return false;
   if (KeyFrame* old_kf = weak ? nullptr : revisited_keyframe()) {
     // The place is already in the map from an earlier pass: track against that keyframe instead of adding one.
     reference_kf_ = old_kf->shared_from_this();
@@ -652,6 +663,7 @@ void Tracking::create_new_keyframe() {
   reference_kf_ = kf;
   current_.reference_keyframe = kf;
   last_keyframe_frame_id_ = current_.id;
+  last_keyframe_center_w_ = current_.T_w_c().translation();
 }
 
 }  // namespace agvslam::slam

@@ -258,6 +258,40 @@ TEST(Tracking, LocalisationOnlyAddsNoKeyframes) {
   EXPECT_EQ(rig.map.map_point_count(), points);
 }
 
+// tracking.keyframe_stop_*: the camera drives 9 frames (0.45 m sideways, 0.27 m on) and rests there for 20
+// frames. ORB-SLAM2's rule makes no keyframe while it rests (the reference's points stay in view); the stop rule
+// makes exactly one, at the resting pose.
+TEST(Tracking, AKeyframeWhereTheCameraComesToRest) {
+  const test::World world = test::make_world(1500, 21, 1.5, 15.0);
+  for (const bool stop_rule : {true, false}) {
+    SlamConfig c;
+    if (!stop_rule) c.tracking.keyframe_stop_distance_m = 0;
+    Rig rig(c);
+    for (int k = 0; k < 10; ++k) {
+      ASSERT_EQ(rig.step(world, test::path_pose(k, 0.03), static_cast<uint64_t>(k)), TrackingState::kOk) << k;
+    }
+    std::size_t moving_kfs = 0;
+    Eigen::Vector3d last_center = Eigen::Vector3d::Zero();
+    {
+      std::lock_guard<std::mutex> lock(rig.map.mutex());
+      moving_kfs = rig.map.keyframe_count();
+      for (const KeyFramePtr& kf : rig.map.keyframes()) last_center = kf->center_w();  // sorted by id: the last one
+    }
+    const SE3d rest = test::path_pose(9, 0.03);
+    const Eigen::Vector3d rest_center = rest.inverse().translation();
+    ASSERT_GE((rest_center - last_center).norm(), 0.2) << "a keyframe while moving came too close to the rest pose";
+    int new_at_rest = 0;
+    for (int k = 10; k < 30; ++k) {
+      TrackingCounts counts;
+      ASSERT_EQ(rig.step(world, rest, static_cast<uint64_t>(k), 0.3, false, &counts), TrackingState::kOk) << k;
+      new_at_rest += counts.new_keyframe ? 1 : 0;
+    }
+    std::lock_guard<std::mutex> lock(rig.map.mutex());
+    EXPECT_EQ(new_at_rest, stop_rule ? 1 : 0) << "stop rule " << stop_rule;
+    EXPECT_EQ(rig.map.keyframe_count(), moving_kfs + (stop_rule ? 1u : 0u));
+  }
+}
+
 TEST(Tracking, TooFewStereoFeaturesDoNotInitialise) {
   Rig rig;
   const test::World world = test::make_world(200, 12);

@@ -39,6 +39,10 @@ struct TrackingConfig {
   double keyframe_revisit_angle_deg = 10.0;
   double keyframe_revisit_shared = 0.5;
   double keyframe_revisit_min_age_s = 1.0;
+  // Stops: a keyframe when the camera comes to rest (speed <= keyframe_stop_speed_mps) at least
+  // keyframe_stop_distance_m from where the last keyframe was made (0 = off).
+  double keyframe_stop_speed_mps = 0.1;
+  double keyframe_stop_distance_m = 0.2;
   // Loss: after this many consecutive failed frames with a map of fewer than reset_max_keyframes keyframes, the
   // map is reset and initialised again (ORB-SLAM2 does the same with <= 5 keyframes).
   int reset_max_keyframes = 5;

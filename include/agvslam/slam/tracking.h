@@ -122,6 +122,7 @@ class Tracking {
   Frame last_frame_;
   KeyFramePtr reference_kf_;
   uint64_t last_keyframe_frame_id_ = 0;
+  Eigen::Vector3d last_keyframe_center_w_ = Eigen::Vector3d::Zero();  // where the last keyframe was made
   uint64_t last_recovery_frame_id_ = 0;
   SE3d last_T_c_r_ = SE3d::Identity();
   SE3d velocity_ = SE3d::Identity();  // T_c_l: last camera -> current camera
