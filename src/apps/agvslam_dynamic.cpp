@@ -558,7 +558,8 @@ int run(const Options& o) {
     nlohmann::json j;
     j["dataset"] = dataset->root();
     j["frames"] = {{"first", first}, {"last", last}, {"detected", frames_detected}};
-    j["regions"] = {{"total", regions_total}, {"per_frame", frames_detected > 0 ? static_cast<double>(regions_total) / frames_detected : 0.0},
+    j["regions"] = {{"total", regions_total},
+                    {"per_frame", frames_detected > 0 ? static_cast<double>(regions_total) / frames_detected : 0.0},
                     {"unconfirmed_objects", unconfirmed_total}};
     if (scored) {
       j["scoring"] = {{"min_iou", scoring.min_iou}, {"min_object_pixels", scoring.min_object_pixels},

@@ -90,13 +90,15 @@ std::string DetectorOptions::describe() const {
   char buf[1400];
   std::snprintf(buf, sizeof(buf),
                 "detector: epipolar test %s, depth test %s, disparity %s, <= %d ROIs searched up to max point "
-                "disparity + %.1f px at scale %.1f, %d row(s) per matched row for ROIs >= %d px (half scale above %d px, 0 = never, eroded %d px more), left border padded %s, ROIs "
+                "disparity + %.1f px at scale %.1f, %d row(s) per matched row for ROIs >= %d px (half scale above "
+                "%d px, 0 = never, eroded %d px more), left border padded %s, ROIs "
                 "extended to the floor %s and %.2f m above it, widened %s, side-by-side pieces split %s, stacked regions merged "
                 "%s, mask dilation %d px, densification %s, objects over frames %s, reported when their box overlaps "
                 "one of the previous frame by IoU >= %.2f (0: always) or they hold >= %d px (0: none)",
                 use_epipolar_test ? "on" : "off", use_depth_test ? "on" : "off",
                 full_frame_disparity ? "whole frame (debug)" : "points + ROIs", max_rois, roi_disparity_margin_px,
-                roi_scale, roi_row_step, roi_row_step_min_area_px, half_scale_min_area_px, half_scale_erode_px, pad_left_border ? "on" : "off", extend_to_floor ? "on" : "off",
+                roi_scale, roi_row_step, roi_row_step_min_area_px, half_scale_min_area_px, half_scale_erode_px,
+                pad_left_border ? "on" : "off", extend_to_floor ? "on" : "off",
                 extend_to_height_m, widen_text, split_side_by_side ? "on" : "off", merge_stacked_regions ? "on" : "off",
                 mask_dilation_px, densify_text, objects_text, confirm_min_box_iou, confirm_below_px);
   return buf;

@@ -199,12 +199,14 @@ DynamicDetectorConfig load_dynamic_config(const std::string& path) {
   in.read("photometric", "region_inset_px", c.photometric.region_inset_px, "an integer (px)");
 
   in.check_keys("detector", {"use_epipolar_test", "use_depth_test", "full_frame_disparity", "max_rois",
-                             "roi_disparity_margin_px", "roi_scale", "roi_row_step", "roi_row_step_min_area_px", "extend_max_rounds", "extend_min_rows", "extend_step_m", "extend_static_guard_px", "half_scale_min_area_px", "half_scale_erode_px", "extend_to_floor", "extend_to_height_m", "split_side_by_side", "mask_dilation_px", "densify",
+                             "roi_disparity_margin_px", "roi_scale", "roi_row_step", "roi_row_step_min_area_px",
+                             "extend_max_rounds", "extend_min_rows", "extend_step_m", "extend_static_guard_px", "half_scale_min_area_px", "half_scale_erode_px", "extend_to_floor", "extend_to_height_m", "split_side_by_side", "mask_dilation_px", "densify",
                              "densify_radius_px",
                              "densify_radius_disparity_factor", "densify_max_points", "densify_min_distance_px",
                              "densify_min_seeds", "densify_extra_tracks", "densify_keep_static",
                              "track_objects", "continue_min_points", "coast_max_frames", "coast_min_detections",
-                             "coast_min_tracks", "coast_min_area_ratio", "confirm_min_box_iou", "confirm_below_px", "pad_left_border", "merge_stacked_regions"});
+                             "coast_min_tracks", "coast_min_area_ratio", "confirm_min_box_iou", "confirm_below_px",
+                             "pad_left_border", "merge_stacked_regions"});
   in.read("detector", "use_epipolar_test", c.detector.use_epipolar_test, flag);
   in.read("detector", "use_depth_test", c.detector.use_depth_test, flag);
   in.read("detector", "full_frame_disparity", c.detector.full_frame_disparity, flag);

@@ -158,7 +158,8 @@ OutlineStats ObjectOutliner::outline(const cv::Mat& disparity_px, cv::Point orig
   const cv::Rect box = cv::boundingRect(mask);
   const cv::Rect area = cv::Rect(box.x - 1, box.y - 1, box.width + 2, box.height + 2) & cv::Rect(0, 0, w, h);
   cv::bitwise_not(mask(area), holes_);
-  const int count = area.empty() ? 0 : cv::connectedComponentsWithStats(holes_, hole_labels_, hole_stats_, hole_centroids_, 4, CV_32S);
+  const int count =
+      area.empty() ? 0 : cv::connectedComponentsWithStats(holes_, hole_labels_, hole_stats_, hole_centroids_, 4, CV_32S);
   if (count > 1) {
     const int aw = area.width, ah = area.height;
     invalid_count_.assign(static_cast<std::size_t>(count), 0);
@@ -177,7 +178,8 @@ OutlineStats ObjectOutliner::outline(const cv::Mat& disparity_px, cv::Point orig
       const int x1 = x0 + hole_stats_.at<int>(k, cv::CC_STAT_WIDTH), y1 = y0 + hole_stats_.at<int>(k, cv::CC_STAT_HEIGHT);
       if (x0 == 0 || y0 == 0 || x1 == aw || y1 == ah) continue;  // reaches the ring or the ROI border: outside
       const int hole_area = hole_stats_.at<int>(k, cv::CC_STAT_AREA);
-      const bool mostly_invalid = invalid_count_[static_cast<std::size_t>(k)] >= c.max_hole_invalid_fraction * hole_area;
+      const bool mostly_invalid =
+          invalid_count_[static_cast<std::size_t>(k)] >= c.max_hole_invalid_fraction * hole_area;
       if (mostly_invalid || hole_area < c.min_hole_fill_px) {
         fill[static_cast<std::size_t>(k)] = 1;
         any = true;

@@ -63,7 +63,8 @@ std::string TrackingConfig::describe() const {
                 "(>= %d matches), >= %d frame inliers, reference matching ratio %.2f (>= %d), local map window x%.1f "
                 "(>= %d inliers, <= %d keyframes), keyframe every <= %d frames (0 = rate), ref ratio %.2f, close "
                 "%d/%d, >= %d new points; revisits: none within %.2f m / %.0f deg of a keyframe >= %.1f s old "
-                "sharing >= %.2f of the inliers; one where it stops (<= %.2f m/s) >= %.2f m from the last (0: off); reset after %d lost frames with <= %d keyframes",
+                "sharing >= %.2f of the inliers; one where it stops (<= %.2f m/s) >= %.2f m from the last (0: off); "
+                "reset after %d lost frames with <= %d keyframes",
                 close_depth_baselines, min_init_features, min_init_stereo, motion_model_radius_px, min_motion_model_matches,
                 min_frame_inliers, reference_ratio, min_reference_matches, local_map_radius, min_local_map_inliers,
                 max_local_keyframes, keyframe_max_frames, keyframe_ref_ratio, keyframe_close_tracked,
