@@ -684,16 +684,22 @@ void DynamicDetector::detect(const StereoFrame& frame, DetectorResult& result) {
 
 void DynamicDetector::confirm_objects(DetectorResult& result) {
   result.unconfirmed_objects = 0;
-  const double min_iou = config_.detector.confirm_min_box_iou;
+  const DetectorOptions& opt = config_.detector;
   cv::Mat& inst = result.mask.instances;
-  // Each object's bounding box (instances 1..255).
+  // Object pixels lie in the regions' rectangles (grown by the mask dilation): only their union is scanned.
+  cv::Rect area;
+  for (const cv::Rect& r : result.mask.regions) area |= r;
+  const int grow = opt.mask_dilation_px;
+  area = cv::Rect(area.x - grow, area.y - grow, area.width + 2 * grow, area.height + 2 * grow) &
+         cv::Rect(0, 0, inst.cols, inst.rows);
+  // Each object's bounding box and pixel count (instances 1..255).
   object_boxes_.assign(256, cv::Rect());
   object_pixels_.assign(256, 0);
   int max_instance = 0;
   if (!result.mask.regions.empty()) {
-    for (int y = 0; y < inst.rows; ++y) {
+    for (int y = area.y; y < area.br().y; ++y) {
       const uint8_t* row = inst.ptr<uint8_t>(y);
-      for (int x = 0; x < inst.cols; ++x) {
+      for (int x = area.x; x < area.br().x; ++x) {
         const int k = row[x];
         if (k == 0) continue;
         cv::Rect& b = object_boxes_[static_cast<std::size_t>(k)];
@@ -704,31 +710,26 @@ void DynamicDetector::confirm_objects(DetectorResult& result) {
     }
   }
   object_boxes_.resize(static_cast<std::size_t>(max_instance) + 1);
-  if (min_iou > 0 && max_instance > 0) {
-    std::vector<uint8_t> drop(object_boxes_.size(), 0);
+  if (opt.confirm_min_box_iou > 0 && max_instance > 0) {
+    drop_object_.assign(object_boxes_.size(), 0);
     for (int k = 1; k <= max_instance; ++k) {
       const cv::Rect& b = object_boxes_[static_cast<std::size_t>(k)];
       if (b.empty()) continue;
-      const int near_px = config_.detector.confirm_below_px;
-      bool confirmed = near_px > 0 && object_pixels_[static_cast<std::size_t>(k)] >= near_px;
-      for (const cv::Rect& p : prev_object_boxes_) {
-        if (confirmed) break;
-        const double overlap = (b & p).area();
-        if (overlap > 0 && overlap >= min_iou * (b.area() + p.area() - overlap)) {
-          confirmed = true;
-          break;
-        }
+      bool confirmed = opt.confirm_below_px > 0 && object_pixels_[static_cast<std::size_t>(k)] >= opt.confirm_below_px;
+      for (std::size_t i = 0; i < prev_object_boxes_.size() && !confirmed; ++i) {
+        const double overlap = (b & prev_object_boxes_[i]).area();
+        confirmed = overlap > 0 && overlap >= opt.confirm_min_box_iou * (b.area() + prev_object_boxes_[i].area() - overlap);
       }
       if (!confirmed) {
-        drop[static_cast<std::size_t>(k)] = 1;
+        drop_object_[static_cast<std::size_t>(k)] = 1;
         ++result.unconfirmed_objects;
       }
     }
     if (result.unconfirmed_objects > 0) {
-      for (int y = 0; y < inst.rows; ++y) {
+      for (int y = area.y; y < area.br().y; ++y) {
         uint8_t* row = inst.ptr<uint8_t>(y);
-        for (int x = 0; x < inst.cols; ++x) {
-          if (row[x] && drop[row[x]]) row[x] = 0;
+        for (int x = area.x; x < area.br().x; ++x) {
+          if (row[x] && drop_object_[row[x]]) row[x] = 0;
         }
       }
       cv::compare(inst, 0, result.mask.image, cv::CMP_GT);

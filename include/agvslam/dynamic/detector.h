@@ -307,6 +307,7 @@ class DynamicDetector {
   std::vector<Corner> corners_;
   std::vector<cv::Rect> prev_object_boxes_, object_boxes_;  // the objects found (reported or not) per frame
   std::vector<int> object_pixels_;
+  std::vector<uint8_t> drop_object_;
   void confirm_objects(DetectorResult& result);
   std::vector<int> cell_start_, cell_fill_;   // the tracks binned for the new corners' distance test
   std::vector<cv::Point2f> cell_points_;
