@@ -116,6 +116,7 @@ void DynamicDetectorConfig::validate(const std::string& source) const {
   boundaries.validate(source);
   regions.validate(source);
   outline.validate(source);
+  edge_refine.validate(source);
   photometric.validate(source);
   detector.validate(source);
 }
@@ -123,7 +124,7 @@ void DynamicDetectorConfig::validate(const std::string& source) const {
 std::vector<std::string> DynamicDetectorConfig::describe() const {
   return {features.describe(), tracking.describe(),   epipolar.describe(), depth_test.describe(), multiframe.describe(),
           grouping.describe(), slic.describe(),       planes.describe(),   boundaries.describe(),
-          regions.describe(),  outline.describe(),     photometric.describe(), detector.describe()};
+          regions.describe(),  outline.describe(),     edge_refine.describe(), photometric.describe(), detector.describe()};
 }
 
 std::string StageTimings::describe() const {
@@ -180,7 +181,8 @@ DynamicDetector::DynamicDetector(const StereoCalibration& calibration, const Dyn
         c.uniqueness_margin = config.multiframe.check_uniqueness_margin;
         return c;
       }()),
-      outliner_(config.outline) {
+      outliner_(config.outline),
+      edge_refiner_(config.edge_refine) {
   config_.validate("DynamicDetectorConfig");
   stereo_config_.validate("StereoConfig");
   if (config_.detector.use_depth_test && !(calibration_.bf() > 0)) {
@@ -693,8 +695,8 @@ void DynamicDetector::confirm_objects(DetectorResult& result) {
   area = cv::Rect(area.x - grow, area.y - grow, area.width + 2 * grow, area.height + 2 * grow) &
          cv::Rect(0, 0, inst.cols, inst.rows);
   // Each object's bounding box and pixel count (instances 1..255).
-  object_boxes_.assign(256, cv::Rect());
   object_pixels_.assign(256, 0);
+  box_limits_.assign(4 * 256, 0);  // per instance: x0, y0, x1, y1 (inclusive)
   int max_instance = 0;
   if (!result.mask.regions.empty()) {
     for (int y = area.y; y < area.br().y; ++y) {
@@ -702,14 +704,24 @@ void DynamicDetector::confirm_objects(DetectorResult& result) {
       for (int x = area.x; x < area.br().x; ++x) {
         const int k = row[x];
         if (k == 0) continue;
-        cv::Rect& b = object_boxes_[static_cast<std::size_t>(k)];
-        b = b.empty() ? cv::Rect(x, y, 1, 1) : (b | cv::Rect(x, y, 1, 1));
-        ++object_pixels_[static_cast<std::size_t>(k)];
-        max_instance = std::max(max_instance, k);
+        int* b = &box_limits_[4 * static_cast<std::size_t>(k)];
+        if (object_pixels_[static_cast<std::size_t>(k)]++ == 0) {
+          b[0] = b[2] = x;
+          b[1] = b[3] = y;
+          max_instance = std::max(max_instance, k);
+        } else {
+          b[0] = std::min(b[0], x);
+          b[2] = std::max(b[2], x);
+          b[3] = y;  // rows are scanned in order
+        }
       }
     }
   }
-  object_boxes_.resize(static_cast<std::size_t>(max_instance) + 1);
+  object_boxes_.assign(static_cast<std::size_t>(max_instance) + 1, cv::Rect());
+  for (int k = 1; k <= max_instance; ++k) {
+    const int* b = &box_limits_[4 * static_cast<std::size_t>(k)];
+    if (object_pixels_[static_cast<std::size_t>(k)] > 0) object_boxes_[static_cast<std::size_t>(k)] = cv::Rect(b[0], b[1], b[2] - b[0] + 1, b[3] - b[1] + 1);
+  }
   if (opt.confirm_min_box_iou > 0 && max_instance > 0) {
     drop_object_.assign(object_boxes_.size(), 0);
     for (int k = 1; k <= max_instance; ++k) {
@@ -823,6 +835,10 @@ void DynamicDetector::outline_region(const StereoFrame& frame, DetectorResult& r
   // Post-processing of the outline; its pixel count is taken again once at the end.
   const bool has_pixels = seg.outline_stats.object_pixels > 0;
   bool reshaped = false;
+  if (config_.edge_refine.band_px > 0 && has_pixels && !seg.half_scale) {
+    const EdgeRefineStats es = edge_refiner_.refine(frame.left, frame.right, seg.roi, seg.disparity_px, seg.outline);
+    reshaped = es.moved > 0;
+  }
   const int extra_erode = seg.half_scale ? config_.detector.half_scale_erode_px : 0;
   if (extra_erode > 0 && has_pixels) {
     const int k = 2 * extra_erode + 1;

@@ -8,7 +8,7 @@ namespace agvslam::dynamic {
 DynamicDetectorConfig load_dynamic_config(const std::string& path) {
   const stereo::ParamsReader in(path);
   in.check_sections({"features", "tracking", "epipolar", "depth_test", "multiframe", "grouping", "slic", "planes", "boundaries",
-                     "regions", "outline", "photometric", "detector"});
+                     "regions", "outline", "edge_refine", "photometric", "detector"});
   DynamicDetectorConfig c;
   const char* px = "a number (px)";
   const char* num = "a number";
@@ -186,6 +186,16 @@ DynamicDetectorConfig load_dynamic_config(const std::string& path) {
   in.read("outline", "close_far_m", o.close_far_m, "a number (m)");
   in.read("outline", "left_band_touch_px", o.left_band_touch_px, "an integer (px)");
   in.read("outline", "close_max_disparity_px", o.close_max_disparity_px, "a number (px)");
+
+  in.check_keys("edge_refine", {"band_px", "half_rows", "background_px", "min_disparity_gap_px", "occlusion_cost",
+                                "min_gain"});
+  EdgeRefineConfig& er = c.edge_refine;
+  in.read("edge_refine", "band_px", er.band_px, "an integer (px)");
+  in.read("edge_refine", "half_rows", er.half_rows, "an integer (rows)");
+  in.read("edge_refine", "background_px", er.background_px, "an integer (px)");
+  in.read("edge_refine", "min_disparity_gap_px", er.min_disparity_gap_px, px);
+  in.read("edge_refine", "occlusion_cost", er.occlusion_cost, "a number (grey levels)");
+  in.read("edge_refine", "min_gain", er.min_gain, "a number (grey levels per px)");
 
   in.check_keys("photometric", {"enabled", "max_motion_px", "min_gradient", "sample_step_px", "min_samples",
                                 "multiframe_max_motion_px", "multiframe_min_disparity_px", "region_inset_px"});

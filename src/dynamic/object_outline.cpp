@@ -125,25 +125,27 @@ OutlineStats ObjectOutliner::outline(const cv::Mat& disparity_px, cv::Point orig
     for (std::size_t i = 0; i < static_px.size(); ++i) stats.static_seeds += add_seed(static_px[i], static_disparity_px[i], 2) ? 1 : 0;
   }
 
-  // Breadth-first from all seeds at once.
+  // Breadth-first from all seeds at once. The queue holds (y << 16) | x (no division per pixel).
+  for (int& e : queue_) e = ((e / w) << 16) | (e % w);
   for (std::size_t head = 0; head < queue_.size(); ++head) {
-    const int p = queue_[head];
-    const int px = p % w, py = p / w;
+    const int px = queue_[head] & 0xffff, py = queue_[head] >> 16;
+    const std::size_t p = static_cast<std::size_t>(py) * static_cast<std::size_t>(w) + static_cast<std::size_t>(px);
     const float dp = disparity_px.ptr<float>(py)[px];
-    const Seed& s = seeds_[static_cast<std::size_t>(seed_of_[static_cast<std::size_t>(p)])];
-    const uint8_t lab = label_[static_cast<std::size_t>(p)];
+    const int32_t seed = seed_of_[p];
+    const Seed& s = seeds_[static_cast<std::size_t>(seed)];
+    const uint8_t lab = label_[p];
     const float step = static_cast<float>(c.step_tolerance_px + c.step_tolerance_rel * dp);
     const int nx[4] = {px - 1, px + 1, px, px};
     const int ny[4] = {py, py, py - 1, py + 1};
     for (int k = 0; k < 4; ++k) {
       if (nx[k] < 0 || ny[k] < 0 || nx[k] >= w || ny[k] >= h) continue;
-      const int q = ny[k] * w + nx[k];
-      if (label_[static_cast<std::size_t>(q)] != 0) continue;
+      const std::size_t q = static_cast<std::size_t>(ny[k]) * static_cast<std::size_t>(w) + static_cast<std::size_t>(nx[k]);
+      if (label_[q] != 0) continue;
       const float dq = disparity_px.ptr<float>(ny[k])[nx[k]];
       if (!(dq > 0) || std::abs(dq - dp) > step || dq < s.lo || dq > s.hi || is_floor(nx[k], ny[k], dq)) continue;
-      label_[static_cast<std::size_t>(q)] = lab;
-      seed_of_[static_cast<std::size_t>(q)] = seed_of_[static_cast<std::size_t>(p)];
-      queue_.push_back(q);
+      label_[q] = lab;
+      seed_of_[q] = seed;
+      queue_.push_back((ny[k] << 16) | nx[k]);
     }
   }
   for (int y = 0; y < h; ++y) {
@@ -202,16 +204,38 @@ OutlineStats ObjectOutliner::outline(const cv::Mat& disparity_px, cv::Point orig
     std::swap(mask, eroded_);
   }
   stats.object_pixels = cv::countNonZero(mask);
-  // Median disparity of the outline's pixels (0 without any).
+  // Median disparity of the outline's pixels (0 without any). SGBM's disparities are multiples of 1/16 px: counted
+  // in 1/16 px bins, the median is exact without sorting (values off that grid fall back to a selection).
   disparities_.clear();
+  constexpr int kBins = 16 * 1024;
+  disparity_bins_.assign(kBins, 0);
+  bool on_grid = true;
   for (int y = 0; y < h; ++y) {
     const uint8_t* m = mask.ptr<uint8_t>(y);
     const float* d = disparity_px.ptr<float>(y);
     for (int x = 0; x < w; ++x) {
-      if (m[x] && d[x] > 0) disparities_.push_back(d[x]);
+      if (!m[x] || !(d[x] > 0)) continue;
+      disparities_.push_back(d[x]);
+      const float scaled = d[x] * 16.0f;
+      const int bin = static_cast<int>(scaled);
+      if (bin >= kBins || static_cast<float>(bin) != scaled) {
+        on_grid = false;
+      } else {
+        ++disparity_bins_[static_cast<std::size_t>(bin)];
+      }
     }
   }
-  if (!disparities_.empty()) {
+  if (!disparities_.empty() && on_grid) {
+    const std::size_t rank = disparities_.size() / 2;  // the element nth_element would put at the middle
+    std::size_t below = 0;
+    for (int b = 0; b < kBins; ++b) {
+      below += static_cast<std::size_t>(disparity_bins_[static_cast<std::size_t>(b)]);
+      if (below > rank) {
+        stats.median_disparity_px = static_cast<float>(b) / 16.0f;
+        break;
+      }
+    }
+  } else if (!disparities_.empty()) {
     auto mid = disparities_.begin() + static_cast<std::ptrdiff_t>(disparities_.size() / 2);
     std::nth_element(disparities_.begin(), mid, disparities_.end());
     stats.median_disparity_px = *mid;

@@ -51,7 +51,7 @@ TEST(DynamicConfig, ShippedParamsFileEqualsTheDefaults) {
   EXPECT_EQ(c.slic.incremental, d.slic.incremental);
   EXPECT_EQ(c.regions.mask_mode, d.regions.mask_mode);
   EXPECT_EQ(c.planes.seed, d.planes.seed);
-  EXPECT_EQ(c.describe().size(), 13u);
+  EXPECT_EQ(c.describe().size(), 14u);
 }
 
 TEST(DynamicConfig, OverridesOnlyTheGivenKeys) {
@@ -81,6 +81,9 @@ TEST(DynamicConfig, BadValuesNameFileAndField) {
   expect_error("outline:\n  aggregate_min_px: many\n", "outline.aggregate_min_px");
   expect_error("outline:\n  aggregate_min_tracks: -3\n", "outline.aggregate_min_tracks");
   expect_error("detector:\n  coast_max_frames: -1\n", "detector.coast_max_frames");
+  expect_error("edge_refine:\n  band_px: 40\n", "edge_refine.band_px");
+  expect_error("edge_refine:\n  occlusion_cost: 0\n", "edge_refine.occlusion_cost");
+  expect_error("edge_refine:\n  width_px: 3\n", "edge_refine.width_px");  // unknown key
   expect_error("detector:\n  extend_max_rounds: -1\n", "detector.extend_max_rounds");
   expect_error("detector:\n  roi_row_step: 3\n", "detector.roi_row_step");
   expect_error("detector:\n  confirm_min_box_iou: 1.5\n", "detector.confirm_min_box_iou");

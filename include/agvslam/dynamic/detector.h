@@ -13,9 +13,9 @@
 //                   -> groups of dynamic points -> dynamic ROIs (> 4 points)
 //                   -> per ROI: SGBM on the ROI crop, then (regions.mask_mode)
 //                      disparity (default): the object's pixels connected to its points through smooth disparity,
-//                        not floor (object_outline.h), kept when its tracks are not mostly static (or move
-//                        together) and its content does not move with the background (photometric check) -> dynamic
-//                        region;
+//                        not floor (object_outline.h), its sides re-decided at full resolution (edge_refine.h),
+//                        kept when its tracks are not mostly static (or move together) and its content does not
+//                        move with the background (photometric check) -> dynamic region;
 //                      superpixels / rectangle (the paper): SLIC, disparity planes, boundary types, search to the
 //                        occlusion boundaries (+ disparity band, static veto) -> rectangle or superpixel outline
 //                   -> objects of the last frame that no region continues coast on their own tracks (detector.coast_*)
@@ -36,6 +36,7 @@
 #include "agvslam/dynamic/boundary.h"
 #include "agvslam/dynamic/depth_test.h"
 #include "agvslam/dynamic/disparity_plane.h"
+#include "agvslam/dynamic/edge_refine.h"
 #include "agvslam/dynamic/epipolar.h"
 #include "agvslam/dynamic/multiframe_test.h"
 #include "agvslam/dynamic/object_outline.h"
@@ -157,6 +158,7 @@ struct DynamicDetectorConfig {
   BoundaryConfig boundaries;
   RegionSearchConfig regions;
   OutlineConfig outline;
+  EdgeRefineConfig edge_refine;
   PhotometricCheckConfig photometric;
   DetectorOptions detector;
 
@@ -301,12 +303,14 @@ class DynamicDetector {
   stereo::SparseStereoMatcher check_sparse_;  // larger window, stricter uniqueness (multiframe.check_*)
   SuperpixelGraph graph_;
   ObjectOutliner outliner_;
+  EdgeRefiner edge_refiner_;
 
   bool has_previous_ = false;
   std::vector<cv::Mat> prev_pyramid_, cur_pyramid_;
   std::vector<Corner> corners_;
   std::vector<cv::Rect> prev_object_boxes_, object_boxes_;  // the objects found (reported or not) per frame
   std::vector<int> object_pixels_;
+  std::vector<int> box_limits_;
   std::vector<uint8_t> drop_object_;
   void confirm_objects(DetectorResult& result);
   std::vector<int> cell_start_, cell_fill_;   // the tracks binned for the new corners' distance test

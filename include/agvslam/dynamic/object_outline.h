@@ -43,8 +43,8 @@ struct OutlineConfig {
   double max_hole_invalid_fraction = 0.5;  // enclosed parts with at least this fraction without disparity join
   int min_hole_fill_px = 64;           // enclosed parts smaller than this join regardless
   // SGBM fattens a foreground object by about half its block (its cost window spills over the edge onto the
-  // background): the outline is eroded by this many px (0 = not).
-  int erode_px = 1;
+  // background): the outline is eroded by this many px (0 = not; edge_refine.h re-decides the sides instead).
+  int erode_px = 0;
   // The detector drops an outline of fewer than min_pixels px, or one holding at least min_tracked_for_fraction
   // tracked points of which fewer than min_dynamic_fraction are dynamic (a few tracks at a depth edge flooded a
   // large static surface).
@@ -118,6 +118,7 @@ class ObjectOutliner {
   std::vector<Seed> seeds_;
   std::vector<uint8_t> fill_;
   std::vector<float> disparities_;
+  std::vector<int> disparity_bins_;
   cv::Mat holes_, hole_labels_, hole_stats_, hole_centroids_, eroded_;
   std::vector<int> invalid_count_;
 };

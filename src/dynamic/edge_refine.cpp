@@ -1,0 +1,184 @@
+#include "agvslam/dynamic/edge_refine.h"
+
+#include <algorithm>
+#include <cmath>
+#include <cstdio>
+
+#include "agvslam/core/error.h"
+
+namespace agvslam::dynamic {
+
+void EdgeRefineConfig::validate(const std::string& source) const {
+  auto require = [&](bool ok, const char* field, const char* expected) {
+    if (!ok) throw InputError(source, std::string("edge_refine.") + field, expected);
+  };
+  require(band_px >= 0 && band_px <= 32, "band_px", "expected an integer in [0, 32] px (0: off)");
+  require(half_rows >= 0 && half_rows <= 16, "half_rows", "expected an integer in [0, 16] rows");
+  require(background_px >= 1 && background_px <= 64, "background_px", "expected an integer in [1, 64] px");
+  require(min_disparity_gap_px >= 0 && min_disparity_gap_px <= 100, "min_disparity_gap_px",
+          "expected a number in [0, 100] px");
+  require(occlusion_cost > 0 && occlusion_cost <= 255, "occlusion_cost", "expected a number in (0, 255] grey levels");
+  require(min_gain >= 0 && min_gain <= 255, "min_gain", "expected a number in [0, 255] grey levels per px");
+}
+
+std::string EdgeRefineConfig::describe() const {
+  if (band_px == 0) return "edge_refine: off";
+  char buf[400];
+  std::snprintf(buf, sizeof(buf),
+                "edge_refine: each side of each outline row moves within %d px, split by 1 x %d windows at the "
+                "object's and the background's disparity (background: median of %d px outside, at least %.2f px "
+                "behind), background cost capped at %.1f, a move must gain %.2f per px",
+                band_px, 2 * half_rows + 1, background_px, min_disparity_gap_px, occlusion_cost, min_gain);
+  return buf;
+}
+
+EdgeRefiner::EdgeRefiner(const EdgeRefineConfig& config) : config_(config) { config_.validate("EdgeRefineConfig"); }
+
+namespace {
+
+float median_in_place(std::vector<float>& v) {
+  if (v.empty()) return 0.0f;
+  const auto mid = v.begin() + static_cast<std::ptrdiff_t>(v.size() / 2);
+  std::nth_element(v.begin(), mid, v.end());
+  return *mid;
+}
+
+// Linear interpolation of row `row` at column x (0 <= x <= cols - 1).
+inline float sample(const uint8_t* row, int cols, float x) {
+  const int x0 = static_cast<int>(x);
+  const int x1 = std::min(x0 + 1, cols - 1);
+  const float a = x - static_cast<float>(x0);
+  return (1.0f - a) * row[x0] + a * row[x1];
+}
+
+// Mean |left(xl, y') - right(xr, y')| over y' in [y0, y1], both sampled linearly between columns; -1 when a
+// column leaves its image.
+float column_cost(const cv::Mat& left, const cv::Mat& right, float xl, float xr, int y0, int y1) {
+  const float last = static_cast<float>(left.cols - 1);
+  if (xl < 0.0f || xr < 0.0f || xl > last || xr > last) return -1.0f;
+  float sum = 0.0f;
+  for (int y = y0; y <= y1; ++y) {
+    sum += std::fabs(sample(left.ptr<uint8_t>(y), left.cols, xl) - sample(right.ptr<uint8_t>(y), right.cols, xr));
+  }
+  return sum / static_cast<float>(y1 - y0 + 1);
+}
+
+}  // namespace
+
+EdgeRefineStats EdgeRefiner::refine(const cv::Mat& left, const cv::Mat& right, cv::Rect roi, const cv::Mat& disparity_px,
+                                    cv::Mat& outline) {
+  EdgeRefineStats stats;
+  const EdgeRefineConfig& c = config_;
+  if (c.band_px <= 0 || outline.empty()) return stats;
+  CV_Assert(left.type() == CV_8UC1 && right.type() == CV_8UC1 && left.size() == right.size());
+  CV_Assert(outline.type() == CV_8UC1 && disparity_px.type() == CV_32FC1 && outline.size() == disparity_px.size());
+  CV_Assert(outline.size() == roi.size() && (roi & cv::Rect(cv::Point(0, 0), left.size())) == roi);
+  const int w = outline.cols;
+  const int band = c.band_px;
+  row_.resize(static_cast<std::size_t>(w));
+  for (int y = 0; y < outline.rows; ++y) {
+    uint8_t* out = outline.ptr<uint8_t>(y);
+    const float* disp = disparity_px.ptr<float>(y);
+    std::copy(out, out + w, row_.begin());
+    const int img_y = roi.y + y;
+    const int y0 = std::max(0, img_y - c.half_rows), y1 = std::min(left.rows - 1, img_y + c.half_rows);
+    int x = 0;
+    int prev_end = -1;
+    while (x < w) {
+      while (x < w && !row_[static_cast<std::size_t>(x)]) ++x;
+      if (x >= w) break;
+      const int xs = x;
+      while (x < w && row_[static_cast<std::size_t>(x)]) ++x;
+      const int xe = x - 1;
+      int next_start = x;
+      while (next_start < w && !row_[static_cast<std::size_t>(next_start)]) ++next_start;
+      // The object's disparity: the run away from its ends (where SGBM fattened it), else the whole run.
+      values_.clear();
+      const bool long_run = xe - xs + 1 > 2 * band + 2;
+      for (int k = long_run ? xs + band : xs; k <= (long_run ? xe - band : xe); ++k) {
+        if (disp[k] > 0.0f) values_.push_back(disp[k]);
+      }
+      const float d_f = median_in_place(values_);
+      const int mid = (xs + xe) / 2;
+      for (int side = 0; side < 2 && d_f > 0.0f; ++side) {
+        const bool left_side = side == 0;
+        int lo, hi;
+        if (left_side) {
+          lo = std::max(xs - band, prev_end < 0 ? 0 : (prev_end + xs) / 2 + 1);  // gaps between runs: halved
+          hi = std::min(xs + band, mid);
+        } else {
+          lo = std::max(xe - band, mid + 1);
+          hi = std::min(xe + band, next_start >= w ? w - 1 : (xe + next_start) / 2);
+        }
+        if (lo > hi) continue;
+        ++stats.sides;
+        // The background's disparity: beside the band, outside the outline.
+        values_.clear();
+        // (Left of an object's left side lies the strip the object hides from the right camera, without
+        // disparity: the search goes on outward, up to 4 * background_px.)
+        for (int k = left_side ? lo - 1 : hi + 1, steps = 0;
+             k >= 0 && k < w && steps < 4 * c.background_px && static_cast<int>(values_.size()) < c.background_px;
+             k += left_side ? -1 : 1, ++steps) {
+          if (!row_[static_cast<std::size_t>(k)] && disp[k] > 0.0f) values_.push_back(disp[k]);
+        }
+        if (values_.empty()) continue;
+        const float d_b = median_in_place(values_);
+        if (d_f - d_b < c.min_disparity_gap_px) continue;
+        const int n = hi - lo + 1;
+        cost_fg_.resize(static_cast<std::size_t>(n));
+        cost_bg_.resize(static_cast<std::size_t>(n));
+        bool ok = true;
+        for (int i = 0; i < n && ok; ++i) {
+          // Object: left pixel x against right x - d_f. Background beside the right side: left x against right
+          // x - d_b. Beside the left side the left camera sees background the right one does not (the object hides
+          // it there), so the split is made in the right image, where the side lies at x - d_f: right x - d_f
+          // against left x - d_f + d_b.
+          const float img_x = static_cast<float>(roi.x + lo + i);
+          const float cf = column_cost(left, right, img_x, img_x - d_f, y0, y1);
+          const float cb = left_side ? column_cost(left, right, img_x - d_f + d_b, img_x - d_f, y0, y1)
+                                     : column_cost(left, right, img_x, img_x - d_b, y0, y1);
+          if (cf < 0.0f || cb < 0.0f) ok = false;
+          cost_fg_[static_cast<std::size_t>(i)] = cf;
+          cost_bg_[static_cast<std::size_t>(i)] = std::min(cb, static_cast<float>(c.occlusion_cost));
+        }
+        if (!ok) continue;
+        // Split e in [0, n]: left side: [0, e) background, [e, n) object; right side: the other way round.
+        const std::vector<float>& first = left_side ? cost_bg_ : cost_fg_;
+        const std::vector<float>& second = left_side ? cost_fg_ : cost_bg_;
+        double total = 0.0;
+        for (int i = 0; i < n; ++i) total += second[static_cast<std::size_t>(i)];
+        const int e0 = (left_side ? xs : xe + 1) - lo;  // the split as it is
+        double best = total, at_e0 = total;
+        int best_e = 0;
+        for (int e = 1; e <= n; ++e) {
+          total += first[static_cast<std::size_t>(e - 1)] - second[static_cast<std::size_t>(e - 1)];
+          if (e == e0) at_e0 = total;
+          if (total < best - 1e-6 || (std::fabs(total - best) <= 1e-6 && std::abs(e - e0) < std::abs(best_e - e0))) {
+            best = total;
+            best_e = e;
+          }
+        }
+        if (e0 == 0) at_e0 = [&] {
+          double t = 0.0;
+          for (int i = 0; i < n; ++i) t += second[static_cast<std::size_t>(i)];
+          return t;
+        }();
+        if (best_e == e0 || at_e0 - best < c.min_gain * std::abs(best_e - e0)) continue;
+        ++stats.moved;
+        for (int i = 0; i < n; ++i) {
+          const bool object = left_side ? i >= best_e : i < best_e;
+          uint8_t& px = out[lo + i];
+          const bool was = px != 0;
+          if (object && !was) ++stats.pixels_added;
+          if (!object && was) ++stats.pixels_removed;
+          px = object ? 255 : 0;
+        }
+      }
+      prev_end = xe;
+      x = next_start;
+    }
+  }
+  return stats;
+}
+
+}  // namespace agvslam::dynamic
