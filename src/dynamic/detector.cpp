@@ -91,14 +91,14 @@ std::string DetectorOptions::describe() const {
   std::snprintf(buf, sizeof(buf),
                 "detector: epipolar test %s, depth test %s, disparity %s, <= %d ROIs searched up to max point "
                 "disparity + %.1f px at scale %.1f, %d row(s) per matched row for ROIs >= %d px (half scale above "
-                "%d px, 0 = never, eroded %d px more), left border padded %s, ROIs "
+                "%d px, 0 = never, eroded %d px more), speckle filter %s, left border padded %s, ROIs "
                 "extended to the floor %s and %.2f m above it, widened %s, side-by-side pieces split %s, stacked regions merged "
                 "%s, mask dilation %d px, densification %s, objects over frames %s, reported when their box overlaps "
                 "one of the previous frame by IoU >= %.2f (0: always) or they hold >= %d px (0: none)",
                 use_epipolar_test ? "on" : "off", use_depth_test ? "on" : "off",
                 full_frame_disparity ? "whole frame (debug)" : "points + ROIs", max_rois, roi_disparity_margin_px,
                 roi_scale, roi_row_step, roi_row_step_min_area_px, half_scale_min_area_px, half_scale_erode_px,
-                pad_left_border ? "on" : "off", extend_to_floor ? "on" : "off",
+                roi_speckle_filter ? "on" : "off", pad_left_border ? "on" : "off", extend_to_floor ? "on" : "off",
                 extend_to_height_m, widen_text, split_side_by_side ? "on" : "off", merge_stacked_regions ? "on" : "off",
                 mask_dilation_px, densify_text, objects_text, confirm_min_box_iou, confirm_below_px);
   return buf;
@@ -173,7 +173,11 @@ DynamicDetector::DynamicDetector(const StereoCalibration& calibration, const Dyn
         half.superpixel_size_px = std::max(3, (config.slic.superpixel_size_px + 1) / 2);
         return half;
       }()),
-      sgbm_(stereo_config.sgbm),
+      sgbm_([&] {
+        stereo::SgbmConfig c = stereo_config.sgbm;
+        if (!config.detector.roi_speckle_filter && !config.detector.full_frame_disparity) c.speckle_window_size = 0;
+        return c;
+      }()),
       sparse_(stereo_config.sparse),
       check_sparse_([&] {
         stereo::SparseStereoConfig c = stereo_config.sparse;

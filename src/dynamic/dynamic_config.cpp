@@ -216,7 +216,7 @@ DynamicDetectorConfig load_dynamic_config(const std::string& path) {
                              "densify_min_seeds", "densify_extra_tracks", "densify_keep_static",
                              "track_objects", "continue_min_points", "coast_max_frames", "coast_min_detections",
                              "coast_min_tracks", "coast_min_area_ratio", "confirm_min_box_iou", "confirm_below_px",
-                             "pad_left_border", "merge_stacked_regions"});
+                             "pad_left_border", "roi_speckle_filter", "merge_stacked_regions"});
   in.read("detector", "use_epipolar_test", c.detector.use_epipolar_test, flag);
   in.read("detector", "use_depth_test", c.detector.use_depth_test, flag);
   in.read("detector", "full_frame_disparity", c.detector.full_frame_disparity, flag);
@@ -252,6 +252,7 @@ DynamicDetectorConfig load_dynamic_config(const std::string& path) {
   in.read("detector", "confirm_min_box_iou", c.detector.confirm_min_box_iou, num);
   in.read("detector", "confirm_below_px", c.detector.confirm_below_px, "an integer (px)");
   in.read("detector", "pad_left_border", c.detector.pad_left_border, flag);
+  in.read("detector", "roi_speckle_filter", c.detector.roi_speckle_filter, flag);
   in.read("detector", "merge_stacked_regions", c.detector.merge_stacked_regions, flag);
 
   c.validate(path);

@@ -63,6 +63,34 @@ float column_cost(const cv::Mat& left, const cv::Mat& right, float xl, float xr,
   return sum / static_cast<float>(y1 - y0 + 1);
 }
 
+// out[i] = column_cost(left, right, xl0 + i, xr0 + i, y0, y1) for i in [0, n): one fraction per image, so the
+// rows are walked once with fixed weights. False when a column leaves its image.
+bool run_costs(const cv::Mat& left, const cv::Mat& right, float xl0, float xr0, int n, int y0, int y1, float* out) {
+  if (xl0 < 0.0f || xr0 < 0.0f) return false;
+  const int bl = static_cast<int>(xl0), br = static_cast<int>(xr0);
+  const float al = xl0 - static_cast<float>(bl), ar = xr0 - static_cast<float>(br);
+  if (bl + n > left.cols - 1 || br + n > right.cols - 1) {  // at the right border: one column at a time
+    for (int i = 0; i < n; ++i) {
+      out[i] = column_cost(left, right, xl0 + static_cast<float>(i), xr0 + static_cast<float>(i), y0, y1);
+      if (out[i] < 0.0f) return false;
+    }
+    return true;
+  }
+  std::fill(out, out + n, 0.0f);
+  for (int y = y0; y <= y1; ++y) {
+    const uint8_t* l = left.ptr<uint8_t>(y) + bl;
+    const uint8_t* r = right.ptr<uint8_t>(y) + br;
+    for (int i = 0; i < n; ++i) {
+      const float lv = (1.0f - al) * l[i] + al * l[i + 1];
+      const float rv = (1.0f - ar) * r[i] + ar * r[i + 1];
+      out[i] += std::fabs(lv - rv);
+    }
+  }
+  const float inv = 1.0f / static_cast<float>(y1 - y0 + 1);
+  for (int i = 0; i < n; ++i) out[i] *= inv;
+  return true;
+}
+
 }  // namespace
 
 EdgeRefineStats EdgeRefiner::refine(const cv::Mat& left, const cv::Mat& right, cv::Rect roi, const cv::Mat& disparity_px,
@@ -95,7 +123,9 @@ EdgeRefineStats EdgeRefiner::refine(const cv::Mat& left, const cv::Mat& right, c
       // The object's disparity: the run away from its ends (where SGBM fattened it), else the whole run.
       values_.clear();
       const bool long_run = xe - xs + 1 > 2 * band + 2;
-      for (int k = long_run ? xs + band : xs; k <= (long_run ? xe - band : xe); ++k) {
+      const int k0 = long_run ? xs + band : xs, k1 = long_run ? xe - band : xe;
+      const int stride = std::max(1, (k1 - k0 + 1) / 16);  // at most ~16 samples
+      for (int k = k0; k <= k1; k += stride) {
         if (disp[k] > 0.0f) values_.push_back(disp[k]);
       }
       const float d_f = median_in_place(values_);
@@ -127,19 +157,16 @@ EdgeRefineStats EdgeRefiner::refine(const cv::Mat& left, const cv::Mat& right, c
         const int n = hi - lo + 1;
         cost_fg_.resize(static_cast<std::size_t>(n));
         cost_bg_.resize(static_cast<std::size_t>(n));
-        bool ok = true;
+        // Object: left pixel x against right x - d_f. Background beside the right side: left x against right
+        // x - d_b. Beside the left side the left camera sees background the right one does not (the object hides
+        // it there), so the split is made in the right image, where the side lies at x - d_f: right x - d_f
+        // against left x - d_f + d_b.
+        const float x0 = static_cast<float>(roi.x + lo);
+        bool ok = run_costs(left, right, x0, x0 - d_f, n, y0, y1, cost_fg_.data()) &&
+                  (left_side ? run_costs(left, right, x0 - d_f + d_b, x0 - d_f, n, y0, y1, cost_bg_.data())
+                             : run_costs(left, right, x0, x0 - d_b, n, y0, y1, cost_bg_.data()));
         for (int i = 0; i < n && ok; ++i) {
-          // Object: left pixel x against right x - d_f. Background beside the right side: left x against right
-          // x - d_b. Beside the left side the left camera sees background the right one does not (the object hides
-          // it there), so the split is made in the right image, where the side lies at x - d_f: right x - d_f
-          // against left x - d_f + d_b.
-          const float img_x = static_cast<float>(roi.x + lo + i);
-          const float cf = column_cost(left, right, img_x, img_x - d_f, y0, y1);
-          const float cb = left_side ? column_cost(left, right, img_x - d_f + d_b, img_x - d_f, y0, y1)
-                                     : column_cost(left, right, img_x, img_x - d_b, y0, y1);
-          if (cf < 0.0f || cb < 0.0f) ok = false;
-          cost_fg_[static_cast<std::size_t>(i)] = cf;
-          cost_bg_[static_cast<std::size_t>(i)] = std::min(cb, static_cast<float>(c.occlusion_cost));
+          cost_bg_[static_cast<std::size_t>(i)] = std::min(cost_bg_[static_cast<std::size_t>(i)], static_cast<float>(c.occlusion_cost));
         }
         if (!ok) continue;
         // Split e in [0, n]: left side: [0, e) background, [e, n) object; right side: the other way round.

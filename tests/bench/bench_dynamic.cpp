@@ -280,6 +280,38 @@ void BM_DynamicPlanesAndBoundaries(benchmark::State& state) {
 }
 BENCHMARK(BM_DynamicPlanesAndBoundaries)->Unit(benchmark::kMillisecond);
 
+// The sides of an outline re-decided at full resolution (edge_refine.h): a 70 x 200 px board pasted at d = 30 px
+// (1.6 m, well in front of the room) into the first frame, at x 300, y 120; the ROI's SGBM disparity; the outline
+// given is the board's rectangle widened by 3 px at either side, as SGBM's 5x5 window fattens it. Counters: the
+// pixels the refinement removed (ideally 2 x 3 x 200 = 1200) and added (ideally 0).
+void BM_DynamicEdgeRefine(benchmark::State& state) {
+  const BenchData* d = data_or_skip(state);
+  if (!d) return;
+  agvslam::StereoFrame f = d->frames[0];
+  f.left = f.left.clone();
+  f.right = f.right.clone();
+  const cv::Rect board(300, 120, 70, 200);
+  paste_board(f, board_texture(board.size(), 120, 4), board.tl(), 30.0);
+  const cv::Rect roi(board.x - 30, board.y - 30, board.width + 60, board.height + 60);
+  cv::Mat disparity_px;
+  agvslam::stereo::StereoSgbm sgbm;
+  sgbm.compute_roi(f.left, f.right, roi, disparity_px);
+  cv::Mat outline(roi.size(), CV_8UC1, cv::Scalar(0)), mask;
+  outline(cv::Rect(board.x - 3 - roi.x, board.y - roi.y, board.width + 6, board.height)).setTo(255);
+  EdgeRefiner refiner;
+  EdgeRefineStats stats;
+  for (auto _ : state) {
+    outline.copyTo(mask);
+    stats = refiner.refine(f.left, f.right, roi, disparity_px, mask);
+    benchmark::DoNotOptimize(mask.data);
+  }
+  state.counters["sides"] = stats.sides;
+  state.counters["moved"] = stats.moved;
+  state.counters["removed_px"] = stats.pixels_removed;
+  state.counters["added_px"] = stats.pixels_added;
+}
+BENCHMARK(BM_DynamicEdgeRefine)->Unit(benchmark::kMillisecond);
+
 // The whole detector, one new frame per iteration (the sequence repeats; a reset at the wrap keeps every
 // measured call a "consecutive frame" call).
 void run_detector(benchmark::State& state, const std::vector<agvslam::StereoFrame>& frames,
