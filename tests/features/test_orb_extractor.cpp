@@ -336,7 +336,7 @@ TEST(OrbExtractor, NoKeypointInsideTheDilatedDynamicMask) {
   cv::circle(mask, cv::Point(620, 300), 45, cv::Scalar(255), cv::FILLED);
   mask.at<uint8_t>(200, 100) = 255;  // a single pixel
   OrbExtractorConfig c;
-  expect_mask_respected(img, mask, c, "dilation 5");
+  expect_mask_respected(img, mask, c, "default dilation");
   c.mask_dilation_px = 0;
   expect_mask_respected(img, mask, c, "dilation 0");
   c.mask_dilation_px = 12;

@@ -36,7 +36,7 @@ struct OrbExtractorConfig {
   int n_levels = 8;
   int ini_fast_threshold = 20;   // FAST threshold for the first pass
   int min_fast_threshold = 7;    // retry in cells where the first pass found no corner
-  int mask_dilation_px = 5;      // the dynamic mask grows by this (level-0 px) before it excludes keypoints
+  int mask_dilation_px = 8;      // the dynamic mask grows by this (level-0 px) before it excludes keypoints
   int cell_size_px = 30;         // side of the FAST cells whose emptiness triggers the retry (ORB-SLAM2's W = 30)
   LevelAllocation level_allocation = LevelAllocation::kArea;
 
