@@ -175,7 +175,7 @@ EdgeRefineStats EdgeRefiner::refine(const cv::Mat& left, const cv::Mat& right, c
         double total = 0.0;
         for (int i = 0; i < n; ++i) total += second[static_cast<std::size_t>(i)];
         const int e0 = (left_side ? xs : xe + 1) - lo;  // the split as it is
-        double best = total, at_e0 = total;
+        double best = total, at_e0 = total;  // split 0 (for e0 = 0 the split as it is)
         int best_e = 0;
         for (int e = 1; e <= n; ++e) {
           total += first[static_cast<std::size_t>(e - 1)] - second[static_cast<std::size_t>(e - 1)];
@@ -185,11 +185,6 @@ EdgeRefineStats EdgeRefiner::refine(const cv::Mat& left, const cv::Mat& right, c
             best_e = e;
           }
         }
-        if (e0 == 0) at_e0 = [&] {
-          double t = 0.0;
-          for (int i = 0; i < n; ++i) t += second[static_cast<std::size_t>(i)];
-          return t;
-        }();
         if (best_e == e0 || at_e0 - best < c.min_gain * std::abs(best_e - e0)) continue;
         ++stats.moved;
         for (int i = 0; i < n; ++i) {

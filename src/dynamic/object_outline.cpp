@@ -126,6 +126,7 @@ OutlineStats ObjectOutliner::outline(const cv::Mat& disparity_px, cv::Point orig
   }
 
   // Breadth-first from all seeds at once. The queue holds (y << 16) | x (no division per pixel).
+  CV_Assert(w < (1 << 16) && h < (1 << 15));
   for (int& e : queue_) e = ((e / w) << 16) | (e % w);
   for (std::size_t head = 0; head < queue_.size(); ++head) {
     const int px = queue_[head] & 0xffff, py = queue_[head] >> 16;
