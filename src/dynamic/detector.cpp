@@ -1,4 +1,5 @@
 #include "agvslam/dynamic/detector.h"
+#include "agvslam/dynamic/median.h"
 
 #include <algorithm>
 #include <chrono>
@@ -14,11 +15,7 @@ namespace agvslam::dynamic {
 namespace {
 using Clock = std::chrono::steady_clock;
 // Median of v (reordered); -1 for an empty vector.
-double median_of(std::vector<float>& v) {
-  if (v.empty()) return -1;
-  std::nth_element(v.begin(), v.begin() + static_cast<std::ptrdiff_t>(v.size() / 2), v.end());
-  return v[v.size() / 2];
-}
+double median_of(std::vector<float>& v) { return median_in_place(v, -1.0f); }
 double ms_since(Clock::time_point t0) {
   return std::chrono::duration<double, std::milli>(Clock::now() - t0).count();
 }

@@ -5,6 +5,7 @@
 #include <cstdio>
 
 #include "agvslam/core/error.h"
+#include "agvslam/dynamic/median.h"
 
 namespace agvslam::dynamic {
 
@@ -35,13 +36,6 @@ std::string EdgeRefineConfig::describe() const {
 EdgeRefiner::EdgeRefiner(const EdgeRefineConfig& config) : config_(config) { config_.validate("EdgeRefineConfig"); }
 
 namespace {
-
-float median_in_place(std::vector<float>& v) {
-  if (v.empty()) return 0.0f;
-  const auto mid = v.begin() + static_cast<std::ptrdiff_t>(v.size() / 2);
-  std::nth_element(v.begin(), mid, v.end());
-  return *mid;
-}
 
 // Linear interpolation of row `row` at column x (0 <= x <= cols - 1).
 inline float sample(const uint8_t* row, int cols, float x) {
@@ -128,7 +122,7 @@ EdgeRefineStats EdgeRefiner::refine(const cv::Mat& left, const cv::Mat& right, c
       for (int k = k0; k <= k1; k += stride) {
         if (disp[k] > 0.0f) values_.push_back(disp[k]);
       }
-      const float d_f = median_in_place(values_);
+      const float d_f = median_in_place(values_, 0.0f);
       const int mid = (xs + xe) / 2;
       for (int side = 0; side < 2 && d_f > 0.0f; ++side) {
         const bool left_side = side == 0;
@@ -152,7 +146,7 @@ EdgeRefineStats EdgeRefiner::refine(const cv::Mat& left, const cv::Mat& right, c
           if (!row_[static_cast<std::size_t>(k)] && disp[k] > 0.0f) values_.push_back(disp[k]);
         }
         if (values_.empty()) continue;
-        const float d_b = median_in_place(values_);
+        const float d_b = median_in_place(values_, 0.0f);
         if (d_f - d_b < c.min_disparity_gap_px) continue;
         const int n = hi - lo + 1;
         cost_fg_.resize(static_cast<std::size_t>(n));

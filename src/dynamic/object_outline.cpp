@@ -6,6 +6,7 @@
 #include <opencv2/imgproc.hpp>
 
 #include "agvslam/core/error.h"
+#include "agvslam/dynamic/median.h"
 
 namespace agvslam::dynamic {
 
@@ -78,6 +79,7 @@ OutlineStats ObjectOutliner::outline(const cv::Mat& disparity_px, cv::Point orig
   mask.create(disparity_px.size(), CV_8UC1);
   mask.setTo(0);
   if (w == 0 || h == 0 || !(bf_px_m > 0)) return stats;
+  CV_Assert(w < (1 << 16) && h < (1 << 15));  // the flood's queue packs (y << 16) | x
   const std::size_t n = static_cast<std::size_t>(w) * static_cast<std::size_t>(h);
   label_.assign(n, 0);
   seeds_.clear();
@@ -116,7 +118,7 @@ OutlineStats ObjectOutliner::outline(const cv::Mat& disparity_px, cv::Point orig
     seed_of_[static_cast<std::size_t>(best)] = static_cast<int32_t>(seeds_.size());
     seeds_.push_back(s);
     label_[static_cast<std::size_t>(best)] = label;
-    queue_.push_back(best);
+    queue_.push_back(((best / w) << 16) | (best % w));  // the flood's queue holds (y << 16) | x
     return true;
   };
   for (std::size_t i = 0; i < points_px.size(); ++i) stats.object_seeds += add_seed(points_px[i], point_disparity_px[i], 1) ? 1 : 0;
@@ -126,8 +128,6 @@ OutlineStats ObjectOutliner::outline(const cv::Mat& disparity_px, cv::Point orig
   }
 
   // Breadth-first from all seeds at once. The queue holds (y << 16) | x (no division per pixel).
-  CV_Assert(w < (1 << 16) && h < (1 << 15));
-  for (int& e : queue_) e = ((e / w) << 16) | (e % w);
   for (std::size_t head = 0; head < queue_.size(); ++head) {
     const int px = queue_[head] & 0xffff, py = queue_[head] >> 16;
     const std::size_t p = static_cast<std::size_t>(py) * static_cast<std::size_t>(w) + static_cast<std::size_t>(px);
@@ -206,28 +206,25 @@ OutlineStats ObjectOutliner::outline(const cv::Mat& disparity_px, cv::Point orig
   }
   stats.object_pixels = cv::countNonZero(mask);
   // Median disparity of the outline's pixels (0 without any). SGBM's disparities are multiples of 1/16 px: counted
-  // in 1/16 px bins, the median is exact without sorting (values off that grid fall back to a selection).
-  disparities_.clear();
+  // in 1/16 px bins, the median is exact without sorting (values off that grid: a selection over a second pass).
   constexpr int kBins = 16 * 1024;
   disparity_bins_.assign(kBins, 0);
   bool on_grid = true;
-  for (int y = 0; y < h; ++y) {
+  std::size_t valid = 0;
+  for (int y = 0; y < h && on_grid; ++y) {
     const uint8_t* m = mask.ptr<uint8_t>(y);
     const float* d = disparity_px.ptr<float>(y);
     for (int x = 0; x < w; ++x) {
       if (!m[x] || !(d[x] > 0)) continue;
-      disparities_.push_back(d[x]);
       const float scaled = d[x] * 16.0f;
       const int bin = static_cast<int>(scaled);
-      if (bin >= kBins || static_cast<float>(bin) != scaled) {
-        on_grid = false;
-      } else {
-        ++disparity_bins_[static_cast<std::size_t>(bin)];
-      }
+      on_grid = on_grid && bin < kBins && static_cast<float>(bin) == scaled;
+      if (on_grid) ++disparity_bins_[static_cast<std::size_t>(bin)];
+      ++valid;
     }
   }
-  if (!disparities_.empty() && on_grid) {
-    const std::size_t rank = disparities_.size() / 2;  // the element nth_element would put at the middle
+  if (on_grid && valid > 0) {
+    const std::size_t rank = valid / 2;  // the element a selection would put at the middle
     std::size_t below = 0;
     for (int b = 0; b < kBins; ++b) {
       below += static_cast<std::size_t>(disparity_bins_[static_cast<std::size_t>(b)]);
@@ -236,10 +233,16 @@ OutlineStats ObjectOutliner::outline(const cv::Mat& disparity_px, cv::Point orig
         break;
       }
     }
-  } else if (!disparities_.empty()) {
-    auto mid = disparities_.begin() + static_cast<std::ptrdiff_t>(disparities_.size() / 2);
-    std::nth_element(disparities_.begin(), mid, disparities_.end());
-    stats.median_disparity_px = *mid;
+  } else if (!on_grid) {
+    disparities_.clear();
+    for (int y = 0; y < h; ++y) {
+      const uint8_t* m = mask.ptr<uint8_t>(y);
+      const float* d = disparity_px.ptr<float>(y);
+      for (int x = 0; x < w; ++x) {
+        if (m[x] && d[x] > 0) disparities_.push_back(d[x]);
+      }
+    }
+    stats.median_disparity_px = median_in_place(disparities_, 0.0f);
   }
   return stats;
 }
