@@ -127,27 +127,41 @@ OutlineStats ObjectOutliner::outline(const cv::Mat& disparity_px, cv::Point orig
     for (std::size_t i = 0; i < static_px.size(); ++i) stats.static_seeds += add_seed(static_px[i], static_disparity_px[i], 2) ? 1 : 0;
   }
 
-  // Breadth-first from all seeds at once. The queue holds (y << 16) | x (no division per pixel).
+  // Breadth-first from all seeds at once. The queue holds (y << 16) | x (no division per pixel). The floor test
+  // uses the plane's column and row terms, computed once per ROI (the same sums as disparity_at, in its order).
+  if (use_ground) {
+    ground_x_.resize(static_cast<std::size_t>(w));
+    ground_y_.resize(static_cast<std::size_t>(h));
+    for (int x = 0; x < w; ++x) ground_x_[static_cast<std::size_t>(x)] = ground->a * static_cast<double>(x + origin.x);
+    for (int y = 0; y < h; ++y) ground_y_[static_cast<std::size_t>(y)] = ground->b * static_cast<double>(y + origin.y);
+  }
+  const double ground_c = use_ground ? ground->c : 0.0;
+  const float* disparity = disparity_px.ptr<float>(0);
+  const std::size_t row_stride = disparity_px.step1();
   for (std::size_t head = 0; head < queue_.size(); ++head) {
     const int px = queue_[head] & 0xffff, py = queue_[head] >> 16;
     const std::size_t p = static_cast<std::size_t>(py) * static_cast<std::size_t>(w) + static_cast<std::size_t>(px);
-    const float dp = disparity_px.ptr<float>(py)[px];
+    const float* drow = disparity + static_cast<std::size_t>(py) * row_stride;
+    const float dp = drow[px];
     const int32_t seed = seed_of_[p];
     const Seed& s = seeds_[static_cast<std::size_t>(seed)];
     const uint8_t lab = label_[p];
     const float step = static_cast<float>(c.step_tolerance_px + c.step_tolerance_rel * dp);
-    const int nx[4] = {px - 1, px + 1, px, px};
-    const int ny[4] = {py, py, py - 1, py + 1};
-    for (int k = 0; k < 4; ++k) {
-      if (nx[k] < 0 || ny[k] < 0 || nx[k] >= w || ny[k] >= h) continue;
-      const std::size_t q = static_cast<std::size_t>(ny[k]) * static_cast<std::size_t>(w) + static_cast<std::size_t>(nx[k]);
-      if (label_[q] != 0) continue;
-      const float dq = disparity_px.ptr<float>(ny[k])[nx[k]];
-      if (!(dq > 0) || std::abs(dq - dp) > step || dq < s.lo || dq > s.hi || is_floor(nx[k], ny[k], dq)) continue;
+    auto visit = [&](int qx, int qy, std::size_t q, float dq) {
+      if (label_[q] != 0) return;
+      if (!(dq > 0) || std::abs(dq - dp) > step || dq < s.lo || dq > s.hi) return;
+      if (use_ground) {
+        const double dg = ground_x_[static_cast<std::size_t>(qx)] + ground_y_[static_cast<std::size_t>(qy)] + ground_c;
+        if (dg > 0 && std::abs(dq - dg) <= c.ground_tolerance_px + c.ground_tolerance_rel * dg) return;
+      }
       label_[q] = lab;
       seed_of_[q] = seed;
-      queue_.push_back((ny[k] << 16) | nx[k]);
-    }
+      queue_.push_back((qy << 16) | qx);
+    };
+    if (px > 0) visit(px - 1, py, p - 1, drow[px - 1]);
+    if (px + 1 < w) visit(px + 1, py, p + 1, drow[px + 1]);
+    if (py > 0) visit(px, py - 1, p - static_cast<std::size_t>(w), drow[static_cast<std::ptrdiff_t>(px) - static_cast<std::ptrdiff_t>(row_stride)]);
+    if (py + 1 < h) visit(px, py + 1, p + static_cast<std::size_t>(w), drow[static_cast<std::size_t>(px) + row_stride]);
   }
   for (int y = 0; y < h; ++y) {
     uint8_t* m = mask.ptr<uint8_t>(y);

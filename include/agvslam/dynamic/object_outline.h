@@ -114,6 +114,7 @@ class ObjectOutliner {
   OutlineConfig config_;
   std::vector<int> queue_;
   std::vector<uint8_t> label_;     // 0 unvisited, 1 object, 2 static
+  std::vector<double> ground_x_, ground_y_;  // the floor plane's column and row terms over the ROI
   std::vector<int32_t> seed_of_;   // per claimed pixel: its seed
   std::vector<Seed> seeds_;
   std::vector<uint8_t> fill_;
