@@ -249,9 +249,11 @@ std::vector<std::pair<std::string, double>> stage_values(const dyn::StageTimings
 // it, how much of it the ROIs and the mask cover, and the IoU of the detection matched to it (0 = missed). This
 // tells at which stage an object was lost (no dynamic points, no ROI, or a poor outline).
 // gt_instances (may be empty): each pixel's object id; with it, an object's pixels are its own ones only.
+// gt_disparity_px (may be empty, the simulator's disp_0/): with it, each object's distance (bf over the median
+// ground-truth disparity of its own pixels).
 nlohmann::json object_diagnostics(const std::vector<agvslam::io::SceneObject>* objects, const cv::Mat& gt_mask,
-                                  const cv::Mat& gt_instances, const dyn::DetectorResult& r,
-                                  const eval::FrameDetectionScore& f) {
+                                  const cv::Mat& gt_instances, const cv::Mat& gt_disparity_px, double bf_px_m,
+                                  const dyn::DetectorResult& r, const eval::FrameDetectionScore& f) {
   nlohmann::json out = nlohmann::json::array();
   if (objects == nullptr) return out;
   const cv::Rect frame_rect(cv::Point(0, 0), gt_mask.size());
@@ -259,12 +261,15 @@ nlohmann::json object_diagnostics(const std::vector<agvslam::io::SceneObject>* o
     const cv::Rect box = obj.box & frame_rect;
     int pixels = 0, in_mask = 0, in_roi = 0, tracked = 0, dynamic = 0;
     auto own = [&](int x, int y) { return gt_instances.empty() || gt_instances.at<uint8_t>(y, x) == obj.id; };
+    std::vector<float> disparities;
     for (int y = box.y; y < box.br().y; ++y) {
       const uint8_t* g = gt_mask.ptr<uint8_t>(y);
       const uint8_t* d = r.mask.image.ptr<uint8_t>(y);
+      const float* gd = gt_disparity_px.empty() ? nullptr : gt_disparity_px.ptr<float>(y);
       for (int x = box.x; x < box.br().x; ++x) {
         if (!g[x] || !own(x, y)) continue;
         ++pixels;
+        if (gd != nullptr && gd[x] > 0) disparities.push_back(gd[x]);
         in_mask += d[x] ? 1 : 0;
         for (const auto& roi : r.rois) {
           if (roi.roi.contains(cv::Point(x, y))) {
@@ -285,19 +290,29 @@ nlohmann::json object_diagnostics(const std::vector<agvslam::io::SceneObject>* o
     for (const auto& d : f.detections) {
       if (d.matched_object_id == obj.id) iou = d.iou;
     }
+    double distance_m = -1;  // unknown
+    if (!disparities.empty() && bf_px_m > 0) {
+      const auto mid = disparities.begin() + static_cast<std::ptrdiff_t>(disparities.size() / 2);
+      std::nth_element(disparities.begin(), mid, disparities.end());
+      distance_m = bf_px_m / static_cast<double>(*mid);
+    }
     out.push_back({{"id", obj.id}, {"class", obj.object_class}, {"moving", obj.moving}, {"pixels", pixels},
                    {"in_mask", in_mask}, {"in_roi", in_roi}, {"tracked_points", tracked}, {"dynamic_points", dynamic},
-                   {"iou", iou}});
+                   {"iou", iou}, {"distance_m", distance_m}});
   }
   return out;
 }
 
-// Recall by the objects' visible size and by whether the image border cuts them (the detector's hard cases: far
-// people, people entering or leaving the view), from the per-object diagnostics.
+// Recall by the objects' visible size, by whether the image border cuts them (the detector's hard cases: far
+// people, people entering or leaving the view) and, where the dataset has ground-truth disparity, by distance,
+// from the per-object diagnostics.
 struct RecallBreakdown {
   static constexpr int kBins = 4;
   static constexpr int kUpper[kBins - 1] = {1500, 5000, 20000};  // visible moving pixels
+  static constexpr int kDistanceBins = 4;
+  static constexpr double kDistanceUpperM[kDistanceBins - 1] = {4.0, 7.0, 12.0};
   int found[kBins] = {}, total[kBins] = {};
+  int distance_found[kDistanceBins] = {}, distance_total[kDistanceBins] = {};
   int border_found = 0, border_total = 0, inner_found = 0, inner_total = 0;
   static constexpr int kBorderPx = 2;  // a box within this of the left/right edge is cut by it
 
@@ -316,6 +331,13 @@ struct RecallBreakdown {
       const bool cut = obj->box.x <= kBorderPx || obj->box.br().x >= size.width - kBorderPx;
       (cut ? border_total : inner_total) += 1;
       (cut ? border_found : inner_found) += hit;
+      const double distance_m = d.value("distance_m", -1.0);
+      if (distance_m > 0) {
+        int k = 0;
+        while (k < kDistanceBins - 1 && distance_m >= kDistanceUpperM[k]) ++k;
+        ++distance_total[k];
+        distance_found[k] += hit;
+      }
     }
   }
   static std::string ratio(int f, int t) {
@@ -328,7 +350,12 @@ struct RecallBreakdown {
     return "recall by visible size: <1500 px " + ratio(found[0], total[0]) + ", 1500-5000 px " + ratio(found[1], total[1]) +
            ", 5000-20000 px " + ratio(found[2], total[2]) + ", >= 20000 px " + ratio(found[3], total[3]) +
            "; cut by the left/right image border " + ratio(border_found, border_total) + ", inside the image " +
-           ratio(inner_found, inner_total);
+           ratio(inner_found, inner_total) +
+           (distance_total[0] + distance_total[1] + distance_total[2] + distance_total[3] == 0
+                ? std::string()
+                : "; by distance: < 4 m " + ratio(distance_found[0], distance_total[0]) + ", 4-7 m " +
+                      ratio(distance_found[1], distance_total[1]) + ", 7-12 m " + ratio(distance_found[2], distance_total[2]) +
+                      ", >= 12 m " + ratio(distance_found[3], distance_total[3]));
   }
   nlohmann::json to_json() const {
     nlohmann::json j;
@@ -336,6 +363,10 @@ struct RecallBreakdown {
     for (int b = 0; b < kBins; ++b) j["size_" + std::string(names[b])] = {{"found", found[b]}, {"objects", total[b]}};
     j["border"] = {{"found", border_found}, {"objects", border_total}};
     j["inside"] = {{"found", inner_found}, {"objects", inner_total}};
+    const char* distance_names[kDistanceBins] = {"lt4m", "4_7m", "7_12m", "ge12m"};
+    for (int b = 0; b < kDistanceBins; ++b) {
+      j["distance_" + std::string(distance_names[b])] = {{"found", distance_found[b]}, {"objects", distance_total[b]}};
+    }
     return j;
   }
 };
@@ -424,10 +455,11 @@ int run(const Options& o) {
     detector.detect(frame, result);
     const double detect_cpu_ms = thread_cpu_ms() - cpu_before_ms;
     write_png((out / "mask" / frame_name(i)).string(), result.mask.image);
-    cv::Mat gt_mask, gt_instances;
+    cv::Mat gt_mask, gt_instances, gt_disparity;
     if (has_gt_masks) {
       gt_mask = dataset->ground_truth_mask(i);
       gt_instances = dataset->ground_truth_instances(i);  // empty without instance_0/
+      gt_disparity = dataset->ground_truth_disparity_px(i);  // empty without disp_0/
     }
     nlohmann::json jf;
     jf["frame"] = i;
@@ -514,7 +546,8 @@ int run(const Options& o) {
         jf["fp"] = f.false_positives;
         jf["fn"] = f.false_negatives;
         jf["iou"] = f.matched_iou;
-        jf["objects"] = object_diagnostics(it == objects.end() ? nullptr : &it->second, gt_mask, gt_instances, result, f);
+        jf["objects"] = object_diagnostics(it == objects.end() ? nullptr : &it->second, gt_mask, gt_instances, gt_disparity,
+                                           dataset->calibration().bf(), result, f);
         if (it != objects.end()) breakdown.add(it->second, jf["objects"], gt_mask.size(), scoring);
         jf["detections"] = detection_diagnostics(f, result.mask.instances, gt_mask);
       }

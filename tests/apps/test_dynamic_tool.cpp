@@ -1,11 +1,15 @@
 // Runs agvslam-dynamic on a short simulated sequence (written by agvslam-sim) and on the real KITTI 06 excerpt.
 #include <gtest/gtest.h>
 
+#include <algorithm>
+#include <cstdio>
 #include <filesystem>
 #include <fstream>
 #include <nlohmann/json.hpp>
 #include <opencv2/imgcodecs.hpp>
+#include <iterator>
 #include <regex>
+#include <vector>
 
 #include "common/test_data.h"
 
@@ -66,6 +70,55 @@ TEST(DynamicTool, WritesMasksOverlaysScoresAndJson) {
   EXPECT_EQ(j["per_frame"].size(), 40u);
   EXPECT_TRUE(j["timings"].contains("total"));
   EXPECT_GT(j["timings"]["total"]["median_ms"].get<double>(), 0.0);
+
+  // Each moving object's distance: bf over the median ground-truth disparity of its own pixels (disp_0/,
+  // instance_0/, mask_0/), recomputed here for every scored object; the distance bins count every object.
+  std::string calib_text;
+  {
+    std::ifstream cf(data + "/calib.txt");
+    calib_text.assign(std::istreambuf_iterator<char>(cf), std::istreambuf_iterator<char>());
+  }
+  std::smatch p1;
+  ASSERT_TRUE(std::regex_search(calib_text, p1, std::regex(R"(P1:\s+(\S+)\s+\S+\s+\S+\s+(\S+))"))) << calib_text;
+  const double bf = -std::stod(p1[2].str());
+  ASSERT_GT(bf, 0);
+  int checked = 0;
+  for (const auto& jf : j["per_frame"]) {
+    if (!jf.contains("objects")) continue;
+    char name[32];
+    std::snprintf(name, sizeof(name), "%06d.png", jf["frame"].get<int>());
+    const cv::Mat disp = cv::imread(data + "/disp_0/" + name, cv::IMREAD_UNCHANGED);
+    const cv::Mat inst = cv::imread(data + "/instance_0/" + name, cv::IMREAD_UNCHANGED);
+    const cv::Mat gt = cv::imread(data + "/mask_0/" + name, cv::IMREAD_UNCHANGED);
+    ASSERT_FALSE(disp.empty() || inst.empty() || gt.empty()) << name;
+    for (const auto& o : jf["objects"]) {
+      if (!o["moving"].get<bool>() || o["pixels"].get<int>() == 0) continue;
+      std::vector<float> d;
+      for (int y = 0; y < inst.rows; ++y) {
+        for (int x = 0; x < inst.cols; ++x) {
+          if (inst.at<uint8_t>(y, x) == o["id"].get<int>() && gt.at<uint8_t>(y, x) && disp.at<uint16_t>(y, x) > 0) {
+            d.push_back(disp.at<uint16_t>(y, x) / 256.0f);
+          }
+        }
+      }
+      ASSERT_FALSE(d.empty()) << name;
+      std::nth_element(d.begin(), d.begin() + static_cast<std::ptrdiff_t>(d.size() / 2), d.end());
+      EXPECT_NEAR(o["distance_m"].get<double>(), bf / d[d.size() / 2], 1e-6) << name;
+      EXPECT_GT(o["distance_m"].get<double>(), 0.5) << name;
+      EXPECT_LT(o["distance_m"].get<double>(), 60.0) << name;
+      ++checked;
+    }
+  }
+  EXPECT_GT(checked, 0);
+  const nlohmann::json& rb = j["recall_breakdown"];
+  int by_size = 0, by_distance = 0;
+  for (const char* k : {"size_lt1500", "size_1500_5000", "size_5000_20000", "size_ge20000"}) by_size += rb[k]["objects"].get<int>();
+  for (const char* k : {"distance_lt4m", "distance_4_7m", "distance_7_12m", "distance_ge12m"}) {
+    by_distance += rb[k]["objects"].get<int>();
+    EXPECT_LE(rb[k]["found"].get<int>(), rb[k]["objects"].get<int>()) << k;
+  }
+  EXPECT_GT(by_size, 0);
+  EXPECT_EQ(by_distance, by_size);
 }
 
 TEST(DynamicTool, BadInputNamesTheOptionOrFolder) {
