@@ -36,6 +36,7 @@
 
 #include "agvslam/core/error.h"
 #include "agvslam/dynamic/detector.h"
+#include "agvslam/dynamic/median.h"
 #include "agvslam/eval/detection_scoring.h"
 #include "agvslam/io/dataset.h"
 #include "agvslam/io/objects_io.h"
@@ -291,11 +292,7 @@ nlohmann::json object_diagnostics(const std::vector<agvslam::io::SceneObject>* o
       if (d.matched_object_id == obj.id) iou = d.iou;
     }
     double distance_m = -1;  // unknown
-    if (!disparities.empty() && bf_px_m > 0) {
-      const auto mid = disparities.begin() + static_cast<std::ptrdiff_t>(disparities.size() / 2);
-      std::nth_element(disparities.begin(), mid, disparities.end());
-      distance_m = bf_px_m / static_cast<double>(*mid);
-    }
+    if (!disparities.empty() && bf_px_m > 0) distance_m = bf_px_m / static_cast<double>(dyn::median_in_place(disparities, 0.0f));
     out.push_back({{"id", obj.id}, {"class", obj.object_class}, {"moving", obj.moving}, {"pixels", pixels},
                    {"in_mask", in_mask}, {"in_roi", in_roi}, {"tracked_points", tracked}, {"dynamic_points", dynamic},
                    {"iou", iou}, {"distance_m", distance_m}});

@@ -88,9 +88,17 @@ OutlineStats ObjectOutliner::outline(const cv::Mat& disparity_px, cv::Point orig
   const bool use_ground = ground != nullptr && ground->valid;
   const OutlineConfig& c = config_;
 
+  // The floor test, from the plane's column and row terms computed once per ROI (the same sums as disparity_at,
+  // in its order).
+  if (use_ground) {
+    ground_x_.resize(static_cast<std::size_t>(w));
+    ground_y_.resize(static_cast<std::size_t>(h));
+    for (int x = 0; x < w; ++x) ground_x_[static_cast<std::size_t>(x)] = ground->a * static_cast<double>(x + origin.x);
+    for (int y = 0; y < h; ++y) ground_y_[static_cast<std::size_t>(y)] = ground->b * static_cast<double>(y + origin.y);
+  }
   auto is_floor = [&](int x, int y, float d) {
     if (!use_ground) return false;
-    const double dg = ground->disparity_at(x + origin.x, y + origin.y);
+    const double dg = ground_x_[static_cast<std::size_t>(x)] + ground_y_[static_cast<std::size_t>(y)] + ground->c;
     return dg > 0 && std::abs(d - dg) <= c.ground_tolerance_px + c.ground_tolerance_rel * dg;
   };
   auto add_seed = [&](const cv::Point2f& p, float d, uint8_t label) {
@@ -127,15 +135,7 @@ OutlineStats ObjectOutliner::outline(const cv::Mat& disparity_px, cv::Point orig
     for (std::size_t i = 0; i < static_px.size(); ++i) stats.static_seeds += add_seed(static_px[i], static_disparity_px[i], 2) ? 1 : 0;
   }
 
-  // Breadth-first from all seeds at once. The queue holds (y << 16) | x (no division per pixel). The floor test
-  // uses the plane's column and row terms, computed once per ROI (the same sums as disparity_at, in its order).
-  if (use_ground) {
-    ground_x_.resize(static_cast<std::size_t>(w));
-    ground_y_.resize(static_cast<std::size_t>(h));
-    for (int x = 0; x < w; ++x) ground_x_[static_cast<std::size_t>(x)] = ground->a * static_cast<double>(x + origin.x);
-    for (int y = 0; y < h; ++y) ground_y_[static_cast<std::size_t>(y)] = ground->b * static_cast<double>(y + origin.y);
-  }
-  const double ground_c = use_ground ? ground->c : 0.0;
+  // Breadth-first from all seeds at once. The queue holds (y << 16) | x (no division per pixel).
   const float* disparity = disparity_px.ptr<float>(0);
   const std::size_t row_stride = disparity_px.step1();
   for (std::size_t head = 0; head < queue_.size(); ++head) {
@@ -149,11 +149,7 @@ OutlineStats ObjectOutliner::outline(const cv::Mat& disparity_px, cv::Point orig
     const float step = static_cast<float>(c.step_tolerance_px + c.step_tolerance_rel * dp);
     auto visit = [&](int qx, int qy, std::size_t q, float dq) {
       if (label_[q] != 0) return;
-      if (!(dq > 0) || std::abs(dq - dp) > step || dq < s.lo || dq > s.hi) return;
-      if (use_ground) {
-        const double dg = ground_x_[static_cast<std::size_t>(qx)] + ground_y_[static_cast<std::size_t>(qy)] + ground_c;
-        if (dg > 0 && std::abs(dq - dg) <= c.ground_tolerance_px + c.ground_tolerance_rel * dg) return;
-      }
+      if (!(dq > 0) || std::abs(dq - dp) > step || dq < s.lo || dq > s.hi || is_floor(qx, qy, dq)) return;
       label_[q] = lab;
       seed_of_[q] = seed;
       queue_.push_back((qy << 16) | qx);

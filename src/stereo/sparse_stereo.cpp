@@ -122,22 +122,20 @@ SparseStereoMatcher::Search SparseStereoMatcher::search(const cv::Mat& ref, cons
     const uint8_t* row = other.ptr<uint8_t>(y - r + j) + strip_x0;
     for (int k = 0; k < strip_width; ++k) col_sums_[static_cast<std::size_t>(k)] += row[k];
   }
-  win_means_.resize(static_cast<std::size_t>(m));
-  win_sums_.resize(static_cast<std::size_t>(m));
-  int32_t running = 0;
-  for (int k = 0; k < side; ++k) running += col_sums_[static_cast<std::size_t>(k)];
-  win_sums_[0] = running;
-  for (int e = 1; e < m; ++e) {
-    running += col_sums_[static_cast<std::size_t>(e + side - 1)] - col_sums_[static_cast<std::size_t>(e - 1)];
-    win_sums_[static_cast<std::size_t>(e)] = running;
-  }
   // (4 sum + n/2) / n rounded down, without a division per candidate: the numerator is below 2^19 and a quotient
   // that is not whole lies at least 1/n from the next integer, so adding half a unit and multiplying by the
   // float reciprocal (relative error < 1e-7) gives the same integer.
   const float inv_n = 1.0f / static_cast<float>(n);
-  for (int e = 0; e < m; ++e) {
-    const float numerator = static_cast<float>(kQuarter * win_sums_[static_cast<std::size_t>(e)] + n / 2) + 0.5f;
-    win_means_[static_cast<std::size_t>(e)] = static_cast<int16_t>(numerator * inv_n);
+  auto window_mean = [&](int32_t sum) {
+    return static_cast<int16_t>((static_cast<float>(kQuarter * sum + n / 2) + 0.5f) * inv_n);
+  };
+  win_means_.resize(static_cast<std::size_t>(m));
+  int32_t running = 0;
+  for (int k = 0; k < side; ++k) running += col_sums_[static_cast<std::size_t>(k)];
+  win_means_[0] = window_mean(running);
+  for (int e = 1; e < m; ++e) {
+    running += col_sums_[static_cast<std::size_t>(e + side - 1)] - col_sums_[static_cast<std::size_t>(e - 1)];
+    win_means_[static_cast<std::size_t>(e)] = window_mean(running);
   }
 
   costs_.assign(static_cast<std::size_t>(m), 0);

@@ -60,7 +60,6 @@ class SparseStereoMatcher {
   std::vector<int16_t> ref_zero_mean_;  // 4 I - 4 mean(I) of the reference window (quarter grey levels)
   std::vector<int32_t> col_sums_;       // column sums of the candidate strip
   std::vector<int16_t> win_means_;      // 4 mean(I) of each candidate window
-  std::vector<int32_t> win_sums_;       // sum(I) of each candidate window
   std::vector<int16_t> strip_scaled_;   // 4 I of one strip row
   std::vector<uint16_t> row_costs_;     // per candidate, one window row
   std::vector<int32_t> costs_;          // ZSAD cost per candidate column (quarter grey levels)
