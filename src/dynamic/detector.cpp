@@ -52,6 +52,12 @@ void DetectorOptions::validate(const std::string& source) const {
           "expected an integer in [1, 1000] frames");
   require(coast_min_tracks >= 1 && coast_min_tracks <= 1000, "coast_min_tracks", "expected an integer in [1, 1000]");
   require(coast_min_area_ratio >= 0 && coast_min_area_ratio <= 1, "coast_min_area_ratio", "expected a number in [0, 1]");
+  require(band_carry_max_frames >= 0 && band_carry_max_frames <= 100, "band_carry_max_frames",
+          "expected an integer in [0, 100] frames (0: off)");
+  require(band_carry_min_tracks >= 1 && band_carry_min_tracks <= 1000, "band_carry_min_tracks",
+          "expected an integer in [1, 1000]");
+  require(band_carry_min_dynamic >= 0 && band_carry_min_dynamic <= 1000, "band_carry_min_dynamic",
+          "expected an integer in [0, 1000]");
   require(confirm_min_box_iou >= 0 && confirm_min_box_iou <= 1, "confirm_min_box_iou",
           "expected a number in [0, 1] (0: off)");
   require(confirm_below_px >= 0, "confirm_below_px", "expected an integer >= 0 px (0: every object waits)");
@@ -77,14 +83,20 @@ std::string DetectorOptions::describe() const {
                   densify_max_points, densify_radius_px, densify_radius_disparity_factor, densify_min_distance_px,
                   densify_min_seeds, densify_extra_tracks, densify_keep_static ? "yes" : "no");
   }
-  char objects_text[200] = "off";
+  char objects_text[320] = "off";
   if (track_objects) {
+    char carry_text[120] = "off";
+    if (band_carry_max_frames > 0) {
+      std::snprintf(carry_text, sizeof(carry_text), "<= %d frames alone, >= %d tracks, >= %d dynamic",
+                    band_carry_max_frames, band_carry_min_tracks, band_carry_min_dynamic);
+    }
     std::snprintf(objects_text, sizeof(objects_text),
                   "on (>= %d points continue one; after >= %d detections it coasts <= %d frames on >= %d tracks, "
-                  ">= %.2f of its area)",
-                  continue_min_points, coast_min_detections, coast_max_frames, coast_min_tracks, coast_min_area_ratio);
+                  ">= %.2f of its area; carried into the left band: %s)",
+                  continue_min_points, coast_min_detections, coast_max_frames, coast_min_tracks, coast_min_area_ratio,
+                  carry_text);
   }
-  char buf[1400];
+  char buf[1600];
   std::snprintf(buf, sizeof(buf),
                 "detector: epipolar test %s, depth test %s, disparity %s, <= %d ROIs searched up to max point "
                 "disparity + %.1f px at scale %.1f, %d row(s) per matched row for ROIs >= %d px (half scale above "
@@ -576,6 +588,8 @@ void DynamicDetector::detect(const StereoFrame& frame, DetectorResult& result) {
       coast_group_.resize(groups.size(), 1);
       for (std::size_t g = first_coasted; g < groups.size(); ++g) process_group(g);
     }
+    carried_.clear();
+    if (objects && opt.band_carry_max_frames > 0 && !objects_.empty()) carry_band_masks(result, next_instance);
     if (opt.mask_dilation_px > 0 && !result.mask.regions.empty()) {
       const int k = 2 * opt.mask_dilation_px + 1;
       cv::dilate(result.mask.instances, dilated_, cv::getStructuringElement(cv::MORPH_ELLIPSE, cv::Size(k, k)));
@@ -1049,6 +1063,99 @@ void DynamicDetector::add_coasting_groups(const DetectorResult& result, cv::Size
   }
 }
 
+void DynamicDetector::carry_band_masks(DetectorResult& result, int& next_instance) {
+  const DetectorOptions& opt = config_.detector;
+  cv::Mat& inst = result.mask.instances;
+  const std::size_t n = std::min(track_object_.size(), result.points.size());
+  for (const auto& [id, ob] : objects_) {
+    if (ob.carry_mask.empty() || ob.band_frames >= opt.band_carry_max_frames) continue;
+    // Its tracks held into this frame (in the band without disparity: their image motion alone).
+    coast_dx_.clear();
+    coast_dy_.clear();
+    int dynamic = 0;
+    for (std::size_t i = 0; i < n; ++i) {
+      const TrackedPoint& p = result.points[i];
+      if (track_object_[i] != id || !p.tracked) continue;
+      coast_dx_.push_back(p.cur_px.x - p.prev_px.x);
+      coast_dy_.push_back(p.cur_px.y - p.prev_px.y);
+      dynamic += p.dynamic ? 1 : 0;
+    }
+    if (static_cast<int>(coast_dx_.size()) < opt.band_carry_min_tracks || dynamic < opt.band_carry_min_dynamic) continue;
+    const cv::Point shift(cvRound(median_of(coast_dx_)), cvRound(median_of(coast_dy_)));
+    // The band without stereo at the object's depth (and the 2 px beside it where SGBM seldom gives a match).
+    const int band = std::min(inst.cols, static_cast<int>(std::ceil(ob.median_disparity_px)) + 2);
+    const cv::Rect moved = ob.carry_rect + shift;
+    const cv::Rect area = moved & cv::Rect(0, 0, band, inst.rows);
+    if (area.empty()) continue;
+    // The instance of the region continuing the object in this frame, if any.
+    int instance = -1;
+    for (std::size_t k = 1; k < instance_object_.size(); ++k) {
+      if (instance_object_[k] == id) {
+        instance = static_cast<int>(k);
+        break;
+      }
+    }
+    // ... or, when none does, the region whose pixels its carried mask overlaps most beside the band (the same
+    // person continued by a region of another object, e.g. its torso where the legs were the object).
+    int carry_id = id;
+    if (instance < 0) {
+      const cv::Rect beside = moved & cv::Rect(band, 0, std::max(0, inst.cols - band), inst.rows);
+      overlap_count_.assign(256, 0);
+      int mask_beside = 0;
+      for (int y = beside.y; y < beside.br().y; ++y) {
+        const uint8_t* src = ob.carry_mask.ptr<uint8_t>(y - moved.y) - moved.x;
+        const uint8_t* dst = inst.ptr<uint8_t>(y);
+        for (int x = beside.x; x < beside.br().x; ++x) {
+          if (!src[x]) continue;
+          ++mask_beside;
+          ++overlap_count_[dst[x]];
+        }
+      }
+      int best = 0, best_count = 0;
+      for (int k = 1; k < 256; ++k) {
+        if (overlap_count_[static_cast<std::size_t>(k)] > best_count) {
+          best = k;
+          best_count = overlap_count_[static_cast<std::size_t>(k)];
+        }
+      }
+      if (best > 0 && 10 * best_count >= mask_beside && static_cast<std::size_t>(best) < instance_object_.size() &&
+          instance_object_[static_cast<std::size_t>(best)] >= 0) {
+        instance = best;
+        carry_id = instance_object_[static_cast<std::size_t>(best)];
+      }
+    }
+    int candidates = 0;
+    for (int y = area.y; y < area.br().y; ++y) {
+      const uint8_t* src = ob.carry_mask.ptr<uint8_t>(y - moved.y) - moved.x;
+      const uint8_t* dst = inst.ptr<uint8_t>(y);
+      for (int x = area.x; x < area.br().x; ++x) candidates += (src[x] && !dst[x]) ? 1 : 0;
+    }
+    const bool band_only = instance < 0;
+    if (candidates == 0 || (band_only && (candidates < config_.outline.min_pixels || next_instance > 255))) continue;
+    if (band_only) {
+      instance = next_instance++;
+      instance_object_.resize(static_cast<std::size_t>(std::min(next_instance, 256)), -1);
+      instance_object_[static_cast<std::size_t>(instance)] = id;
+    }
+    int x0 = area.br().x, y0 = area.br().y, x1 = -1, y1 = -1;
+    for (int y = area.y; y < area.br().y; ++y) {
+      const uint8_t* src = ob.carry_mask.ptr<uint8_t>(y - moved.y) - moved.x;
+      uint8_t* dst = inst.ptr<uint8_t>(y);
+      for (int x = area.x; x < area.br().x; ++x) {
+        if (!src[x] || dst[x]) continue;
+        dst[x] = static_cast<uint8_t>(instance);
+        x0 = std::min(x0, x);
+        x1 = std::max(x1, x);
+        y0 = std::min(y0, y);
+        y1 = std::max(y1, y);
+      }
+    }
+    const cv::Rect painted(x0, y0, x1 - x0 + 1, y1 - y0 + 1);
+    result.mask.regions.push_back(painted);
+    carried_.push_back({carry_id, instance, band_only, painted, candidates});
+  }
+}
+
 void DynamicDetector::update_objects(const DetectorResult& result) {
   next_objects_.clear();
   std::vector<uint8_t>& own = coast_own_;  // per entry of next_objects_: kept on its own evidence this frame
@@ -1069,6 +1176,26 @@ void DynamicDetector::update_objects(const DetectorResult& result) {
       own[static_cast<std::size_t>(it - next_objects_.begin())] |= seg.coasted ? 0 : 1;
     }
   }
+  // Objects carried into the left band: their band pixels belong to them; one no region continues is kept alone.
+  band_only_.assign(next_objects_.size(), 0);
+  for (const CarriedObject& c : carried_) {
+    auto it = std::find_if(next_objects_.begin(), next_objects_.end(), [&](const auto& e) { return e.first == c.id; });
+    if (it == next_objects_.end()) {
+      auto prev = std::lower_bound(objects_.begin(), objects_.end(), c.id, [](const auto& e, int id) { return e.first < id; });
+      if (prev == objects_.end() || prev->first != c.id) continue;
+      ObjectTrack ob;
+      ob.rect = c.rect;
+      ob.median_disparity_px = prev->second.median_disparity_px;
+      ob.pixels = c.pixels;
+      next_objects_.emplace_back(c.id, ob);
+      own.push_back(0);
+      band_only_.push_back(1);
+    } else {
+      it->second.rect |= c.rect;
+      it->second.pixels += c.pixels;
+    }
+  }
+  const DetectorOptions& opt = config_.detector;
   for (std::size_t k = 0; k < next_objects_.size(); ++k) {
     ObjectTrack& ob = next_objects_[k].second;
     auto prev = std::lower_bound(objects_.begin(), objects_.end(), next_objects_[k].first,
@@ -1076,6 +1203,18 @@ void DynamicDetector::update_objects(const DetectorResult& result) {
     const bool known = prev != objects_.end() && prev->first == next_objects_[k].first;
     ob.detections = (known ? prev->second.detections : 0) + own[k];
     ob.coasted = own[k] ? 0 : (known ? prev->second.coasted : 0) + 1;
+    ob.band_frames = band_only_[k] ? (known ? prev->second.band_frames : 0) + 1 : 0;
+    // Near the left band (it may reach it by the next frame): its pixels are kept for carrying.
+    if (opt.band_carry_max_frames > 0 && ob.rect.x < 2 * ob.median_disparity_px + 16) {
+      const cv::Rect r = ob.rect & cv::Rect(0, 0, result.mask.instances.cols, result.mask.instances.rows);
+      ob.carry_rect = r;
+      ob.carry_mask.create(r.size(), CV_8UC1);
+      ob.carry_mask.setTo(0);
+      for (std::size_t i = 1; i < instance_object_.size(); ++i) {
+        if (instance_object_[i] != next_objects_[k].first) continue;
+        ob.carry_mask.setTo(255, result.mask.instances(r) == static_cast<int>(i));
+      }
+    }
   }
   std::sort(next_objects_.begin(), next_objects_.end(), [](const auto& a, const auto& b) { return a.first < b.first; });
   std::swap(objects_, next_objects_);

@@ -215,7 +215,7 @@ DynamicDetectorConfig load_dynamic_config(const std::string& path) {
                              "densify_radius_disparity_factor", "densify_max_points", "densify_min_distance_px",
                              "densify_min_seeds", "densify_extra_tracks", "densify_keep_static",
                              "track_objects", "continue_min_points", "coast_max_frames", "coast_min_detections",
-                             "coast_min_tracks", "coast_min_area_ratio", "confirm_min_box_iou", "confirm_below_px",
+                             "coast_min_tracks", "coast_min_area_ratio", "band_carry_max_frames", "band_carry_min_tracks", "band_carry_min_dynamic", "confirm_min_box_iou", "confirm_below_px",
                              "pad_left_border", "roi_speckle_filter", "merge_stacked_regions"});
   in.read("detector", "use_epipolar_test", c.detector.use_epipolar_test, flag);
   in.read("detector", "use_depth_test", c.detector.use_depth_test, flag);
@@ -249,6 +249,9 @@ DynamicDetectorConfig load_dynamic_config(const std::string& path) {
   in.read("detector", "coast_min_detections", c.detector.coast_min_detections, "an integer (frames)");
   in.read("detector", "coast_min_tracks", c.detector.coast_min_tracks, integer);
   in.read("detector", "coast_min_area_ratio", c.detector.coast_min_area_ratio, num);
+  in.read("detector", "band_carry_max_frames", c.detector.band_carry_max_frames, "an integer (frames)");
+  in.read("detector", "band_carry_min_tracks", c.detector.band_carry_min_tracks, "an integer");
+  in.read("detector", "band_carry_min_dynamic", c.detector.band_carry_min_dynamic, "an integer");
   in.read("detector", "confirm_min_box_iou", c.detector.confirm_min_box_iou, num);
   in.read("detector", "confirm_below_px", c.detector.confirm_below_px, "an integer (px)");
   in.read("detector", "pad_left_border", c.detector.pad_left_border, flag);

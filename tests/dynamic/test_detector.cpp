@@ -362,6 +362,87 @@ TEST(DynamicDetector, BoxAtTheLeftBorderIsCompletedIntoTheUnmatchedBand) {
               with_band, gt_band, with_false, iou_with, iou_without);
 }
 
+// A 0.5 m wide box 2.5 m away (d = 22 px) moving sideways by `step_m` per frame (negative: to the left) in front of
+// the corridor's left wall, the camera driving on by 2 cm per frame; its left edge starts at image x = `x0_px`.
+// Returns each frame's result and ground truth.
+std::vector<DetectorResult> box_sideways_at_left_border(const DynamicDetectorConfig& config, double x0_px, double step_m,
+                                                        int frames, std::vector<cv::Mat>& gt_masks) {
+  CorridorScene scene;
+  const double z = 2.5;
+  scene.box.origin = {(x0_px - scene.camera.cx) * z / scene.camera.fx, -1.1, z};
+  scene.box.width_m = 0.5;
+  DynamicDetector detector(scene.calibration(), config);
+  std::vector<DetectorResult> results(static_cast<std::size_t>(frames));
+  gt_masks.clear();
+  for (int k = 0; k < frames; ++k) {
+    cv::Mat gt;
+    const StereoFrame f = scene.render_frame(camera_pose(0, 0, 0.02 * k), Eigen::Vector3d(step_m * k, 0, 0), true,
+                                             static_cast<std::size_t>(k), &gt);
+    detector.detect(f, results[static_cast<std::size_t>(k)]);
+    gt_masks.push_back(gt);
+  }
+  return results;
+}
+
+TEST(DynamicDetector, ABoxLeavingToTheLeftIsCarriedIntoTheUnmatchedBand) {
+  // The box moves left by 3 cm (~6 px) per frame from x = 60 until it is cut by the border: its pixels that enter
+  // the band x < d (no match in the right image) were outlined in earlier frames, and with detector.band_carry_*
+  // they are carried there with its tracks. Off, the band stays empty. Nothing of the wall behind it is carried.
+  DynamicDetectorConfig carried = per_frame();
+  ASSERT_GT(carried.detector.band_carry_max_frames, 0);  // on by default
+  DynamicDetectorConfig not_carried = per_frame();
+  not_carried.detector.band_carry_max_frames = 0;
+  constexpr int kFrames = 14;
+  std::vector<cv::Mat> gt;
+  const std::vector<DetectorResult> with = box_sideways_at_left_border(carried, 60, -0.03, kFrames, gt);
+  const std::vector<DetectorResult> without = box_sideways_at_left_border(not_carried, 60, -0.03, kFrames, gt);
+  const cv::Rect band(0, 0, 20, 480);
+  int gt_band = 0, with_band = 0, with_false = 0, without_band = 0, frames_in_band = 0;
+  double iou_with = 0, iou_without = 0;
+  for (int k = 2; k < kFrames; ++k) {
+    const std::size_t i = static_cast<std::size_t>(k);
+    const int g = cv::countNonZero(gt[i](band));
+    if (g < 20 * 100) continue;  // the box reaches well into the band
+    ++frames_in_band;
+    gt_band += g;
+    with_band += cv::countNonZero(with[i].mask.image(band) & gt[i](band));
+    with_false += cv::countNonZero(with[i].mask.image(band) & ~gt[i](band));
+    without_band += cv::countNonZero(without[i].mask.image(band));
+    iou_with += iou(with[i].mask.image, gt[i]);
+    iou_without += iou(without[i].mask.image, gt[i]);
+  }
+  ASSERT_GE(frames_in_band, 4);
+  EXPECT_GT(with_band, gt_band * 6 / 10) << summary(with.back());
+  EXPECT_LT(with_false, gt_band / 10) << summary(with.back());
+  EXPECT_LT(without_band, gt_band / 20) << summary(without.back());
+  EXPECT_GT(iou_with, iou_without + 0.05 * frames_in_band);
+  std::printf("box leaving to the left, %d frames in the band: %d / %d band px carried (%d false), mean IoU %.3f "
+              "carried, %.3f not\n",
+              frames_in_band, with_band, gt_band, with_false, iou_with / frames_in_band, iou_without / frames_in_band);
+}
+
+TEST(DynamicDetector, ABoxEnteringFromTheLeftCarriesNoWallIntoTheBand) {
+  // The same box entering (3 cm per frame to the right from x = -60; the camera's forward motion moves the left
+  // image border's content outwards by ~3 px per frame): only pixels the box's own outline held are carried, so
+  // the wall beside and behind it in the band stays unmasked.
+  std::vector<cv::Mat> gt;
+  const std::vector<DetectorResult> r = box_sideways_at_left_border(per_frame(), -60, 0.03, 14, gt);
+  const cv::Rect band(0, 0, 20, 480);
+  int band_true = 0, band_false = 0, band_gt = 0, false_px = 0, gt_px = 0;
+  for (std::size_t i = 2; i < r.size(); ++i) {
+    band_true += cv::countNonZero(r[i].mask.image(band) & gt[i](band));
+    band_false += cv::countNonZero(r[i].mask.image(band) & ~gt[i](band));
+    band_gt += cv::countNonZero(gt[i](band));
+    false_px += cv::countNonZero(r[i].mask.image & ~gt[i]);
+    gt_px += cv::countNonZero(gt[i]);
+  }
+  ASSERT_GT(band_gt, 20 * 150 * 8);
+  EXPECT_LT(band_false, band_gt / 50) << summary(r.back());
+  EXPECT_LT(false_px, gt_px / 20) << summary(r.back());
+  std::printf("box entering from the left: band %d / %d box px masked, %d wall px; %d false px of %d box px\n",
+              band_true, band_gt, band_false, false_px, gt_px);
+}
+
 TEST(DynamicDetector, OutlineCutByTheRoiSideIsWidened) {
   // A 1.2 m wide box 3 m away (~184 px) whose left half has a faint texture: no FAST corner there, so the ROI
   // (the tracks' box plus its margin) ends ~25 px left of the textured half, but SGBM matches the faint half.

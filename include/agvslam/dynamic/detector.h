@@ -138,6 +138,16 @@ struct DetectorOptions {
   int coast_min_tracks = 3;
   double coast_min_area_ratio = 0.5;  // a coasted outline smaller than this part of the object's last one is a
                                       // fragment of it: dropped
+  // Beyond the paper: the band x < d at the left border has no stereo match (the right camera does not see it), so
+  // no outline reaches there. An object leaving the view to the left moves its pixels into that band, where they
+  // were outlined in earlier frames: its last mask (band part included) is carried with the median motion of its
+  // tracks (the left image alone), and its pixels that fall into the band join it, or, when no region of this frame
+  // continues the object, are its region, for at most band_carry_max_frames frames in a row without a region
+  // (0 = off). The object must still move: at least band_carry_min_tracks of its tracks held, band_carry_min_dynamic
+  // of them dynamic. An object entering from the left has no earlier pixels there: nothing is carried.
+  int band_carry_max_frames = 6;
+  int band_carry_min_tracks = 3;
+  int band_carry_min_dynamic = 2;
   // Beyond the paper: an object (an instance of the mask) is reported only when its bounding box overlaps, by at
   // least this IoU, one found in the previous frame (a moving object persists; a false region seldom does). The
   // first frame of each object is therefore not reported; unreported objects still confirm the next frame's
@@ -284,6 +294,8 @@ class DynamicDetector {
   // Coasting (detector.coast_*): a group per object of the last frame that no region of this frame continues and
   // that still has coast_min_tracks tracks at its depth (seeds appended to dyn_pts_).
   void add_coasting_groups(const DetectorResult& result, cv::Size image_size, std::vector<DynamicGroup>& groups);
+  // Objects of the last frame near the left border: their pixels carried into the band x < d (band_carry_*).
+  void carry_band_masks(DetectorResult& result, int& next_instance);
   // The objects with regions in this frame become objects_.
   void update_objects(const DetectorResult& result);
   // SGBM of one ROI (detector.pad_left_border: in left-padded images near the left border).
@@ -353,12 +365,25 @@ class DynamicDetector {
     int pixels = 0;                  // its outline's pixels in that frame
     int detections = 0;              // frames kept on its own evidence
     int coasted = 0;                 // frames in a row it has coasted since
+    int band_frames = 0;             // frames in a row it was only carried in the left band (band_carry_*)
+    cv::Rect carry_rect;             // its pixels in that frame, kept near the left band only (band_carry_*) ...
+    cv::Mat carry_mask;              // ... CV_8UC1 of carry_rect's size, 255 = the object's
   };
   std::vector<std::pair<int, ObjectTrack>> objects_;  // by object id, ascending
   std::vector<std::pair<int, ObjectTrack>> next_objects_;
   std::vector<int> coast_tracks_;
   std::vector<float> coast_dx_, coast_dy_;
   std::vector<uint8_t> coast_own_;
+  struct CarriedObject {
+    int id;
+    int instance;        // the instance its band pixels were painted with
+    bool band_only;      // no region of this frame continues it
+    cv::Rect rect;       // the band pixels painted
+    int pixels;
+  };
+  std::vector<CarriedObject> carried_;
+  std::vector<int> overlap_count_;  // per instance: carried pixels on it
+  std::vector<uint8_t> band_only_;  // per entry of next_objects_: only carried in the band this frame
   std::vector<float> inside_offsets_, static_offsets_;
   double static_offset_median_px_ = -1;  // of this frame's static tracks (-1: not computed yet)
   std::vector<uint8_t> coast_group_;  // per group: coasted
