@@ -311,6 +311,10 @@ struct RecallBreakdown {
   int found[kBins] = {}, total[kBins] = {};
   int distance_found[kDistanceBins] = {}, distance_total[kDistanceBins] = {};
   int border_found = 0, border_total = 0, inner_found = 0, inner_total = 0;
+  // Objects within 4 m in full view: not cut by the border, and no nearer moving object's box over theirs (a person
+  // the vehicle must not lose, seen whole; objects that do not move have no ground-truth distance here).
+  int full_view_found = 0, full_view_total = 0;
+  static constexpr double kNearM = 4.0;
   static constexpr int kBorderPx = 2;  // a box within this of the left/right edge is cut by it
 
   void add(const std::vector<agvslam::io::SceneObject>& objects, const nlohmann::json& diagnostics, cv::Size size,
@@ -335,6 +339,19 @@ struct RecallBreakdown {
         ++distance_total[k];
         distance_found[k] += hit;
       }
+      if (distance_m > 0 && distance_m < kNearM && !cut) {
+        bool covered = false;
+        for (const auto& other : diagnostics) {
+          const double other_m = other.value("distance_m", -1.0);
+          if (other["id"].get<int>() == id || !(other_m > 0) || other_m >= distance_m) continue;
+          const auto o2 = std::find_if(objects.begin(), objects.end(), [&](const auto& o) { return o.id == other["id"].get<int>(); });
+          covered = covered || (o2 != objects.end() && (o2->box & obj->box).area() > 0);
+        }
+        if (!covered) {
+          ++full_view_total;
+          full_view_found += hit;
+        }
+      }
     }
   }
   static std::string ratio(int f, int t) {
@@ -352,7 +369,8 @@ struct RecallBreakdown {
                 ? std::string()
                 : "; by distance: < 4 m " + ratio(distance_found[0], distance_total[0]) + ", 4-7 m " +
                       ratio(distance_found[1], distance_total[1]) + ", 7-12 m " + ratio(distance_found[2], distance_total[2]) +
-                      ", >= 12 m " + ratio(distance_found[3], distance_total[3]));
+                      ", >= 12 m " + ratio(distance_found[3], distance_total[3]) + "; within 4 m in full view (not cut, " +
+                      "no nearer mover over it) " + ratio(full_view_found, full_view_total));
   }
   nlohmann::json to_json() const {
     nlohmann::json j;
@@ -360,6 +378,7 @@ struct RecallBreakdown {
     for (int b = 0; b < kBins; ++b) j["size_" + std::string(names[b])] = {{"found", found[b]}, {"objects", total[b]}};
     j["border"] = {{"found", border_found}, {"objects", border_total}};
     j["inside"] = {{"found", inner_found}, {"objects", inner_total}};
+    j["full_view_lt4m"] = {{"found", full_view_found}, {"objects", full_view_total}};
     const char* distance_names[kDistanceBins] = {"lt4m", "4_7m", "7_12m", "ge12m"};
     for (int b = 0; b < kDistanceBins; ++b) {
       j["distance_" + std::string(distance_names[b])] = {{"found", distance_found[b]}, {"objects", distance_total[b]}};

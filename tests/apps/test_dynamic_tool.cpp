@@ -8,7 +8,9 @@
 #include <iterator>
 #include <nlohmann/json.hpp>
 #include <opencv2/imgcodecs.hpp>
+#include <map>
 #include <regex>
+#include <sstream>
 #include <vector>
 
 #include "common/test_data.h"
@@ -119,6 +121,42 @@ TEST(DynamicTool, WritesMasksOverlaysScoresAndJson) {
   }
   EXPECT_GT(by_size, 0);
   EXPECT_EQ(by_distance, by_size);
+  // Objects within 4 m in full view (not cut by the left/right border, no nearer moving object's box over theirs),
+  // recounted from objects.txt and the per-object distances.
+  std::map<std::pair<int, int>, cv::Rect> boxes;
+  std::ifstream objects_file(data + "/objects.txt");
+  for (std::string line; std::getline(objects_file, line);) {
+    if (line.empty() || line[0] == '#') continue;
+    std::istringstream in(line);
+    int frame = 0, id = 0, moving = 0, x0 = 0, y0 = 0, x1 = 0, y1 = 0;
+    std::string object_class;
+    ASSERT_TRUE(in >> frame >> id >> object_class >> moving >> x0 >> y0 >> x1 >> y1) << line;
+    boxes[{frame, id}] = cv::Rect(cv::Point(x0, y0), cv::Point(x1 + 1, y1 + 1));
+  }
+  int full_view = 0, full_view_found = 0;
+  for (const auto& jf : j["per_frame"]) {
+    if (!jf.contains("objects")) continue;
+    const int frame = jf["frame"].get<int>();
+    for (const auto& o : jf["objects"]) {
+      const double m = o["distance_m"].get<double>();
+      if (!o["moving"].get<bool>() || o["pixels"].get<int>() < 400 || !(m > 0) || m >= 4.0) continue;
+      const cv::Rect b = boxes.at({frame, o["id"].get<int>()});
+      if (b.x <= 2 || b.br().x >= 752 - 2) continue;
+      bool covered = false;
+      for (const auto& other : jf["objects"]) {
+        const double other_m = other["distance_m"].get<double>();
+        if (other["id"] == o["id"] || !(other_m > 0) || other_m >= m) continue;
+        covered = covered || (boxes.at({frame, other["id"].get<int>()}) & b).area() > 0;
+      }
+      if (covered) continue;
+      ++full_view;
+      full_view_found += o["iou"].get<double>() >= 0.5 ? 1 : 0;
+    }
+  }
+  EXPECT_GT(full_view, 0);
+  EXPECT_EQ(rb["full_view_lt4m"]["objects"].get<int>(), full_view);
+  EXPECT_EQ(rb["full_view_lt4m"]["found"].get<int>(), full_view_found);
+  EXPECT_LE(full_view, rb["distance_lt4m"]["objects"].get<int>());
 }
 
 TEST(DynamicTool, BadInputNamesTheOptionOrFolder) {
