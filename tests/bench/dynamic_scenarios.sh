@@ -75,7 +75,9 @@ if tp + fp + fn:
           f"mean IoU {tot['iou'] / max(1, tp):.3f} (TP {tp} FP {fp} FN {fn})")
 if breakdown:
     names = [("size_lt1500", "<1500 px"), ("size_1500_5000", "1500-5000 px"), ("size_5000_20000", "5000-20000 px"),
-             ("size_ge20000", ">=20000 px"), ("border", "cut by the image border"), ("inside", "inside the image")]
+             ("size_ge20000", ">=20000 px"), ("border", "cut by the image border"), ("inside", "inside the image"),
+             ("distance_lt4m", "< 4 m"), ("distance_4_7m", "4-7 m"), ("distance_7_12m", "7-12 m"),
+             ("distance_ge12m", ">= 12 m"), ("full_view_lt4m", "< 4 m in full view")]
     print("scene1..5 recall by object: " + ", ".join(
         f"{label} {breakdown[k][0] / max(1, breakdown[k][1]):.3f} ({breakdown[k][0]}/{breakdown[k][1]})"
         for k, label in names if k in breakdown))
