@@ -1204,7 +1204,9 @@ void DynamicDetector::update_objects(const DetectorResult& result) {
     ob.detections = (known ? prev->second.detections : 0) + own[k];
     ob.coasted = own[k] ? 0 : (known ? prev->second.coasted : 0) + 1;
     ob.band_frames = band_only_[k] ? (known ? prev->second.band_frames : 0) + 1 : 0;
-    // Near the left band (it may reach it by the next frame): its pixels are kept for carrying.
+    // Near the left band (it may reach it by the next frame): its pixels are kept for carrying (with
+    // detector.mask_dilation_px > 0 they are the dilated ones, so a carried band part grows by that much per frame,
+    // within the band and for at most band_carry_max_frames frames alone).
     if (opt.band_carry_max_frames > 0 && ob.rect.x < 2 * ob.median_disparity_px + 16) {
       const cv::Rect r = ob.rect & cv::Rect(0, 0, result.mask.instances.cols, result.mask.instances.rows);
       ob.carry_rect = r;
