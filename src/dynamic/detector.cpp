@@ -1088,13 +1088,8 @@ void DynamicDetector::carry_band_masks(DetectorResult& result, int& next_instanc
     const cv::Rect area = moved & cv::Rect(0, 0, band, inst.rows);
     if (area.empty()) continue;
     // The instance of the region continuing the object in this frame, if any.
-    int instance = -1;
-    for (std::size_t k = 1; k < instance_object_.size(); ++k) {
-      if (instance_object_[k] == id) {
-        instance = static_cast<int>(k);
-        break;
-      }
-    }
+    const auto continuing = std::find(instance_object_.begin() + 1, instance_object_.end(), id);
+    int instance = continuing == instance_object_.end() ? -1 : static_cast<int>(continuing - instance_object_.begin());
     // ... or, when none does, the region whose pixels its carried mask overlaps most beside the band (the same
     // person continued by a region of another object, e.g. its torso where the legs were the object).
     int carry_id = id;
@@ -1151,7 +1146,15 @@ void DynamicDetector::carry_band_masks(DetectorResult& result, int& next_instanc
       }
     }
     const cv::Rect painted(x0, y0, x1 - x0 + 1, y1 - y0 + 1);
-    result.mask.regions.push_back(painted);
+    // A new region, or the band part of the region that holds the instance (regions number their instances in
+    // the order they were kept: the last one starting at or below it).
+    auto holder = std::find_if(kept_regions_.rbegin(), kept_regions_.rend(), [&](const KeptRegion& k) { return k.instance <= instance; });
+    if (band_only || holder == kept_regions_.rend()) {
+      result.mask.regions.push_back(painted);
+    } else {
+      holder->rect |= painted;
+      result.mask.regions[holder->region_index] = holder->rect;
+    }
     carried_.push_back({carry_id, instance, band_only, painted, candidates});
   }
 }
@@ -1210,12 +1213,13 @@ void DynamicDetector::update_objects(const DetectorResult& result) {
     if (opt.band_carry_max_frames > 0 && ob.rect.x < 2 * ob.median_disparity_px + 16) {
       const cv::Rect r = ob.rect & cv::Rect(0, 0, result.mask.instances.cols, result.mask.instances.rows);
       ob.carry_rect = r;
-      ob.carry_mask.create(r.size(), CV_8UC1);
-      ob.carry_mask.setTo(0);
+      // Its instances' pixels, in one pass through an instance -> 255 / 0 table.
+      carry_lut_.create(1, 256, CV_8UC1);
+      carry_lut_.setTo(0);
       for (std::size_t i = 1; i < instance_object_.size(); ++i) {
-        if (instance_object_[i] != next_objects_[k].first) continue;
-        ob.carry_mask.setTo(255, result.mask.instances(r) == static_cast<int>(i));
+        if (instance_object_[i] == next_objects_[k].first) carry_lut_.at<uint8_t>(static_cast<int>(i)) = 255;
       }
+      cv::LUT(result.mask.instances(r), carry_lut_, ob.carry_mask);
     }
   }
   std::sort(next_objects_.begin(), next_objects_.end(), [](const auto& a, const auto& b) { return a.first < b.first; });

@@ -406,6 +406,11 @@ TEST(DynamicDetector, ABoxLeavingToTheLeftIsCarriedIntoTheUnmatchedBand) {
     ++frames_in_band;
     gt_band += g;
     with_band += cv::countNonZero(with[i].mask.image(band) & gt[i](band));
+    // The carried band part belongs to the box's region: one rectangle, one object.
+    EXPECT_EQ(with[i].mask.regions.size(), 1u) << "frame " << k << ": " << summary(with[i]);
+    double max_instance = 0;
+    cv::minMaxLoc(with[i].mask.instances, nullptr, &max_instance);
+    EXPECT_EQ(max_instance, 1.0) << "frame " << k;
     with_false += cv::countNonZero(with[i].mask.image(band) & ~gt[i](band));
     without_band += cv::countNonZero(without[i].mask.image(band));
     iou_with += iou(with[i].mask.image, gt[i]);

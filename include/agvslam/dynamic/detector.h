@@ -383,6 +383,7 @@ class DynamicDetector {
   };
   std::vector<CarriedObject> carried_;
   std::vector<int> overlap_count_;  // per instance: carried pixels on it
+  cv::Mat carry_lut_;               // instance -> 255 (the object's) / 0
   std::vector<uint8_t> band_only_;  // per entry of next_objects_: only carried in the band this frame
   std::vector<float> inside_offsets_, static_offsets_;
   double static_offset_median_px_ = -1;  // of this frame's static tracks (-1: not computed yet)
