@@ -7,6 +7,7 @@
 #include <cstdio>
 #include <opencv2/features2d.hpp>
 #include <opencv2/imgproc.hpp>
+#include <opencv2/video/tracking.hpp>
 
 #include "agvslam/core/error.h"
 
@@ -46,6 +47,12 @@ void DetectorOptions::validate(const std::string& source) const {
   require(densify_min_seeds >= 1 && densify_min_seeds <= 100, "densify_min_seeds", "expected an integer in [1, 100]");
   require(densify_extra_tracks >= 0 && densify_extra_tracks <= 10000, "densify_extra_tracks",
           "expected an integer in [0, 10000]");
+  require(densify_multiframe_levels >= -1 && densify_multiframe_levels <= 5, "densify_multiframe_levels",
+          "expected an integer in [-1, 5] (-1: off)");
+  require(densify_multiframe_agreement > 0 && densify_multiframe_agreement <= 2, "densify_multiframe_agreement",
+          "expected a number in (0, 2]");
+  require(densify_multiframe_factor >= 1 && densify_multiframe_factor <= 20, "densify_multiframe_factor",
+          "expected a number in [1, 20]");
   require(continue_min_points >= 1 && continue_min_points <= 1000, "continue_min_points", "expected an integer in [1, 1000]");
   require(coast_max_frames >= 0 && coast_max_frames <= 100, "coast_max_frames", "expected an integer in [0, 100] frames");
   require(coast_min_detections >= 1 && coast_min_detections <= 1000, "coast_min_detections",
@@ -69,7 +76,7 @@ void DetectorOptions::validate(const std::string& source) const {
 }
 
 std::string DetectorOptions::describe() const {
-  char densify_text[240] = "off";
+  char densify_text[320] = "off";
   char widen_text[200] = "off";
   if (extend_max_rounds > 0) {
     std::snprintf(widen_text, sizeof(widen_text),
@@ -79,9 +86,10 @@ std::string DetectorOptions::describe() const {
   if (densify) {
     std::snprintf(densify_text, sizeof(densify_text),
                   "<= %d points within %.0f + %.2f d px, %.0f px apart, >= %d seeds, <= %d tracks beyond the cap, static "
-                  "ones kept %s",
+                  "ones kept %s, multi-frame test %s (%d levels)",
                   densify_max_points, densify_radius_px, densify_radius_disparity_factor, densify_min_distance_px,
-                  densify_min_seeds, densify_extra_tracks, densify_keep_static ? "yes" : "no");
+                  densify_min_seeds, densify_extra_tracks, densify_keep_static ? "yes" : "no",
+                  densify_multiframe_levels >= 0 ? "on" : "off", std::max(0, densify_multiframe_levels));
   }
   char objects_text[320] = "off";
   if (track_objects) {
@@ -304,8 +312,14 @@ void DynamicDetector::detect(const StereoFrame& frame, DetectorResult& result) {
     consistent_.assign(prev_pts_.size(), 0);
     if (result.depth.valid) {
       for (std::size_t i = 0; i < consistent_.size(); ++i) {
-        consistent_[i] = tracked_[i] && result.depth.reprojection_px[i] >= 0 && result.depth.disparity_residual_px[i] >= 0 &&
-                         !result.depth.dynamic[i];
+        const double r_disp = result.depth.disparity_residual_px[i];
+        const bool measured = tracked_[i] && result.depth.reprojection_px[i] >= 0 && r_disp >= 0;
+        if (!measured) continue;
+        if (!result.depth.dynamic[i]) {
+          consistent_[i] = TrackHistory::kStepConsistent;
+        } else if (r_disp <= result.depth.a_disp_used_px + config_.depth_test.b_disp * cur_disparity_px_[i]) {
+          consistent_[i] = TrackHistory::kStepStereoOnly;
+        }
       }
     }
     history_.next_frame(cur_pts_, cur_disparity_px_, consistent_);
@@ -1271,6 +1285,8 @@ void DynamicDetector::densify(const StereoFrame& frame, DetectorResult& result) 
   const cv::Rect inner(b, b, frame.left.cols - 2 * b, frame.left.rows - 2 * b);
   const float min_d2 = static_cast<float>(opt.densify_min_distance_px * opt.densify_min_distance_px);
   extra_prev_.clear();
+  extra_group_motion_.clear();
+  extra_group_valid_.clear();
   for (const DynamicGroup& g : groups) {
     if (static_cast<int>(g.members.size()) >= min_points) continue;  // already a ROI
     // The window around the group's previous positions.
@@ -1303,6 +1319,35 @@ void DynamicDetector::densify(const StereoFrame& frame, DetectorResult& result) 
     std::sort(keypoints_.begin(), keypoints_.end(),
               [](const cv::KeyPoint& a, const cv::KeyPoint& c) { return a.response > c.response; });
     const std::size_t first_new = extra_prev_.size();
+    // The group's own motion against the multi-frame reference: the median offset of its seeds' reference
+    // observations from where static points at their current disparity would have been.
+    cv::Point2f group_motion(0, 0);
+    bool group_motion_valid = false;
+    if (opt.densify_multiframe_levels >= 0 && result.multiframe.valid) {
+      const SE3d T_ref_cur = result.multiframe.T_cur_ref.inverse();
+      mf_vx_.clear();
+      mf_vy_.clear();
+      for (int m : g.members) {
+        const auto idx = static_cast<std::size_t>(seed_index_[static_cast<std::size_t>(m)]);
+        const TrackedPoint& sp = result.points[idx];
+        cv::Point2f ref_px;
+        float ref_d = 0;
+        Eigen::Vector2d pred;
+        double depth_m = 0;
+        if (idx >= history_.size() || !history_.observation(idx, result.multiframe.frames_back, ref_px, ref_d) ||
+            !(sp.cur_disparity_px > 0) ||
+            !DepthConsistencyTest::predict(calibration_.left, calibration_.bf(), T_ref_cur, sp.cur_px, sp.cur_disparity_px,
+                                           pred, depth_m)) {
+          continue;
+        }
+        mf_vx_.push_back(ref_px.x - static_cast<float>(pred.x()));
+        mf_vy_.push_back(ref_px.y - static_cast<float>(pred.y()));
+      }
+      if (static_cast<int>(mf_vx_.size()) >= opt.densify_min_seeds) {
+        group_motion = cv::Point2f(static_cast<float>(median_of(mf_vx_)), static_cast<float>(median_of(mf_vy_)));
+        group_motion_valid = true;
+      }
+    }
     for (const cv::KeyPoint& kp : keypoints_) {
       if (static_cast<int>(extra_prev_.size() - first_new) >= opt.densify_max_points) break;
       const int track_cap = config_.tracking.max_tracks + opt.densify_extra_tracks;
@@ -1320,7 +1365,11 @@ void DynamicDetector::densify(const StereoFrame& frame, DetectorResult& result) 
         const cv::Point2f d = extra_prev_[k] - p;
         near = d.dot(d) < min_d2;
       }
-      if (!near) extra_prev_.push_back(p);
+      if (!near) {
+        extra_prev_.push_back(p);
+        extra_group_motion_.push_back(group_motion);
+        extra_group_valid_.push_back(group_motion_valid ? 1 : 0);
+      }
     }
   }
   if (extra_prev_.empty()) return;
@@ -1333,6 +1382,7 @@ void DynamicDetector::densify(const StereoFrame& frame, DetectorResult& result) 
     extra_cur_disp_[i] = sparse_.match(frame.left, frame.right, extra_cur_[i]);
     if (opt.use_depth_test) extra_prev_disp_[i] = sparse_.match(prev_left_, prev_right_, extra_prev_[i]);
   }
+  test_densified_multiframe(frame, result);
   for (std::size_t i = 0; i < extra_prev_.size(); ++i) {
     if (!extra_ok_[i]) continue;
     TrackedPoint p;
@@ -1351,7 +1401,10 @@ void DynamicDetector::densify(const StereoFrame& frame, DetectorResult& result) 
       p.dynamic_depth = depth_test_.is_dynamic(result.depth, p.reprojection_px, p.disparity_residual_px,
                                                p.cur_disparity_px > 0 ? p.cur_disparity_px : p.prev_disparity_px);
     }
-    p.dynamic = (opt.use_epipolar_test && p.dynamic_epipolar) || (opt.use_depth_test && p.dynamic_depth);
+    p.multiframe_px = extra_mf_px_[i];
+    p.dynamic_multiframe = extra_mf_[i] != 0;
+    p.dynamic = (opt.use_epipolar_test && p.dynamic_epipolar) ||
+                (opt.use_depth_test && (p.dynamic_depth || p.dynamic_multiframe));
     result.points.push_back(p);
     history_.add(p.cur_px, p.cur_disparity_px);
     history_.add_earlier(1, p.prev_px, p.prev_disparity_px);
@@ -1360,6 +1413,119 @@ void DynamicDetector::densify(const StereoFrame& frame, DetectorResult& result) 
       dyn_disp_.push_back(p.cur_disparity_px);
       dyn_index_.push_back(static_cast<int>(result.points.size() - 1));
     }
+  }
+}
+
+void DynamicDetector::test_densified_multiframe(const StereoFrame& frame, const DetectorResult& result) {
+  const DetectorOptions& opt = config_.detector;
+  const std::size_t n = extra_prev_.size();
+  extra_mf_.assign(n, 0);
+  extra_mf_px_.assign(n, -1.0);
+  if (opt.densify_multiframe_levels < 0 || !opt.use_depth_test || !result.multiframe.valid ||
+      result.multiframe.reference_left.empty()) {
+    return;
+  }
+  const MultiFrameTestConfig& mf = config_.multiframe;
+  const cv::Mat& ref_left = result.multiframe.reference_left;
+  const SE3d T_ref_cur = result.multiframe.T_cur_ref.inverse();
+  const float w = static_cast<float>(ref_left.cols - 1), h = static_cast<float>(ref_left.rows - 1);
+  // Where each point, static at its current disparity, was in the reference frame.
+  mf_cur_.clear();
+  mf_pred_.clear();
+  mf_index_.clear();
+  for (std::size_t i = 0; i < n; ++i) {
+    if (!extra_ok_[i] || !extra_group_valid_[i] || !(extra_cur_disp_[i] >= mf.min_disparity_px)) continue;
+    Eigen::Vector2d pred;
+    double depth_m = 0;
+    if (!DepthConsistencyTest::predict(calibration_.left, calibration_.bf(), T_ref_cur, extra_cur_[i], extra_cur_disp_[i],
+                                       pred, depth_m)) {
+      continue;
+    }
+    const cv::Point2f q(static_cast<float>(pred.x()), static_cast<float>(pred.y()));
+    if (!(q.x >= 0 && q.y >= 0 && q.x <= w && q.y <= h)) continue;
+    mf_cur_.push_back(extra_cur_[i]);
+    mf_pred_.push_back(q);
+    mf_index_.push_back(static_cast<int>(i));
+  }
+  if (mf_index_.empty()) return;
+  const LkTrackerConfig& trk = config_.tracking;
+  const int levels = opt.densify_multiframe_levels;
+  const cv::Size win(trk.window_px, trk.window_px);
+  const cv::TermCriteria crit(cv::TermCriteria::COUNT | cv::TermCriteria::EPS, trk.max_iterations, trk.epsilon);
+  // LK on the part of both images the points and their predictions lie in, with room for the pyramid's reach
+  // (OpenCV takes the derivatives of every pyramid level it is given, so whole images would cost ~10x more).
+  cv::Rect area = cv::boundingRect(mf_cur_) | cv::boundingRect(mf_pred_);
+  const int margin = trk.window_px * (1 << levels);
+  area = cv::Rect(area.x - margin, area.y - margin, area.width + 2 * margin, area.height + 2 * margin) &
+         cv::Rect(0, 0, ref_left.cols, ref_left.rows);
+  const cv::Point2f origin(static_cast<float>(area.x), static_cast<float>(area.y));
+  for (std::size_t k = 0; k < mf_cur_.size(); ++k) {
+    mf_cur_[k] -= origin;
+    mf_pred_[k] -= origin;
+  }
+  cv::buildOpticalFlowPyramid(frame.left(area), mf_cur_pyramid_, win, levels, false);
+  cv::buildOpticalFlowPyramid(ref_left(area), mf_ref_pyramid_, win, levels, false);
+  mf_ref_ = mf_pred_;
+  cv::calcOpticalFlowPyrLK(mf_cur_pyramid_, mf_ref_pyramid_, mf_cur_, mf_ref_, mf_status_, mf_errors_, win, levels, crit,
+                           cv::OPTFLOW_USE_INITIAL_FLOW, trk.min_eigen_threshold);
+  mf_back_ = mf_cur_;
+  cv::calcOpticalFlowPyrLK(mf_ref_pyramid_, mf_cur_pyramid_, mf_ref_, mf_back_, mf_back_status_, mf_errors_, win, levels,
+                           crit, cv::OPTFLOW_USE_INITIAL_FLOW, trk.min_eigen_threshold);
+  for (std::size_t k = 0; k < mf_cur_.size(); ++k) {
+    mf_cur_[k] += origin;
+    mf_pred_[k] += origin;
+    mf_ref_[k] += origin;
+    mf_back_[k] += origin;
+  }
+  const float fb2 = static_cast<float>(mf.verify_fb_px * mf.verify_fb_px);
+  const auto r = static_cast<float>(mf.edge_check_px);
+  const cv::Point2f around[4] = {{-r, 0}, {r, 0}, {0, -r}, {0, r}};
+  for (std::size_t k = 0; k < mf_index_.size(); ++k) {
+    const auto i = static_cast<std::size_t>(mf_index_[k]);
+    const cv::Point2f found = mf_ref_[k];
+    const cv::Point2f fb = mf_back_[k] - mf_cur_[k];
+    if (!mf_status_[k] || !mf_back_status_[k] || fb.dot(fb) > fb2 ||
+        !(found.x >= 0 && found.y >= 0 && found.x <= w && found.y <= h)) {
+      continue;
+    }
+    const float d = extra_cur_disp_[i];
+    const cv::Point2f off = found - mf_pred_[k];
+    double offset = std::sqrt(static_cast<double>(off.dot(off)));
+    extra_mf_px_[i] = offset;
+    const double threshold =
+        opt.densify_multiframe_factor * (result.multiframe.test.a_reproj_used_px + mf.b_reproj * d);
+    if (!(offset > threshold)) continue;
+    // ... and it moved with its group (a static point whose current disparity is wrong, on repetitive racking, is
+    // predicted off and LK finds it somewhere else: off by as much, but not the way the group moved).
+    const cv::Point2f& gm = extra_group_motion_[i];
+    const cv::Point2f dv = off - gm;
+    const double group_offset = std::sqrt(static_cast<double>(gm.dot(gm)));
+    if (!(group_offset > threshold) ||
+        std::sqrt(static_cast<double>(dv.dot(dv))) > std::max(threshold, opt.densify_multiframe_agreement * group_offset)) {
+      continue;
+    }
+    // On an edge-like patch only the offset across the edge counts (multiframe.aperture_ratio).
+    if (mf.aperture_ratio > 0) {
+      const double across = offset_across_edge(ref_left, found, trk.window_px / 2, calibration_.left, calibration_.bf(),
+                                               T_ref_cur, extra_cur_[i], d, mf.aperture_ratio);
+      if (across >= 0 && !(across > threshold)) continue;
+    }
+    // Not on a depth edge (its window mixes two surfaces that move apart over the frames), not an ambiguous match.
+    const double tol = mf.edge_tolerance_px + mf.edge_tolerance_rel * d;
+    bool edge = false;
+    if (mf.edge_check_px > 0) {
+      for (int e = 0; e < 4 && !edge; ++e) {
+        const cv::Point2f q = extra_cur_[i] + around[e];
+        if (q.x < 0 || q.y < 0 || q.x > w || q.y > h) continue;
+        const float dq = sparse_.match(frame.left, frame.right, q);
+        edge = dq > 0 && std::abs(dq - d) > tol;
+      }
+    }
+    if (!edge && mf.check_half_window > 0) {
+      const float dc = check_sparse_.match(frame.left, frame.right, extra_cur_[i]);
+      edge = !(dc > 0) || std::abs(dc - d) > tol;
+    }
+    if (!edge) extra_mf_[i] = 1;
   }
 }
 

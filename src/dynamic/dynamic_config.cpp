@@ -68,7 +68,7 @@ DynamicDetectorConfig load_dynamic_config(const std::string& path) {
                                "min_points", "min_disparity_px", "ransac_reprojection_px", "a_reproj_px", "b_reproj",
                                "a_disp_px", "b_disp", "adaptive_k", "max_scale", "verify_levels", "verify_fb_px",
                                "verify_max_shift_px", "edge_check_px", "edge_tolerance_px", "edge_tolerance_rel",
-                               "check_half_window", "check_uniqueness_margin", "aperture_ratio"});
+                               "check_half_window", "check_uniqueness_margin", "aperture_ratio", "chain_stereo_only", "chain_stereo_factor"});
   MultiFrameTestConfig& m = c.multiframe;
   in.read("multiframe", "enabled", m.enabled, flag);
   in.read("multiframe", "max_frames", m.max_frames, integer);
@@ -93,6 +93,8 @@ DynamicDetectorConfig load_dynamic_config(const std::string& path) {
   in.read("multiframe", "check_half_window", m.check_half_window, integer);
   in.read("multiframe", "check_uniqueness_margin", m.check_uniqueness_margin, num);
   in.read("multiframe", "aperture_ratio", m.aperture_ratio, num);
+  in.read("multiframe", "chain_stereo_only", m.chain_stereo_only, flag);
+  in.read("multiframe", "chain_stereo_factor", m.chain_stereo_factor, num);
 
   in.check_keys("grouping", {"a_s_px", "b_s", "t_disp_px", "t_disp_rel", "min_points", "margin_px",
                              "margin_disparity_factor", "merge_overlapping", "merge_side_gap_m"});
@@ -213,7 +215,7 @@ DynamicDetectorConfig load_dynamic_config(const std::string& path) {
                              "extend_max_rounds", "extend_min_rows", "extend_step_m", "extend_static_guard_px", "half_scale_min_area_px", "half_scale_erode_px", "extend_to_floor", "extend_to_height_m", "split_side_by_side", "mask_dilation_px", "densify",
                              "densify_radius_px",
                              "densify_radius_disparity_factor", "densify_max_points", "densify_min_distance_px",
-                             "densify_min_seeds", "densify_extra_tracks", "densify_keep_static",
+                             "densify_min_seeds", "densify_extra_tracks", "densify_keep_static", "densify_multiframe_levels", "densify_multiframe_agreement", "densify_multiframe_factor",
                              "track_objects", "continue_min_points", "coast_max_frames", "coast_min_detections",
                              "coast_min_tracks", "coast_min_area_ratio", "band_carry_max_frames", "band_carry_min_tracks", "band_carry_min_dynamic", "confirm_min_box_iou", "confirm_below_px",
                              "pad_left_border", "roi_speckle_filter", "merge_stacked_regions"});
@@ -243,6 +245,9 @@ DynamicDetectorConfig load_dynamic_config(const std::string& path) {
   in.read("detector", "densify_min_seeds", c.detector.densify_min_seeds, integer);
   in.read("detector", "densify_extra_tracks", c.detector.densify_extra_tracks, integer);
   in.read("detector", "densify_keep_static", c.detector.densify_keep_static, flag);
+  in.read("detector", "densify_multiframe_levels", c.detector.densify_multiframe_levels, integer);
+  in.read("detector", "densify_multiframe_agreement", c.detector.densify_multiframe_agreement, num);
+  in.read("detector", "densify_multiframe_factor", c.detector.densify_multiframe_factor, num);
   in.read("detector", "track_objects", c.detector.track_objects, flag);
   in.read("detector", "continue_min_points", c.detector.continue_min_points, integer);
   in.read("detector", "coast_max_frames", c.detector.coast_max_frames, "an integer (frames)");

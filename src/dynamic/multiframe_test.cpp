@@ -37,20 +37,23 @@ void MultiFrameTestConfig::validate(const std::string& source) const {
   require(check_uniqueness_margin >= 0 && check_uniqueness_margin <= 10, "check_uniqueness_margin",
           "expected a number in [0, 10]");
   require(aperture_ratio >= 0 && aperture_ratio < 1, "aperture_ratio", "expected a number in [0, 1)");
+  require(chain_stereo_factor >= 1 && chain_stereo_factor <= 20, "chain_stereo_factor", "expected a number in [1, 20]");
 }
 
 std::string MultiFrameTestConfig::describe() const {
-  char buf[800];
+  char buf[900];
   std::snprintf(buf, sizeof(buf),
                 "multiframe: %s; reference %d..%d frames back, the newest >= %.2f m away, rotation <= %.1f deg, >= %d "
                 "tracks with d >= %.1f px in both; PnP %.2f px; dynamic if offset > %.2f + %.3f d px or disparity "
                 "residual > %.2f + %.3f d px (adaptive k %.1f, <= %.1fx); verified by LK into the reference (%d levels, "
                 "fb <= %.2f px, same point within %.2f px); not at depth edges (disparity %d px away within %.2f + "
-                "%.3f d px); disparity confirmed with a %dx%d window, uniqueness %.2f; aperture ratio %.2f",
+                "%.3f d px); disparity confirmed with a %dx%d window, uniqueness %.2f; aperture ratio %.2f; histories "
+                "chained on %s (tracks the per-frame test flagged need %.1fx the thresholds)",
                 enabled ? "on" : "off", min_frames, max_frames, min_translation_m, max_rotation_deg, min_points,
                 min_disparity_px, ransac_reprojection_px, a_reproj_px, b_reproj, a_disp_px, b_disp, adaptive_k, max_scale,
                 verify_levels, verify_fb_px, verify_max_shift_px, edge_check_px, edge_tolerance_px, edge_tolerance_rel,
-                2 * check_half_window + 1, 2 * check_half_window + 1, check_uniqueness_margin, aperture_ratio);
+                2 * check_half_window + 1, 2 * check_half_window + 1, check_uniqueness_margin, aperture_ratio,
+                chain_stereo_only ? "stereo" : "the per-frame depth test", chain_stereo_factor);
   return buf;
 }
 
@@ -61,6 +64,7 @@ TrackHistory::TrackHistory(int depth) : depth_(std::max(1, depth)) {}
 void TrackHistory::clear() {
   age_.clear();
   run_.clear();
+  strict_run_.clear();
   px_.clear();
   d_.clear();
 }
@@ -76,6 +80,7 @@ void TrackHistory::next_frame(const std::vector<cv::Point2f>& px, const std::vec
     d_[i * depth + slot] = d[i];
     age_[i] = std::min(age_[i] + 1, depth_ - 1);
     run_[i] = consistent[i] ? std::min(run_[i] + 1, depth_ - 1) : 0;
+    strict_run_[i] = consistent[i] == kStepConsistent ? std::min(strict_run_[i] + 1, depth_ - 1) : 0;
   }
 }
 
@@ -90,11 +95,13 @@ void TrackHistory::retain(const std::vector<uint8_t>& keep) {
       std::copy_n(d_.begin() + static_cast<std::ptrdiff_t>(i * depth), depth, d_.begin() + static_cast<std::ptrdiff_t>(out * depth));
       age_[out] = age_[i];
       run_[out] = run_[i];
+      strict_run_[out] = strict_run_[i];
     }
     ++out;
   }
   age_.resize(out);
   run_.resize(out);
+  strict_run_.resize(out);
   px_.resize(out * depth);
   d_.resize(out * depth);
 }
@@ -109,6 +116,7 @@ void TrackHistory::add(const cv::Point2f& px, float d) {
   d_[row * depth + slot] = d;
   age_.push_back(0);
   run_.push_back(0);
+  strict_run_.push_back(0);
 }
 
 void TrackHistory::add_earlier(int back, const cv::Point2f& px, float d) {
@@ -231,12 +239,18 @@ void MultiFrameTest::run(const PinholeCamera& camera, double bf_px_m, const Trac
   const int max_back = std::min({h - 1, config_.max_frames, history.depth() - 1});
   const double max_rotation_rad = config_.max_rotation_deg * M_PI / 180.0;
   const SE3d& T_w_cur = frames_.back().T_w_c;
+  // Steps a track's history holds since the reference: those the per-frame depth test passed, or (chain_stereo_only)
+  // those its stereo agreed on. (Estimating the motion from the former alone and testing the others against it: seeds
+  // 101-103 +1 true, +10 false regions.)
+  auto steps = [&](std::size_t i) {
+    return config_.chain_stereo_only ? history.consistent_steps(i) : history.consistent_steps_strict(i);
+  };
   auto count_both = [&](int k) {
     int count = 0;
     cv::Point2f p;
     float d = 0;
     for (std::size_t i = 0; i < n; ++i) {
-      count += usable[i] && history.consistent_steps(i) >= k && history.observation(i, k, p, d) &&
+      count += usable[i] && steps(i) >= k && history.observation(i, k, p, d) &&
                        d >= config_.min_disparity_px ? 1 : 0;
     }
     return count;
@@ -262,7 +276,7 @@ void MultiFrameTest::run(const PinholeCamera& camera, double bf_px_m, const Trac
   cur_d_.assign(n, 0.0f);
   both_.assign(n, 0);
   for (std::size_t i = 0; i < n; ++i) {
-    if (!usable[i] || history.consistent_steps(i) < chosen) continue;
+    if (!usable[i] || steps(i) < chosen) continue;
     if (!history.observation(i, chosen, ref_px_[i], ref_d_[i]) || !history.observation(i, 0, cur_px_[i], cur_d_[i])) continue;
     both_[i] = 1;
     result.candidates += ref_d_[i] >= config_.min_disparity_px ? 1 : 0;
@@ -325,7 +339,13 @@ void MultiFrameTest::run(const PinholeCamera& camera, double bf_px_m, const Trac
                                                result.T_cur_ref, found, ref_d_[i], config_.aperture_ratio);
       if (across >= 0) off_2d = across > t_2d;
     }
-    const bool off_depth = same_point && r_disp >= 0 && r_disp > result.test.a_disp_used_px + config_.b_disp * d;
+    bool off_depth = same_point && r_disp >= 0 && r_disp > result.test.a_disp_used_px + config_.b_disp * d;
+    // A track the per-frame depth test flagged since the reference (chained on stereo alone) must be off by
+    // chain_stereo_factor times the thresholds: noisy static tracks fail the per-frame test now and then too.
+    if (history.consistent_steps_strict(i) < chosen) {
+      off_2d = off_2d && offset > config_.chain_stereo_factor * t_2d;
+      off_depth = off_depth && r_disp > config_.chain_stereo_factor * (result.test.a_disp_used_px + config_.b_disp * d);
+    }
     result.test.reprojection_px[i] = offset;
     result.test.disparity_residual_px[i] = same_point ? r_disp : -1;
     result.test.dynamic[i] = off_2d || off_depth ? 1 : 0;

@@ -71,6 +71,8 @@ struct WalkerRun {
   std::vector<int> on_box;
   std::vector<cv::Mat> cur_pyramid;
   int slid = -1, mismatched = -1;  // indices of the two doctored static tracks
+  // How the box's tracks are marked in the step 2 frames before the last (TrackHistory::next_frame).
+  uint8_t box_step_consistency = TrackHistory::kStepConsistent;
 
   // The rendered frames, once for all tests.
   StereoFrame frame(int k) const {
@@ -84,7 +86,8 @@ struct WalkerRun {
     return frames[static_cast<std::size_t>(k)];
   }
 
-  explicit WalkerRun(const MultiFrameTestConfig& config = {}) : test(config) {
+  explicit WalkerRun(const MultiFrameTestConfig& config = {}, uint8_t box_step = TrackHistory::kStepConsistent)
+      : test(config), box_step_consistency(box_step) {
     // Static points on the back wall (left of where the box hides it), the left wall and the pillar; points on
     // the box. Only points in view over the whole run.
     std::vector<Eigen::Vector3d> candidates;
@@ -134,7 +137,12 @@ struct WalkerRun {
       const StereoFrame f = frame(k);
       std::vector<cv::Point2f> px(points_w.size());
       std::vector<float> d(points_w.size());
-      std::vector<uint8_t> consistent(points_w.size(), 1);
+      std::vector<uint8_t> consistent(points_w.size(), TrackHistory::kStepConsistent);
+      if (k == kFrames - 1 - 2) {
+        for (std::size_t i = 0; i < points_w.size(); ++i) {
+          if (on_box[i]) consistent[i] = box_step_consistency;
+        }
+      }
       for (std::size_t i = 0; i < points_w.size(); ++i) {
         const Eigen::Vector3d X = T_w_c.inverse() * (points_w[i] + (on_box[i] ? box_offset : Eigen::Vector3d::Zero()));
         px[i] = cv::Point2f(static_cast<float>(scene.camera.fx * X.x() / X.z() + scene.camera.cx),
@@ -187,6 +195,79 @@ TEST(MultiFrameTest, FindsABoxKeepingItsDistanceAheadAndNoStaticPoint) {
   EXPECT_FALSE(r.test.dynamic[static_cast<std::size_t>(run.slid)]);
   EXPECT_GE(r.test.reprojection_px[static_cast<std::size_t>(run.slid)], 0);
   EXPECT_LT(r.test.reprojection_px[static_cast<std::size_t>(run.slid)], 1.0);
+}
+
+TEST(TrackHistory, CountsStepsTheDepthTestPassedApartFromStepsOnlyTheStereoAgreedOn) {
+  TrackHistory h(6);
+  h.add({1, 1}, 5.0f);
+  h.add({2, 2}, 6.0f);
+  const std::vector<cv::Point2f> px = {{1, 1}, {2, 2}};
+  const std::vector<float> d = {5.0f, 6.0f};
+  constexpr uint8_t ok = TrackHistory::kStepConsistent, stereo = TrackHistory::kStepStereoOnly;
+  h.next_frame(px, d, {ok, ok});
+  h.next_frame(px, d, {stereo, ok});  // track 0: the per-frame test flagged it, its stereo agreed
+  h.next_frame(px, d, {ok, TrackHistory::kStepBroken});  // track 1: a stereo mismatch
+  EXPECT_EQ(h.consistent_steps(0), 3);
+  EXPECT_EQ(h.consistent_steps_strict(0), 1);
+  EXPECT_EQ(h.consistent_steps(1), 0);
+  EXPECT_EQ(h.consistent_steps_strict(1), 0);
+  h.retain({0, 1});
+  EXPECT_EQ(h.consistent_steps(0), 0);
+  EXPECT_EQ(h.consistent_steps_strict(0), 0);
+}
+
+TEST(MultiFrameTest, TracksChainedOnStereoAloneAreTestedAgainstAHigherThreshold) {
+  // The box's tracks were flagged by the per-frame test in one step since the reference (kStepStereoOnly: only
+  // their stereo agreed). By default such tracks are not tested at all; with chain_stereo_only they are, and they are
+  // dynamic only when off by chain_stereo_factor times the thresholds. The box keeps its distance: its disparity
+  // residual (~2 px) is above the threshold (~1.9 px) but not 3 times above it; its points away from the focus of
+  // expansion are off in position by more.
+  struct Outcome {
+    int tested = 0, dynamic = 0, static_dynamic = 0, box = 0;
+  };
+  auto run_with = [](const MultiFrameTestConfig& c) {
+    WalkerRun run(c, TrackHistory::kStepStereoOnly);
+    MultiFrameResult r;
+    const double bf = run.scene.camera.fx * run.scene.baseline_m;
+    run.test.run(run.scene.camera, bf, run.history, std::vector<uint8_t>(run.history.size(), 1), run.cur_pyramid,
+                 LkTrackerConfig{}, r);
+    EXPECT_TRUE(r.valid);
+    Outcome o;
+    for (std::size_t i = 0; i < run.points_w.size(); ++i) {
+      if (!run.on_box[i]) {
+        o.static_dynamic += r.test.dynamic[i];
+        continue;
+      }
+      ++o.box;
+      o.tested += r.test.reprojection_px[i] >= 0 ? 1 : 0;
+      o.dynamic += r.test.dynamic[i];
+      if (r.test.dynamic[i] && c.chain_stereo_factor > 1) {
+        // Flagged by its position alone: the disparity residual is under 3x its threshold.
+        cv::Point2f p;
+        float d = 0;
+        run.history.observation(i, 0, p, d);
+        EXPECT_GT(r.test.reprojection_px[i], c.chain_stereo_factor * (r.test.a_reproj_used_px + c.b_reproj * d));
+      }
+    }
+    return o;
+  };
+  MultiFrameTestConfig c;
+  c.chain_stereo_only = false;
+  const Outcome unchained = run_with(c);
+  EXPECT_EQ(unchained.tested, 0);
+  EXPECT_EQ(unchained.dynamic, 0);
+  c.chain_stereo_only = true;
+  c.chain_stereo_factor = 1.0;
+  const Outcome plain = run_with(c);
+  EXPECT_EQ(plain.tested, plain.box);
+  EXPECT_GE(plain.dynamic, plain.box * 9 / 10);
+  c.chain_stereo_factor = 3.0;
+  const Outcome strict = run_with(c);
+  EXPECT_EQ(strict.tested, strict.box);
+  EXPECT_LT(strict.dynamic, plain.dynamic * 3 / 4);
+  EXPECT_GT(strict.dynamic, 0);
+  EXPECT_EQ(unchained.static_dynamic + plain.static_dynamic + strict.static_dynamic, 0);
+  std::printf("box tracks %d: dynamic %d with factor 1, %d with factor 3\n", plain.box, plain.dynamic, strict.dynamic);
 }
 
 TEST(MultiFrameTest, NeedsAChainAndEnoughSharedTracks) {

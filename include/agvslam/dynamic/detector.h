@@ -119,6 +119,23 @@ struct DetectorOptions {
   int densify_min_seeds = 2;           // seed points a group needs to be densified (1: a lone strong seed too)
   int densify_extra_tracks = 150;      // tracks densification may add beyond tracking.max_tracks (0: none)
   bool densify_keep_static = false;    // densified tracks the tests pass as static continue into the next frame
+  // A densified point has no history, so the multi-frame test cannot see it: a person 7 m away walking along the
+  // line of sight moves < 1 px per frame against the static prediction (the per-frame tests pass its new corners),
+  // but several px over the multi-frame test's 0.3-0.6 s. With densify_multiframe_levels >= 0 (and a multi-frame
+  // reference in this frame), each densified point is also tested against that reference: its current patch is
+  // tracked by LK (this many pyramid levels above the full image) into the reference image, starting where a static
+  // point at its current disparity would be there; it is dynamic when found farther from that prediction than the
+  // multi-frame test's threshold (and not on a depth edge or an ambiguous stereo match, as multiframe.edge_check_*
+  // and check_* decide for the tracks). -1 = off.
+  int densify_multiframe_levels = 2;
+  // ... and only when its offset agrees with its group's (the median of the seeds' reference observations against
+  // the same prediction) within max(threshold, this fraction of the group's offset); a group whose seeds did not
+  // move against the reference adds no such point.
+  double densify_multiframe_agreement = 0.35;
+  // The threshold for these points is this many times the multi-frame test's: a whole far surface can be off the
+  // prediction by about its threshold (the motion's error at that depth), and a densified point has no history to
+  // show it held still.
+  double densify_multiframe_factor = 3.0;
   // Objects over frames (beyond the paper, mask_mode disparity): the tracks inside a region's outline belong to
   // its object in the next frame. A group of dynamic points of which at least continue_min_points belong to one
   // object of the previous frame is a ROI even when it is smaller than grouping.min_points (a person who showed
@@ -290,6 +307,8 @@ class DynamicDetector {
 
  private:
   void densify(const StereoFrame& frame, DetectorResult& result);
+  // The multi-frame test of this frame's densified points (extra_*), into extra_mf_ / extra_mf_px_.
+  void test_densified_multiframe(const StereoFrame& frame, const DetectorResult& result);
   void outline_region(const StereoFrame& frame, DetectorResult& result, RoiSegmentation& seg, int& next_instance);
   // Coasting (detector.coast_*): a group per object of the last frame that no region of this frame continues and
   // that still has coast_min_tracks tracks at its depth (seeds appended to dyn_pts_).
@@ -350,6 +369,15 @@ class DynamicDetector {
   std::vector<cv::Point2f> extra_prev_, extra_cur_;
   std::vector<uint8_t> extra_ok_;
   std::vector<float> extra_prev_disp_, extra_cur_disp_;
+  std::vector<cv::Point2f> mf_cur_, mf_ref_, mf_back_, mf_pred_;
+  std::vector<int> mf_index_;
+  std::vector<uint8_t> mf_status_, mf_back_status_, extra_mf_;
+  std::vector<float> mf_errors_;
+  std::vector<double> extra_mf_px_;
+  std::vector<cv::Point2f> extra_group_motion_;
+  std::vector<uint8_t> extra_group_valid_;
+  std::vector<float> mf_vx_, mf_vy_;
+  std::vector<cv::Mat> mf_cur_pyramid_, mf_ref_pyramid_;
   std::vector<cv::Point2f> seed_pts_;
   std::vector<float> seed_disp_;
   std::vector<int> seed_index_;

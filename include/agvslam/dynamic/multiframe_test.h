@@ -81,6 +81,13 @@ struct MultiFrameTestConfig {
   // reference does not move along the edge either). For such a track only the part of the offset across the
   // edge (along the strong gradient) counts for the 2-D test. 0 = off.
   double aperture_ratio = 0.15;
+  // What makes a frame-to-frame step of a track "consistent" (TrackHistory: only tracks whose every step since the
+  // reference was consistent are tested). false: the per-frame depth test passed the track (a mover the per-frame
+  // test flagged even once is never tested here). true: its disparity changed as the ego-motion predicts (the
+  // per-frame disparity residual within its threshold): a stereo mismatch in one frame still breaks the chain, but
+  // a person 7 m away whose per-frame offset hovers around the per-frame threshold keeps a history to test.
+  bool chain_stereo_only = true;
+  double chain_stereo_factor = 4.0;  // ... but such a track is dynamic only when off by this many times the thresholds
 
   void validate(const std::string& source) const;
   std::string describe() const;
@@ -90,14 +97,16 @@ struct MultiFrameTestConfig {
 // up to depth-1 earlier frames (fewer when it is younger).
 class TrackHistory {
  public:
+  static constexpr uint8_t kStepBroken = 0, kStepConsistent = 1, kStepStereoOnly = 2;
   explicit TrackHistory(int depth = 13);
   int depth() const { return depth_; }
   std::size_t size() const { return age_.size(); }
   void clear();
 
   // Moves to the next frame: every track continues, observed at px[i] with disparity d[i] (0 = none);
-  // consistent[i] != 0 when this observation agrees with the previous one under the frame's ego-motion (the
-  // per-frame depth test measured both residuals and passed the track).
+  // consistent[i]: how this observation agrees with the previous one under the frame's ego-motion (kStepConsistent:
+  // the per-frame depth test measured both residuals and passed the track; kStepStereoOnly: the test flagged it,
+  // but its disparity changed as the ego-motion predicts; kStepBroken: neither, or not measured).
   void next_frame(const std::vector<cv::Point2f>& px, const std::vector<float>& d, const std::vector<uint8_t>& consistent);
   // Ends the tracks with keep[i] == 0 (the others keep their order).
   void retain(const std::vector<uint8_t>& keep);
@@ -112,11 +121,13 @@ class TrackHistory {
   // Number of most recent frame-to-frame steps of track i that were consistent: its observations `back` frames
   // ago and since agree with each other when consistent_steps(i) >= back (a stereo mismatch in one frame breaks it).
   int consistent_steps(std::size_t i) const { return run_[i]; }
+  // consistent_steps() counts the steps marked kStepConsistent or kStepStereoOnly; this one only kStepConsistent.
+  int consistent_steps_strict(std::size_t i) const { return strict_run_[i]; }
 
  private:
   int depth_;
   int64_t frame_ = 0;                 // current frame number (slot = frame % depth)
-  std::vector<int> age_, run_;
+  std::vector<int> age_, run_, strict_run_;
   std::vector<cv::Point2f> px_;       // size() x depth, slot-major per track
   std::vector<float> d_;
 };
