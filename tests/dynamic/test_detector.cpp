@@ -245,6 +245,60 @@ std::vector<DetectorResult> box_crossing_then_stopping(const DynamicDetectorConf
   return results;
 }
 
+TEST(DynamicDetector, DensifiedPointsAroundASlowMoverAreTestedAgainstTheMultiFrameReference) {
+  // A box 4 m ahead and 1-2 m to the left keeps its distance from the forward-driving camera, with only 60
+  // tracks: a few of its tracks are multi-frame dynamic, and the points densified around them have no history.
+  // Tracked from this frame into the reference image (detector.densify_multiframe_*), those on the box are found
+  // 10-17 px from where static points would be, the way the box's tracks are; frame to frame nothing flags them.
+  CorridorScene scene;
+  scene.box.origin = {-1.9, -1.1, 4.0};
+  std::vector<StereoFrame> frames;
+  std::vector<cv::Mat> gt_masks(14);
+  for (int k = 0; k < static_cast<int>(gt_masks.size()); ++k) {
+    frames.push_back(scene.render_frame(camera_pose(0, 0, 0.04 * k), Eigen::Vector3d(0, 0, 0.04 * k), true,
+                                        static_cast<std::size_t>(k), &gt_masks[static_cast<std::size_t>(k)]));
+  }
+  struct Count {
+    int densified = 0, on_box = 0, off_box = 0, roi_frames = 0;
+  };
+  auto run = [&](int levels) {
+    DynamicDetectorConfig config = per_frame();
+    config.features.target_count = 60;
+    config.tracking.max_tracks = 60;
+    config.detector.densify_multiframe_levels = levels;
+    // The multi-frame threshold adapts to this run's residuals (~5 px, 2.5x its floor; ~2 px in the simulator's
+    // warehouse): 3x that would be above the box's offsets.
+    config.detector.densify_multiframe_factor = 1.5;
+    DynamicDetector detector(scene.calibration(), config);
+    DetectorResult r;
+    Count c;
+    for (std::size_t k = 0; k < frames.size(); ++k) {
+      detector.detect(frames[k], r);
+      int box_dynamic = 0;
+      for (const auto& p : r.points) {
+        const cv::Point q(cvRound(p.cur_px.x), cvRound(p.cur_px.y));
+        const bool on_box = gt_masks[k].at<uint8_t>(q) != 0;
+        box_dynamic += on_box && p.dynamic;
+        if (!p.densified) continue;
+        ++c.densified;
+        if (p.dynamic_multiframe) (on_box ? c.on_box : c.off_box) += 1;
+      }
+      c.roi_frames += box_dynamic >= config.grouping.min_points ? 1 : 0;
+    }
+    return c;
+  };
+  const Count off = run(-1);
+  const Count on = run(2);
+  EXPECT_GT(off.densified, 0);
+  EXPECT_EQ(off.on_box + off.off_box, 0);
+  EXPECT_GE(on.on_box, 10) << on.densified << " densified";
+  EXPECT_EQ(on.off_box, 0);
+  // With them the box has enough dynamic points for a ROI (grouping.min_points) in more frames (7 against 4).
+  EXPECT_GE(on.roi_frames, off.roi_frames + 3);
+  std::printf("densified %d, multi-frame dynamic on the box %d, off it %d; frames with >= 5 dynamic points on the box "
+              "%d (%d without)\n", on.densified, on.on_box, on.off_box, on.roi_frames, off.roi_frames);
+}
+
 TEST(DynamicDetector, AnObjectIsReportedOnceTheNextFrameConfirmsIt) {
   // detector.confirm_min_box_iou: the crossing box (~37500 px) is found in frame 1 and, when every object must
   // wait for confirmation (confirm_below_px 0), reported from frame 2 on, when its box overlaps frame 1's.
