@@ -1490,7 +1490,7 @@ void DynamicDetector::test_densified_multiframe(const StereoFrame& frame, const 
     }
     const float d = extra_cur_disp_[i];
     const cv::Point2f off = found - mf_pred_[k];
-    double offset = std::sqrt(static_cast<double>(off.dot(off)));
+    const double offset = std::sqrt(static_cast<double>(off.dot(off)));
     extra_mf_px_[i] = offset;
     const double threshold =
         opt.densify_multiframe_factor * (result.multiframe.test.a_reproj_used_px + mf.b_reproj * d);

@@ -27,8 +27,10 @@
 // found, back-projected with the reference disparity, still misses the current position, and its disparity
 // residual counts only when the position found is within verify_max_shift_px of the track's (the reference
 // disparity was measured there). And a stereo mismatch in one frame (repetitive racking) gives a wrong depth that
-// looks like motion over the longer baseline: only tracks whose every frame-to-frame step since the reference
-// passed the per-frame depth test take part.
+// looks like motion over the longer baseline: only tracks whose disparity agreed with the ego-motion in every
+// frame-to-frame step since the reference take part (chain_stereo_only; those the per-frame depth test flagged in
+// a step must be off by chain_stereo_factor times the thresholds), or, with chain_stereo_only off, only tracks the
+// per-frame test passed in every step.
 
 #include <cstdint>
 #include <deque>
