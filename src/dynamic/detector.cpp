@@ -333,27 +333,12 @@ void DynamicDetector::detect(const StereoFrame& frame, DetectorResult& result) {
     // Depth-edge check of the tracks only the multi-frame test flags.
     const MultiFrameTestConfig& mf = config_.multiframe;
     if (result.multiframe.valid && mf.edge_check_px > 0) {
-      const auto r = static_cast<float>(mf.edge_check_px);
-      const cv::Point2f offsets[4] = {{-r, 0}, {r, 0}, {0, -r}, {0, r}};
       for (std::size_t i = 0; i < result.multiframe.test.dynamic.size(); ++i) {
         if (!result.multiframe.test.dynamic[i] || result.depth.dynamic.empty() || result.depth.dynamic[i] ||
             (!result.epipolar.dynamic.empty() && result.epipolar.dynamic[i])) {
           continue;
         }
-        const float d = cur_disparity_px_[i];
-        const double tol = mf.edge_tolerance_px + mf.edge_tolerance_rel * d;
-        bool edge = !(d > 0);
-        for (int k = 0; k < 4 && !edge; ++k) {
-          const cv::Point2f q = cur_pts_[i] + offsets[k];
-          if (q.x < 0 || q.y < 0 || q.x > static_cast<float>(size.width - 1) || q.y > static_cast<float>(size.height - 1)) continue;
-          const float dq = sparse_.match(frame.left, frame.right, q);
-          edge = dq > 0 && std::abs(dq - d) > tol;
-        }
-        if (!edge && mf.check_half_window > 0) {
-          const float dc = check_sparse_.match(frame.left, frame.right, cur_pts_[i]);
-          edge = !(dc > 0) || std::abs(dc - d) > tol;
-        }
-        if (edge) result.multiframe.test.dynamic[i] = 0;
+        if (on_depth_edge_or_ambiguous(frame, cur_pts_[i], cur_disparity_px_[i])) result.multiframe.test.dynamic[i] = 0;
       }
     }
     tm.multiframe_ms = ms_since(t);
@@ -1478,8 +1463,6 @@ void DynamicDetector::test_densified_multiframe(const StereoFrame& frame, const 
     mf_back_[k] += origin;
   }
   const float fb2 = static_cast<float>(mf.verify_fb_px * mf.verify_fb_px);
-  const auto r = static_cast<float>(mf.edge_check_px);
-  const cv::Point2f around[4] = {{-r, 0}, {r, 0}, {0, -r}, {0, r}};
   for (std::size_t k = 0; k < mf_index_.size(); ++k) {
     const auto i = static_cast<std::size_t>(mf_index_[k]);
     const cv::Point2f found = mf_ref_[k];
@@ -1511,22 +1494,31 @@ void DynamicDetector::test_densified_multiframe(const StereoFrame& frame, const 
       if (across >= 0 && !(across > threshold)) continue;
     }
     // Not on a depth edge (its window mixes two surfaces that move apart over the frames), not an ambiguous match.
-    const double tol = mf.edge_tolerance_px + mf.edge_tolerance_rel * d;
-    bool edge = false;
-    if (mf.edge_check_px > 0) {
-      for (int e = 0; e < 4 && !edge; ++e) {
-        const cv::Point2f q = extra_cur_[i] + around[e];
-        if (q.x < 0 || q.y < 0 || q.x > w || q.y > h) continue;
-        const float dq = sparse_.match(frame.left, frame.right, q);
-        edge = dq > 0 && std::abs(dq - d) > tol;
-      }
-    }
-    if (!edge && mf.check_half_window > 0) {
-      const float dc = check_sparse_.match(frame.left, frame.right, extra_cur_[i]);
-      edge = !(dc > 0) || std::abs(dc - d) > tol;
-    }
+    const bool edge = on_depth_edge_or_ambiguous(frame, extra_cur_[i], d);
     if (!edge) extra_mf_[i] = 1;
   }
+}
+
+bool DynamicDetector::on_depth_edge_or_ambiguous(const StereoFrame& frame, const cv::Point2f& p, float disparity_px) {
+  const MultiFrameTestConfig& mf = config_.multiframe;
+  const double tol = mf.edge_tolerance_px + mf.edge_tolerance_rel * disparity_px;
+  bool edge = !(disparity_px > 0);
+  if (mf.edge_check_px > 0) {
+    const auto r = static_cast<float>(mf.edge_check_px);
+    const cv::Point2f offsets[4] = {{-r, 0}, {r, 0}, {0, -r}, {0, r}};
+    const auto w = static_cast<float>(frame.left.cols - 1), h = static_cast<float>(frame.left.rows - 1);
+    for (int k = 0; k < 4 && !edge; ++k) {
+      const cv::Point2f q = p + offsets[k];
+      if (q.x < 0 || q.y < 0 || q.x > w || q.y > h) continue;
+      const float dq = sparse_.match(frame.left, frame.right, q);
+      edge = dq > 0 && std::abs(dq - disparity_px) > tol;
+    }
+  }
+  if (!edge && mf.check_half_window > 0) {
+    const float dc = check_sparse_.match(frame.left, frame.right, p);
+    edge = !(dc > 0) || std::abs(dc - disparity_px) > tol;
+  }
+  return edge;
 }
 
 }  // namespace agvslam::dynamic

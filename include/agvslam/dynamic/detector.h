@@ -309,6 +309,9 @@ class DynamicDetector {
   void densify(const StereoFrame& frame, DetectorResult& result);
   // The multi-frame test of this frame's densified points (extra_*), into extra_mf_ / extra_mf_px_.
   void test_densified_multiframe(const StereoFrame& frame, const DetectorResult& result);
+  // The multi-frame test's depth-edge and stereo checks of a point with this disparity (multiframe.edge_check_*,
+  // check_*): true when its window straddles a depth edge or its match is missing or ambiguous.
+  bool on_depth_edge_or_ambiguous(const StereoFrame& frame, const cv::Point2f& p, float disparity_px);
   void outline_region(const StereoFrame& frame, DetectorResult& result, RoiSegmentation& seg, int& next_instance);
   // Coasting (detector.coast_*): a group per object of the last frame that no region of this frame continues and
   // that still has coast_min_tracks tracks at its depth (seeds appended to dyn_pts_).
