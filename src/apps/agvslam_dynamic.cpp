@@ -314,7 +314,18 @@ struct RecallBreakdown {
   // Objects within 4 m in full view: not cut by the border, and no nearer moving object's box over theirs (a person
   // the vehicle must not lose, seen whole; objects that do not move have no ground-truth distance here).
   int full_view_found = 0, full_view_total = 0;
+  int left_found = 0, left_total = 0, right_found = 0, right_total = 0;  // cut by the left / the right border
+  // Where each missed object was lost, by distance (< 4 m, 4-12 m, >= 12 m, unknown): no tracked point on it; tracked
+  // points but none dynamic; dynamic points but no ROI over it; ROIs over it (its own, rejected or withheld, or another
+  // object's) but none of its pixels in the mask; or masked, with the matching IoU below the scoring's.
+  static constexpr int kMissBands = 4;
+  static constexpr int kMissStages = 5;
+  static constexpr const char* kMissBandNames[kMissBands] = {"lt4m", "4_12m", "ge12m", "unknown"};
+  static constexpr const char* kMissStageNames[kMissStages] = {"no_track", "no_dynamic_point", "no_roi", "roi_not_masked",
+                                                               "outline_below_iou"};
+  int misses[kMissBands][kMissStages] = {};
   static constexpr double kNearM = 4.0;
+  static constexpr double kFarM = 12.0;
   static constexpr int kBorderPx = 2;  // a box within this of the left/right edge is cut by it
 
   void add(const std::vector<agvslam::io::SceneObject>& objects, const nlohmann::json& diagnostics, cv::Size size,
@@ -329,10 +340,24 @@ struct RecallBreakdown {
       while (bin < kBins - 1 && d["pixels"].get<int>() >= kUpper[bin]) ++bin;
       ++total[bin];
       found[bin] += hit;
-      const bool cut = obj->box.x <= kBorderPx || obj->box.br().x >= size.width - kBorderPx;
+      const bool cut_left = obj->box.x <= kBorderPx, cut_right = obj->box.br().x >= size.width - kBorderPx;
+      const bool cut = cut_left || cut_right;
       (cut ? border_total : inner_total) += 1;
       (cut ? border_found : inner_found) += hit;
+      left_total += cut_left;
+      left_found += cut_left && hit;
+      right_total += cut_right;
+      right_found += cut_right && hit;
       const double distance_m = d.value("distance_m", -1.0);
+      if (!hit) {
+        const int band = !(distance_m > 0) ? 3 : distance_m < kNearM ? 0 : distance_m < kFarM ? 1 : 2;
+        const int stage = d["in_mask"].get<int>() > 0           ? 4
+                          : d["in_roi"].get<int>() > 0          ? 3
+                          : d["dynamic_points"].get<int>() > 0  ? 2
+                          : d["tracked_points"].get<int>() > 0  ? 1
+                                                                : 0;
+        ++misses[band][stage];
+      }
       if (distance_m > 0) {
         int k = 0;
         while (k < kDistanceBins - 1 && distance_m >= kDistanceUpperM[k]) ++k;
@@ -360,10 +385,33 @@ struct RecallBreakdown {
     std::snprintf(buf, sizeof(buf), "%.3f (%d/%d)", static_cast<double>(f) / t, f, t);
     return buf;
   }
+  std::string describe_misses() const {
+    std::string text = "misses by where they were lost (no track / no dynamic point / no ROI / ROI, not in the mask / "
+                       "outline IoU too low):";
+    const char* labels[kMissBands] = {"< 4 m", "4-12 m", ">= 12 m", "distance unknown"};
+    for (int b = 0; b < kMissBands; ++b) {
+      int sum = 0;
+      for (int k = 0; k < kMissStages; ++k) sum += misses[b][k];
+      if (sum == 0) continue;
+      text += std::string(" ") + labels[b] + " " + std::to_string(misses[b][0]);
+      for (int k = 1; k < kMissStages; ++k) text += " / " + std::to_string(misses[b][k]);
+      text += ";";
+    }
+    if (text.back() == ';') text.pop_back();
+    return text;
+  }
+  nlohmann::json misses_json() const {
+    nlohmann::json j;
+    for (int b = 0; b < kMissBands; ++b) {
+      for (int k = 0; k < kMissStages; ++k) j[kMissBandNames[b]][kMissStageNames[k]] = misses[b][k];
+    }
+    return j;
+  }
   std::string describe() const {
     return "recall by visible size: <1500 px " + ratio(found[0], total[0]) + ", 1500-5000 px " + ratio(found[1], total[1]) +
            ", 5000-20000 px " + ratio(found[2], total[2]) + ", >= 20000 px " + ratio(found[3], total[3]) +
-           "; cut by the left/right image border " + ratio(border_found, border_total) + ", inside the image " +
+           "; cut by the left/right image border " + ratio(border_found, border_total) + " (left " +
+           ratio(left_found, left_total) + ", right " + ratio(right_found, right_total) + "), inside the image " +
            ratio(inner_found, inner_total) +
            (distance_total[0] + distance_total[1] + distance_total[2] + distance_total[3] == 0
                 ? std::string()
@@ -377,6 +425,8 @@ struct RecallBreakdown {
     const char* names[kBins] = {"lt1500", "1500_5000", "5000_20000", "ge20000"};
     for (int b = 0; b < kBins; ++b) j["size_" + std::string(names[b])] = {{"found", found[b]}, {"objects", total[b]}};
     j["border"] = {{"found", border_found}, {"objects", border_total}};
+    j["border_left"] = {{"found", left_found}, {"objects", left_total}};
+    j["border_right"] = {{"found", right_found}, {"objects", right_total}};
     j["inside"] = {{"found", inner_found}, {"objects", inner_total}};
     j["full_view_lt4m"] = {{"found", full_view_found}, {"objects", full_view_total}};
     const char* distance_names[kDistanceBins] = {"lt4m", "4_7m", "7_12m", "ge12m"};
@@ -595,6 +645,7 @@ int run(const Options& o) {
     std::printf("pixels: precision %.4f recall %.4f IoU %.4f\n", score.pixel_precision(), score.pixel_recall(),
                 score.pixel_iou());
     std::printf("%s\n", breakdown.describe().c_str());
+    std::printf("%s\n", breakdown.describe_misses().c_str());
   } else {
     std::printf("no ground-truth masks (mask_0/) in the dataset: not scored\n");
   }
@@ -623,6 +674,7 @@ int run(const Options& o) {
       j["false_regions_per_100_frames"] = score.false_positives_per_100_frames();
       j["pixel"] = {{"precision", score.pixel_precision()}, {"recall", score.pixel_recall()}, {"iou", score.pixel_iou()}};
       j["recall_breakdown"] = breakdown.to_json();
+      j["misses_by_stage"] = breakdown.misses_json();
     }
     nlohmann::json jt;
     for (const auto& name : stage_order) {

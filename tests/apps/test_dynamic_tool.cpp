@@ -134,18 +134,39 @@ TEST(DynamicTool, WritesMasksOverlaysScoresAndJson) {
     boxes[{frame, id}] = cv::Rect(cv::Point(x0, y0), cv::Point(x1 + 1, y1 + 1));
   }
   int full_view = 0, full_view_found = 0;
+  int left = 0, left_found = 0, right = 0, right_found = 0, missed = 0;
+  std::map<std::string, std::map<std::string, int>> misses;  // distance band -> stage -> count
   for (const auto& jf : j["per_frame"]) {
     if (!jf.contains("objects")) continue;
     const int frame = jf["frame"].get<int>();
     for (const auto& o : jf["objects"]) {
-      const double m = o["distance_m"].get<double>();
-      if (!o["moving"].get<bool>() || o["pixels"].get<int>() < 400 || !(m > 0) || m >= 4.0) continue;
+      if (o["moving"].get<bool>() && o["pixels"].get<int>() >= 400) {
+        const cv::Rect b = boxes.at({frame, o["id"].get<int>()});
+        const bool hit = o["iou"].get<double>() >= 0.5;
+        left += b.x <= 2;
+        left_found += b.x <= 2 && hit;
+        right += b.br().x >= 752 - 2;
+        right_found += b.br().x >= 752 - 2 && hit;
+        if (!hit) {
+          const double miss_m = o["distance_m"].get<double>();
+          const std::string band = !(miss_m > 0) ? "unknown" : miss_m < 4.0 ? "lt4m" : miss_m < 12.0 ? "4_12m" : "ge12m";
+          const std::string stage = o["in_mask"].get<int>() > 0          ? "outline_below_iou"
+                                    : o["in_roi"].get<int>() > 0         ? "roi_not_masked"
+                                    : o["dynamic_points"].get<int>() > 0 ? "no_roi"
+                                    : o["tracked_points"].get<int>() > 0 ? "no_dynamic_point"
+                                                                         : "no_track";
+          ++misses[band][stage];
+          ++missed;
+        }
+      }
+      const double object_m = o["distance_m"].get<double>();
+      if (!o["moving"].get<bool>() || o["pixels"].get<int>() < 400 || !(object_m > 0) || object_m >= 4.0) continue;
       const cv::Rect b = boxes.at({frame, o["id"].get<int>()});
       if (b.x <= 2 || b.br().x >= 752 - 2) continue;
       bool covered = false;
       for (const auto& other : jf["objects"]) {
         const double other_m = other["distance_m"].get<double>();
-        if (other["id"] == o["id"] || !(other_m > 0) || other_m >= m) continue;
+        if (other["id"] == o["id"] || !(other_m > 0) || other_m >= object_m) continue;
         covered = covered || (boxes.at({frame, other["id"].get<int>()}) & b).area() > 0;
       }
       if (covered) continue;
@@ -157,6 +178,23 @@ TEST(DynamicTool, WritesMasksOverlaysScoresAndJson) {
   EXPECT_EQ(rb["full_view_lt4m"]["objects"].get<int>(), full_view);
   EXPECT_EQ(rb["full_view_lt4m"]["found"].get<int>(), full_view_found);
   EXPECT_LE(full_view, rb["distance_lt4m"]["objects"].get<int>());
+  // Cut by the left / the right border, and each miss by the stage that lost it, recounted the same way.
+  EXPECT_EQ(rb["border_left"]["objects"].get<int>(), left);
+  EXPECT_EQ(rb["border_left"]["found"].get<int>(), left_found);
+  EXPECT_EQ(rb["border_right"]["objects"].get<int>(), right);
+  EXPECT_EQ(rb["border_right"]["found"].get<int>(), right_found);
+  int found = 0;
+  for (const char* k : {"size_lt1500", "size_1500_5000", "size_5000_20000", "size_ge20000"}) found += rb[k]["found"].get<int>();
+  EXPECT_EQ(missed, by_size - found);
+  EXPECT_GT(missed, 0);
+  int counted = 0;
+  for (const auto& [band, stages] : j["misses_by_stage"].items()) {
+    for (const auto& [stage, n] : stages.items()) {
+      EXPECT_EQ(n.get<int>(), misses[band][stage]) << band << " " << stage;
+      counted += n.get<int>();
+    }
+  }
+  EXPECT_EQ(counted, missed);
 }
 
 TEST(DynamicTool, BadInputNamesTheOptionOrFolder) {

@@ -51,6 +51,7 @@ sep = args.index("--")
 scenarios, seeds = args[:sep], args[sep + 1:]
 tot = {"tp": 0, "fp": 0, "fn": 0, "iou": 0.0}
 breakdown = {}
+misses = {}
 print(f"{'sequence':<14}{'frames':>7}{'P':>8}{'R':>8}{'IoU':>8}{'TP':>6}{'FP':>6}{'FN':>6}{'FP/100f':>9}{'med ms':>8}{'p95 ms':>8}"
       f"{'cpu med':>9}{'cpu p95':>9}")
 static_frames = static_regions = 0
@@ -62,6 +63,10 @@ for sc in scenarios:
             tot["tp"] += tp; tot["fp"] += fp; tot["fn"] += fn; tot["iou"] += j["mean_iou"] * tp
             for k, v in j.get("recall_breakdown", {}).items():
                 b = breakdown.setdefault(k, [0, 0]); b[0] += v["found"]; b[1] += v["objects"]
+            for band, stages in j.get("misses_by_stage", {}).items():
+                m = misses.setdefault(band, {})
+                for stage, n in stages.items():
+                    m[stage] = m.get(stage, 0) + n
         else:
             static_frames += j["frames"]["detected"]; static_regions += j["regions"]["total"]
         t = j["timings"]["total"]
@@ -75,12 +80,20 @@ if tp + fp + fn:
           f"mean IoU {tot['iou'] / max(1, tp):.3f} (TP {tp} FP {fp} FN {fn})")
 if breakdown:
     names = [("size_lt1500", "<1500 px"), ("size_1500_5000", "1500-5000 px"), ("size_5000_20000", "5000-20000 px"),
-             ("size_ge20000", ">=20000 px"), ("border", "cut by the image border"), ("inside", "inside the image"),
+             ("size_ge20000", ">=20000 px"), ("border", "cut by the image border"), ("border_left", "cut by the left border"),
+             ("border_right", "cut by the right border"), ("inside", "inside the image"),
              ("distance_lt4m", "< 4 m"), ("distance_4_7m", "4-7 m"), ("distance_7_12m", "7-12 m"),
              ("distance_ge12m", ">= 12 m"), ("full_view_lt4m", "< 4 m in full view")]
     print("scene1..5 recall by object: " + ", ".join(
         f"{label} {breakdown[k][0] / max(1, breakdown[k][1]):.3f} ({breakdown[k][0]}/{breakdown[k][1]})"
         for k, label in names if k in breakdown))
+if misses:
+    stages = [("no_track", "no track"), ("no_dynamic_point", "no dynamic point"), ("no_roi", "no ROI"),
+              ("roi_not_masked", "ROI, not in the mask"), ("outline_below_iou", "outline IoU too low")]
+    print("scene1..5 misses by where they were lost (" + " / ".join(label for _, label in stages) + "): " + "; ".join(
+        f"{label} " + " / ".join(str(misses[band].get(k, 0)) for k, _ in stages)
+        for band, label in [("lt4m", "< 4 m"), ("4_12m", "4-12 m"), ("ge12m", ">= 12 m"), ("unknown", "distance unknown")]
+        if sum(misses.get(band, {}).values()) > 0))
 if static_frames:
     print(f"static: {static_regions} regions in {static_frames} frames ({100 * static_regions / static_frames:.2f} per 100 frames)")
 PY
