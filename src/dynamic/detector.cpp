@@ -65,6 +65,9 @@ void DetectorOptions::validate(const std::string& source) const {
           "expected an integer in [1, 1000]");
   require(band_carry_min_dynamic >= 0 && band_carry_min_dynamic <= 1000, "band_carry_min_dynamic",
           "expected an integer in [0, 1000]");
+  require(growth_max_ratio == 0 || (growth_max_ratio >= 1 && growth_max_ratio <= 100), "growth_max_ratio",
+          "expected 0 (off) or a number in [1, 100]");
+  require(growth_margin >= 0 && growth_margin <= 2, "growth_margin", "expected a number in [0, 2]");
   require(confirm_min_box_iou >= 0 && confirm_min_box_iou <= 1, "confirm_min_box_iou",
           "expected a number in [0, 1] (0: off)");
   require(confirm_below_px >= 0, "confirm_below_px", "expected an integer >= 0 px (0: every object waits)");
@@ -91,7 +94,7 @@ std::string DetectorOptions::describe() const {
                   densify_min_seeds, densify_extra_tracks, densify_keep_static ? "yes" : "no",
                   densify_multiframe_levels >= 0 ? "on" : "off", std::max(0, densify_multiframe_levels));
   }
-  char objects_text[320] = "off";
+  char objects_text[480] = "off";
   if (track_objects) {
     char carry_text[120] = "off";
     if (band_carry_max_frames > 0) {
@@ -100,9 +103,10 @@ std::string DetectorOptions::describe() const {
     }
     std::snprintf(objects_text, sizeof(objects_text),
                   "on (>= %d points continue one; after >= %d detections it coasts <= %d frames on >= %d tracks, "
-                  ">= %.2f of its area; carried into the left band: %s)",
+                  ">= %.2f of its area; carried into the left band: %s; an outline grown > %.2fx in a frame is cut to "
+                  "its last pixels + %.2f of its size (0: off))",
                   continue_min_points, coast_min_detections, coast_max_frames, coast_min_tracks, coast_min_area_ratio,
-                  carry_text);
+                  carry_text, growth_max_ratio, growth_margin);
   }
   char buf[1600];
   std::snprintf(buf, sizeof(buf),
@@ -222,6 +226,7 @@ void DynamicDetector::reset() {
   track_object_.clear();
   objects_.clear();
   prev_object_boxes_.clear();
+  prev_instances_.release();
 }
 
 DetectorResult DynamicDetector::detect(const StereoFrame& frame) {
@@ -596,6 +601,13 @@ void DynamicDetector::detect(const StereoFrame& frame, DetectorResult& result) {
     }
     cv::compare(result.mask.instances, 0, result.mask.image, cv::CMP_GT);
     if (objects) update_objects(result);
+    // Each object's pixels, for the next frame's growth check (detector.growth_max_ratio).
+    if (objects && opt.growth_max_ratio > 0 && !result.mask.regions.empty()) {
+      result.mask.instances.copyTo(prev_instances_);
+      prev_instance_object_ = instance_object_;
+    } else {
+      prev_instances_.release();
+    }
   }
 
   // The tracks that held continue into the next call (tracking.persistent); this frame's quadtree corners fill
@@ -882,6 +894,7 @@ void DynamicDetector::outline_region(const StereoFrame& frame, DetectorResult& r
     reshaped = true;
   }
   if (reshaped) seg.outline_stats.object_pixels = cv::countNonZero(seg.outline);
+  clamp_growth(result, seg);
   seg.labels.release();
   seg.superpixels = 0;
   seg.planes.clear();
@@ -1006,6 +1019,67 @@ void DynamicDetector::outline_region(const StereoFrame& frame, DetectorResult& r
                                        config_.detector.split_side_by_side, next_instance, result.mask.instances(rect));
   instance_object_.resize(static_cast<std::size_t>(std::min(next_instance, 256)), -1);
   for (int k = first_instance; k < next_instance && k < 256; ++k) instance_object_[static_cast<std::size_t>(k)] = seg.object_id;
+}
+
+int cut_to_moved_pixels(cv::Mat& outline, cv::Point outline_origin, const cv::Mat& last_pixels, cv::Point last_origin,
+                        cv::Point shift_px, cv::Size grow_px) {
+  CV_Assert(outline.type() == CV_8UC1 && last_pixels.type() == CV_8UC1);
+  cv::Mat allowed = cv::Mat::zeros(outline.size(), CV_8UC1);
+  // The last pixels' rectangle, moved, in the outline's coordinates.
+  const cv::Rect moved = cv::Rect(last_origin + shift_px - outline_origin, last_pixels.size()) &
+                         cv::Rect(0, 0, outline.cols, outline.rows);
+  if (!moved.empty()) {
+    last_pixels(cv::Rect(moved.tl() + outline_origin - shift_px - last_origin, moved.size())).copyTo(allowed(moved));
+  }
+  cv::Mat grown;
+  cv::dilate(allowed, grown, cv::getStructuringElement(cv::MORPH_RECT, cv::Size(2 * grow_px.width + 1, 2 * grow_px.height + 1)));
+  cv::bitwise_and(outline, grown, outline);
+  return cv::countNonZero(outline);
+}
+
+void DynamicDetector::clamp_growth(const DetectorResult& result, RoiSegmentation& seg) {
+  const DetectorOptions& opt = config_.detector;
+  if (!(opt.growth_max_ratio > 0) || seg.coasted || seg.object_id < 0 || seg.outline_stats.object_pixels == 0 ||
+      prev_instances_.size() != result.mask.instances.size()) {
+    return;
+  }
+  const auto ob = std::lower_bound(objects_.begin(), objects_.end(), seg.object_id,
+                                   [](const auto& e, int id) { return e.first < id; });
+  if (ob == objects_.end() || ob->first != seg.object_id) return;
+  const ObjectTrack& last = ob->second;
+  const int width = result.mask.instances.cols;
+  if (last.detections < 2 || last.coasted > 0 || last.band_frames > 0 || last.pixels <= 0 || last.rect.x <= 2 ||
+      last.rect.br().x >= width - 2 || !(seg.outline_stats.object_pixels > opt.growth_max_ratio * last.pixels)) {
+    return;
+  }
+  // An object beside or behind another one may come out from behind it: growth is no evidence there.
+  for (const auto& [id, other] : objects_) {
+    if (id != seg.object_id && (other.rect & last.rect).area() > 0) return;
+  }
+  // The object's motion: the median of its tracks' image motion.
+  coast_dx_.clear();
+  coast_dy_.clear();
+  const std::size_t n = std::min(track_object_.size(), result.points.size());
+  for (std::size_t i = 0; i < n; ++i) {
+    const TrackedPoint& p = result.points[i];
+    if (track_object_[i] != seg.object_id || !p.tracked) continue;
+    coast_dx_.push_back(p.cur_px.x - p.prev_px.x);
+    coast_dy_.push_back(p.cur_px.y - p.prev_px.y);
+  }
+  if (coast_dx_.empty()) return;
+  const cv::Point shift(static_cast<int>(std::lround(median_of(coast_dx_))), static_cast<int>(std::lround(median_of(coast_dy_))));
+  const cv::Size grow(static_cast<int>(std::lround(opt.growth_margin * last.rect.width)) + 2,
+                      static_cast<int>(std::lround(opt.growth_margin * last.rect.height)) + 2);
+  // The object's last pixels: its instances of the previous frame.
+  const cv::Rect last_rect = last.rect & cv::Rect(0, 0, prev_instances_.cols, prev_instances_.rows);
+  if (last_rect.empty()) return;
+  clamp_lut_.create(1, 256, CV_8UC1);
+  clamp_lut_.setTo(0);
+  for (std::size_t i = 1; i < prev_instance_object_.size(); ++i) {
+    if (prev_instance_object_[i] == seg.object_id) clamp_lut_.at<uint8_t>(static_cast<int>(i)) = 255;
+  }
+  cv::LUT(prev_instances_(last_rect), clamp_lut_, clamp_last_);
+  seg.outline_stats.object_pixels = cut_to_moved_pixels(seg.outline, seg.roi.tl(), clamp_last_, last_rect.tl(), shift, grow);
 }
 
 void DynamicDetector::add_coasting_groups(const DetectorResult& result, cv::Size image_size,

@@ -537,3 +537,32 @@ TEST(DynamicDetector, OutlineCutByTheRoiSideIsWidened) {
 
 }  // namespace
 }  // namespace agvslam::dynamic
+
+TEST(DynamicDetector, AnOutlineThatFloodedASurfaceIsCutToTheObjectsLastPixelsMoved) {
+  // detector.growth_max_ratio: the object (a 40 x 100 px block) was at (200, 100) in the previous frame and moved
+  // by (+6, -2); this frame's outline, in a ROI whose top-left is (150, 60), holds it and a 120 x 60 px slab of
+  // racking beside and above it at its depth. Cut to the last pixels moved and grown by (4, 8), only the block and
+  // the margin around it remain.
+  cv::Mat last = cv::Mat::zeros(100, 40, CV_8UC1);
+  last.setTo(255);
+  const cv::Point last_origin(200, 100), shift(6, -2), roi_origin(150, 60);
+  cv::Mat outline = cv::Mat::zeros(200, 200, CV_8UC1);
+  const cv::Rect object_now = cv::Rect(last_origin + shift - roi_origin, last.size());
+  outline(object_now).setTo(255);
+  const cv::Rect slab(0, 0, 120, 60);  // ROI coordinates: left of and above the object, touching it
+  outline(slab).setTo(255);
+  ASSERT_GT((slab & object_now).area(), 0);
+  const int before = cv::countNonZero(outline);
+  const int kept = agvslam::dynamic::cut_to_moved_pixels(outline, roi_origin, last, last_origin, shift, cv::Size(4, 8));
+  EXPECT_EQ(kept, cv::countNonZero(outline));
+  EXPECT_LT(kept, before);
+  // The object is kept whole, nothing farther than the margin from it is.
+  EXPECT_EQ(cv::countNonZero(outline(object_now)), object_now.area());
+  const cv::Rect allowed(object_now.x - 4, object_now.y - 8, object_now.width + 8, object_now.height + 16);
+  EXPECT_EQ(kept, cv::countNonZero(outline(allowed & cv::Rect(0, 0, outline.cols, outline.rows))));
+  EXPECT_EQ(cv::countNonZero(outline(cv::Rect(0, 0, allowed.x, outline.rows))), 0);
+  // Last pixels that moved out of the ROI altogether leave nothing.
+  cv::Mat far_outline = cv::Mat::zeros(50, 50, CV_8UC1);
+  far_outline.setTo(255);
+  EXPECT_EQ(agvslam::dynamic::cut_to_moved_pixels(far_outline, cv::Point(600, 400), last, last_origin, shift, cv::Size(4, 8)), 0);
+}

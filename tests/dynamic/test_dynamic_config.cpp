@@ -88,6 +88,8 @@ TEST(DynamicConfig, BadValuesNameFileAndField) {
   expect_error("detector:\n  roi_row_step: 3\n", "detector.roi_row_step");
   expect_error("detector:\n  confirm_min_box_iou: 1.5\n", "detector.confirm_min_box_iou");
   expect_error("detector:\n  confirm_below_px: -1\n", "detector.confirm_below_px");
+  expect_error("detector:\n  growth_max_ratio: 0.5\n", "detector.growth_max_ratio");
+  expect_error("detector:\n  growth_margin: -0.1\n", "detector.growth_margin");
   expect_error("detector:\n  roi_row_step_min_area_px: -1\n", "detector.roi_row_step_min_area_px");
   expect_error("detector:\n  extend_min_rows: 0\n", "detector.extend_min_rows");
   expect_error("detector:\n  extend_step_m: 0\n", "detector.extend_step_m");

@@ -165,6 +165,12 @@ struct DetectorOptions {
   int band_carry_max_frames = 6;
   int band_carry_min_tracks = 3;
   int band_carry_min_dynamic = 2;
+  // Beyond the paper: an object found in the previous frame (on its own evidence, >= 2 frames, not coasted, not cut
+  // by the left/right border, its rectangle overlapping no other object's) whose outline grew by more than this ratio
+  // in one frame flooded a surface beside it: the outline is cut to the object's last pixels, moved by the median
+  // motion of its tracks and grown by growth_margin of its last width / height (+2 px) (0 = off).
+  double growth_max_ratio = 1.6;
+  double growth_margin = 0.08;
   // Beyond the paper: an object (an instance of the mask) is reported only when its bounding box overlaps, by at
   // least this IoU, one found in the previous frame (a moving object persists; a false region seldom does). The
   // first frame of each object is therefore not reported; unreported objects still confirm the next frame's
@@ -286,6 +292,12 @@ struct DetectorResult {
   int dynamic_point_count() const;
 };
 
+// detector.growth_max_ratio: cuts `outline` (CV_8UC1, its top-left pixel at `outline_origin` in the image) to the
+// pixels of `last_pixels` (CV_8UC1, non-zero = the object's pixels in the previous frame, its top-left at
+// `last_origin`) moved by `shift_px` and grown by `grow_px` on each side (a rectangle). Returns the pixels kept.
+int cut_to_moved_pixels(cv::Mat& outline, cv::Point outline_origin, const cv::Mat& last_pixels, cv::Point last_origin,
+                        cv::Point shift_px, cv::Size grow_px);
+
 class DynamicDetector {
  public:
   // calibration: of the rectified frames that detect() receives. Validates both configurations
@@ -318,6 +330,7 @@ class DynamicDetector {
   void add_coasting_groups(const DetectorResult& result, cv::Size image_size, std::vector<DynamicGroup>& groups);
   // Objects of the last frame near the left border: their pixels carried into the band x < d (band_carry_*).
   void carry_band_masks(DetectorResult& result, int& next_instance);
+  void clamp_growth(const DetectorResult& result, RoiSegmentation& seg);
   // The objects with regions in this frame become objects_.
   void update_objects(const DetectorResult& result);
   // SGBM of one ROI (detector.pad_left_border: in left-padded images near the left border).
@@ -366,7 +379,9 @@ class DynamicDetector {
   std::vector<int> dyn_index_;
   std::vector<cv::Point2f> group_pts_, static_pts_;
   std::vector<float> group_disp_, static_disp_;
-  cv::Mat dilated_, small_grey_, small_labels_, reshaped_outline_;
+  cv::Mat dilated_, small_grey_, small_labels_, reshaped_outline_, clamp_last_, clamp_lut_;
+  cv::Mat prev_instances_;               // the previous frame's instances (detector.growth_max_ratio)
+  std::vector<int> prev_instance_object_;  // ... and their objects
   cv::Mat prev_left_, prev_right_;            // the previous frame (for densification)
   std::vector<cv::KeyPoint> keypoints_;
   std::vector<cv::Point2f> extra_prev_, extra_cur_;
