@@ -1057,17 +1057,17 @@ void DynamicDetector::clamp_growth(const DetectorResult& result, RoiSegmentation
     if (id != seg.object_id && (other.rect & last.rect).area() > 0) return;
   }
   // The object's motion: the median of its tracks' image motion.
-  coast_dx_.clear();
-  coast_dy_.clear();
+  motion_dx_.clear();
+  motion_dy_.clear();
   const std::size_t n = std::min(track_object_.size(), result.points.size());
   for (std::size_t i = 0; i < n; ++i) {
     const TrackedPoint& p = result.points[i];
     if (track_object_[i] != seg.object_id || !p.tracked) continue;
-    coast_dx_.push_back(p.cur_px.x - p.prev_px.x);
-    coast_dy_.push_back(p.cur_px.y - p.prev_px.y);
+    motion_dx_.push_back(p.cur_px.x - p.prev_px.x);
+    motion_dy_.push_back(p.cur_px.y - p.prev_px.y);
   }
-  if (coast_dx_.empty()) return;
-  const cv::Point shift(static_cast<int>(std::lround(median_of(coast_dx_))), static_cast<int>(std::lround(median_of(coast_dy_))));
+  if (motion_dx_.empty()) return;
+  const cv::Point shift(static_cast<int>(std::lround(median_of(motion_dx_))), static_cast<int>(std::lround(median_of(motion_dy_))));
   const cv::Size grow(static_cast<int>(std::lround(opt.growth_margin * last.rect.width)) + 2,
                       static_cast<int>(std::lround(opt.growth_margin * last.rect.height)) + 2);
   // The object's last pixels: its instances of the previous frame.
@@ -1103,8 +1103,8 @@ void DynamicDetector::add_coasting_groups(const DetectorResult& result, cv::Size
     }
     if (static_cast<int>(coast_tracks_.size()) < opt.coast_min_tracks) continue;
     // The last rectangle moved with the median motion of its tracks, and the tracks themselves.
-    std::vector<float>& dx = coast_dx_;
-    std::vector<float>& dy = coast_dy_;
+    std::vector<float>& dx = motion_dx_;
+    std::vector<float>& dy = motion_dy_;
     dx.clear();
     dy.clear();
     DynamicGroup g;
@@ -1143,18 +1143,18 @@ void DynamicDetector::carry_band_masks(DetectorResult& result, int& next_instanc
   for (const auto& [id, ob] : objects_) {
     if (ob.carry_mask.empty() || ob.band_frames >= opt.band_carry_max_frames) continue;
     // Its tracks held into this frame (in the band without disparity: their image motion alone).
-    coast_dx_.clear();
-    coast_dy_.clear();
+    motion_dx_.clear();
+    motion_dy_.clear();
     int dynamic = 0;
     for (std::size_t i = 0; i < n; ++i) {
       const TrackedPoint& p = result.points[i];
       if (track_object_[i] != id || !p.tracked) continue;
-      coast_dx_.push_back(p.cur_px.x - p.prev_px.x);
-      coast_dy_.push_back(p.cur_px.y - p.prev_px.y);
+      motion_dx_.push_back(p.cur_px.x - p.prev_px.x);
+      motion_dy_.push_back(p.cur_px.y - p.prev_px.y);
       dynamic += p.dynamic ? 1 : 0;
     }
-    if (static_cast<int>(coast_dx_.size()) < opt.band_carry_min_tracks || dynamic < opt.band_carry_min_dynamic) continue;
-    const cv::Point shift(cvRound(median_of(coast_dx_)), cvRound(median_of(coast_dy_)));
+    if (static_cast<int>(motion_dx_.size()) < opt.band_carry_min_tracks || dynamic < opt.band_carry_min_dynamic) continue;
+    const cv::Point shift(cvRound(median_of(motion_dx_)), cvRound(median_of(motion_dy_)));
     // The band without stereo at the object's depth (and the 2 px beside it where SGBM seldom gives a match).
     const int band = std::min(inst.cols, static_cast<int>(std::ceil(ob.median_disparity_px)) + 2);
     const cv::Rect moved = ob.carry_rect + shift;

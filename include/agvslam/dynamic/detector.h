@@ -418,7 +418,7 @@ class DynamicDetector {
   std::vector<std::pair<int, ObjectTrack>> objects_;  // by object id, ascending
   std::vector<std::pair<int, ObjectTrack>> next_objects_;
   std::vector<int> coast_tracks_;
-  std::vector<float> coast_dx_, coast_dy_;
+  std::vector<float> motion_dx_, motion_dy_;  // scratch: tracks' image motion (coasting, band carry, growth cut)
   std::vector<uint8_t> coast_own_;
   struct CarriedObject {
     int id;
