@@ -170,9 +170,7 @@ bool DepthConsistencyTest::is_dynamic(const DepthTestResult& fitted, double repr
                                       double disparity_residual_px, double disparity_px) const {
   if (!fitted.valid || reprojection_px < 0) return false;
   const bool off_2d = reprojection_px > fitted.a_reproj_used_px + config_.b_reproj * disparity_px;
-  const bool off_depth = disparity_residual_px >= 0 &&
-                         disparity_residual_px > fitted.a_disp_used_px + config_.b_disp * disparity_px;
-  return off_2d || off_depth;
+  return off_2d || disparity_off(fitted, disparity_residual_px, disparity_px);
 }
 
 

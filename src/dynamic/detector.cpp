@@ -322,7 +322,7 @@ void DynamicDetector::detect(const StereoFrame& frame, DetectorResult& result) {
         if (!measured) continue;
         if (!result.depth.dynamic[i]) {
           consistent_[i] = TrackHistory::kStepConsistent;
-        } else if (r_disp <= result.depth.a_disp_used_px + config_.depth_test.b_disp * cur_disparity_px_[i]) {
+        } else if (!depth_test_.disparity_off(result.depth, r_disp, cur_disparity_px_[i])) {
           consistent_[i] = TrackHistory::kStepStereoOnly;
         }
       }

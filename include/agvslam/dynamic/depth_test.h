@@ -74,6 +74,10 @@ class DepthConsistencyTest {
   // (for tracks added after run(), e.g. around dynamic points). disparity_px: the track's disparity.
   bool is_dynamic(const DepthTestResult& fitted, double reprojection_px, double disparity_residual_px,
                   double disparity_px) const;
+  // Its depth half: the disparity residual (>= 0: measured) is over the threshold of `fitted`.
+  bool disparity_off(const DepthTestResult& fitted, double disparity_residual_px, double disparity_px) const {
+    return disparity_residual_px >= 0 && disparity_residual_px > fitted.a_disp_used_px + config_.b_disp * disparity_px;
+  }
 
  private:
   DepthTestConfig config_;
