@@ -5,6 +5,7 @@
 #include <chrono>
 #include <cmath>
 #include <cstdio>
+#include <limits>
 #include <opencv2/features2d.hpp>
 #include <opencv2/imgproc.hpp>
 #include <opencv2/video/tracking.hpp>
@@ -68,6 +69,12 @@ void DetectorOptions::validate(const std::string& source) const {
   require(growth_max_ratio == 0 || (growth_max_ratio >= 1 && growth_max_ratio <= 100), "growth_max_ratio",
           "expected 0 (off) or a number in [1, 100]");
   require(growth_margin >= 0 && growth_margin <= 2, "growth_margin", "expected a number in [0, 2]");
+  require(carve_min_tracks >= 0 && carve_min_tracks <= 1000, "carve_min_tracks", "expected an integer in [0, 1000] (0: off)");
+  require(carve_max_offset_px >= 0 && carve_max_offset_px <= 100, "carve_max_offset_px", "expected a number in [0, 100] px");
+  require(carve_max_multiframe_px >= 0 && carve_max_multiframe_px <= 100, "carve_max_multiframe_px",
+          "expected a number in [0, 100] px");
+  require(carve_min_distance_px >= 0 && carve_min_distance_px <= 1000, "carve_min_distance_px",
+          "expected a number in [0, 1000] px");
   require(confirm_min_box_iou >= 0 && confirm_min_box_iou <= 1, "confirm_min_box_iou",
           "expected a number in [0, 1] (0: off)");
   require(confirm_below_px >= 0, "confirm_below_px", "expected an integer >= 0 px (0: every object waits)");
@@ -94,7 +101,7 @@ std::string DetectorOptions::describe() const {
                   densify_min_seeds, densify_extra_tracks, densify_keep_static ? "yes" : "no",
                   densify_multiframe_levels >= 0 ? "on" : "off", std::max(0, densify_multiframe_levels));
   }
-  char objects_text[480] = "off";
+  char objects_text[640] = "off";
   if (track_objects) {
     char carry_text[120] = "off";
     if (band_carry_max_frames > 0) {
@@ -104,9 +111,11 @@ std::string DetectorOptions::describe() const {
     std::snprintf(objects_text, sizeof(objects_text),
                   "on (>= %d points continue one; after >= %d detections it coasts <= %d frames on >= %d tracks, "
                   ">= %.2f of its area; carried into the left band: %s; an outline grown > %.2fx in a frame is cut to "
-                  "its last pixels + %.2f of its size (0: off))",
+                  "its last pixels + %.2f of its size (0: off); an outline holding >= %d static tracks (offset <= %.2f px, "
+                  "multi-frame <= %.2f px, >= %.0f px from its dynamic points) loses their cells (0: off))",
                   continue_min_points, coast_min_detections, coast_max_frames, coast_min_tracks, coast_min_area_ratio,
-                  carry_text, growth_max_ratio, growth_margin);
+                  carry_text, growth_max_ratio, growth_margin, carve_min_tracks, carve_max_offset_px,
+                  carve_max_multiframe_px, carve_min_distance_px);
   }
   char buf[1600];
   std::snprintf(buf, sizeof(buf),
@@ -954,6 +963,11 @@ void DynamicDetector::outline_region(const StereoFrame& frame, DetectorResult& r
   } else {
     seg.outline_verdict = OutlineVerdict::kKept;
   }
+  // A kept outline that flooded a static surface (its clearly static tracks away from the object's points) loses it.
+  if (seg.outline_verdict == OutlineVerdict::kKept) {
+    carve_static(result, seg);
+    if (seg.outline_stats.object_pixels < oc.min_pixels) seg.outline_verdict = OutlineVerdict::kTooSmall;
+  }
   // Photometric confirmation: an outline whose content moved as a static surface would, frame to frame and against
   // the multi-frame reference (where there is one), is dropped.
   const PhotometricCheckConfig& pc = config_.photometric;
@@ -1035,6 +1049,64 @@ int cut_to_moved_pixels(cv::Mat& outline, cv::Point outline_origin, const cv::Ma
   cv::dilate(allowed, grown, cv::getStructuringElement(cv::MORPH_RECT, cv::Size(2 * grow_px.width + 1, 2 * grow_px.height + 1)));
   cv::bitwise_and(outline, grown, outline);
   return cv::countNonZero(outline);
+}
+
+int carve_static_cells(cv::Mat& outline, cv::Point outline_origin, const std::vector<cv::Point2f>& object_px,
+                       const std::vector<cv::Point2f>& static_px) {
+  CV_Assert(outline.type() == CV_8UC1);
+  if (object_px.empty() || static_px.empty()) return cv::countNonZero(outline);
+  int kept = 0;
+  for (int y = 0; y < outline.rows; ++y) {
+    uint8_t* row = outline.ptr<uint8_t>(y);
+    const float py = static_cast<float>(y + outline_origin.y);
+    for (int x = 0; x < outline.cols; ++x) {
+      if (!row[x]) continue;
+      const float px = static_cast<float>(x + outline_origin.x);
+      float nearest_static = std::numeric_limits<float>::max();
+      for (const cv::Point2f& q : static_px) {
+        nearest_static = std::min(nearest_static, (q.x - px) * (q.x - px) + (q.y - py) * (q.y - py));
+      }
+      bool object_nearer = false;
+      for (const cv::Point2f& q : object_px) {
+        if ((q.x - px) * (q.x - px) + (q.y - py) * (q.y - py) <= nearest_static) {
+          object_nearer = true;
+          break;
+        }
+      }
+      if (object_nearer) {
+        ++kept;
+      } else {
+        row[x] = 0;
+      }
+    }
+  }
+  return kept;
+}
+
+void DynamicDetector::carve_static(const DetectorResult& result, RoiSegmentation& seg) {
+  const DetectorOptions& opt = config_.detector;
+  if (opt.carve_min_tracks <= 0 || seg.coasted || seg.outline_stats.object_pixels == 0 || group_pts_.empty()) return;
+  const double min_d2 = opt.carve_min_distance_px * opt.carve_min_distance_px;
+  carve_static_px_.clear();
+  for (const TrackedPoint& p : result.points) {
+    if (!p.tracked || p.dynamic || p.reprojection_px < 0 || p.reprojection_px > opt.carve_max_offset_px ||
+        p.multiframe_px < 0 || p.multiframe_px > opt.carve_max_multiframe_px) {
+      continue;
+    }
+    const cv::Point q(cvRound(p.cur_px.x) - seg.roi.x, cvRound(p.cur_px.y) - seg.roi.y);
+    if (q.x < 0 || q.y < 0 || q.x >= seg.outline.cols || q.y >= seg.outline.rows || !seg.outline.at<uint8_t>(q)) continue;
+    bool far_from_object = true;
+    for (const cv::Point2f& o : group_pts_) {
+      const double dx = o.x - p.cur_px.x, dy = o.y - p.cur_px.y;
+      if (dx * dx + dy * dy < min_d2) {
+        far_from_object = false;
+        break;
+      }
+    }
+    if (far_from_object) carve_static_px_.push_back(p.cur_px);
+  }
+  if (static_cast<int>(carve_static_px_.size()) < opt.carve_min_tracks) return;
+  seg.outline_stats.object_pixels = carve_static_cells(seg.outline, seg.roi.tl(), group_pts_, carve_static_px_);
 }
 
 void DynamicDetector::clamp_growth(const DetectorResult& result, RoiSegmentation& seg) {

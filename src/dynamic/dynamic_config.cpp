@@ -217,7 +217,7 @@ DynamicDetectorConfig load_dynamic_config(const std::string& path) {
                              "densify_radius_disparity_factor", "densify_max_points", "densify_min_distance_px",
                              "densify_min_seeds", "densify_extra_tracks", "densify_keep_static", "densify_multiframe_levels", "densify_multiframe_agreement", "densify_multiframe_factor",
                              "track_objects", "continue_min_points", "coast_max_frames", "coast_min_detections",
-                             "coast_min_tracks", "coast_min_area_ratio", "band_carry_max_frames", "band_carry_min_tracks", "band_carry_min_dynamic", "growth_max_ratio", "growth_margin", "confirm_min_box_iou", "confirm_below_px",
+                             "coast_min_tracks", "coast_min_area_ratio", "band_carry_max_frames", "band_carry_min_tracks", "band_carry_min_dynamic", "growth_max_ratio", "growth_margin", "carve_min_tracks", "carve_max_offset_px", "carve_max_multiframe_px", "carve_min_distance_px", "confirm_min_box_iou", "confirm_below_px",
                              "pad_left_border", "roi_speckle_filter", "merge_stacked_regions"});
   in.read("detector", "use_epipolar_test", c.detector.use_epipolar_test, flag);
   in.read("detector", "use_depth_test", c.detector.use_depth_test, flag);
@@ -250,6 +250,10 @@ DynamicDetectorConfig load_dynamic_config(const std::string& path) {
   in.read("detector", "densify_multiframe_factor", c.detector.densify_multiframe_factor, num);
   in.read("detector", "growth_max_ratio", c.detector.growth_max_ratio, num);
   in.read("detector", "growth_margin", c.detector.growth_margin, num);
+  in.read("detector", "carve_min_tracks", c.detector.carve_min_tracks, integer);
+  in.read("detector", "carve_max_offset_px", c.detector.carve_max_offset_px, num);
+  in.read("detector", "carve_max_multiframe_px", c.detector.carve_max_multiframe_px, num);
+  in.read("detector", "carve_min_distance_px", c.detector.carve_min_distance_px, num);
   in.read("detector", "track_objects", c.detector.track_objects, flag);
   in.read("detector", "continue_min_points", c.detector.continue_min_points, integer);
   in.read("detector", "coast_max_frames", c.detector.coast_max_frames, "an integer (frames)");

@@ -566,3 +566,33 @@ TEST(DynamicDetector, AnOutlineThatFloodedASurfaceIsCutToTheObjectsLastPixelsMov
   far_outline.setTo(255);
   EXPECT_EQ(agvslam::dynamic::cut_to_moved_pixels(far_outline, cv::Point(600, 400), last, last_origin, shift, cv::Size(4, 8)), 0);
 }
+
+TEST(DynamicDetector, ACarvedOutlineLosesTheCellsOfItsStaticTracks) {
+  // detector.carve_min_tracks: a ROI at (100, 50) whose outline holds a person (a 40 x 120 px block, dynamic points
+  // down its middle) and, right of it, a 60 x 120 px rack face at its depth with two clearly static tracks. The
+  // Voronoi split between the two sets of points puts the boundary halfway between them: the person stays whole,
+  // the rack face beyond the halfway line goes.
+  const cv::Point roi_origin(100, 50);
+  cv::Mat outline = cv::Mat::zeros(140, 120, CV_8UC1);
+  const cv::Rect person(10, 10, 40, 120), rack(50, 10, 60, 120);  // ROI coordinates, side by side
+  outline(person).setTo(255);
+  outline(rack).setTo(255);
+  std::vector<cv::Point2f> object_px, static_px;
+  for (int y = 30; y <= 110; y += 20) object_px.emplace_back(static_cast<float>(roi_origin.x + 30), static_cast<float>(roi_origin.y + y));
+  static_px.emplace_back(static_cast<float>(roi_origin.x + 90), static_cast<float>(roi_origin.y + 40));
+  static_px.emplace_back(static_cast<float>(roi_origin.x + 90), static_cast<float>(roi_origin.y + 100));
+  const int kept = agvslam::dynamic::carve_static_cells(outline, roi_origin, object_px, static_px);
+  EXPECT_EQ(kept, cv::countNonZero(outline));
+  EXPECT_EQ(cv::countNonZero(outline(person)), person.area());
+  // Columns x >= 80 (ROI) lie within 10 columns and 30 rows of a static track (squared distance <= 1000) and 50
+  // columns from the object's points (>= 2500): all carved. Columns 50-54 lie 20-24 columns and <= 20 rows from an
+  // object point (<= 976) and >= 36 columns from the static tracks (>= 1296): all kept.
+  EXPECT_EQ(cv::countNonZero(outline(cv::Rect(80, 0, outline.cols - 80, outline.rows))), 0);
+  EXPECT_EQ(cv::countNonZero(outline(cv::Rect(50, 10, 5, 120))), 5 * 120);
+  EXPECT_LT(kept, person.area() + rack.area() / 2);
+  // Without static tracks (or without object points) nothing is carved.
+  cv::Mat untouched = cv::Mat::zeros(140, 120, CV_8UC1);
+  untouched(rack).setTo(255);
+  EXPECT_EQ(agvslam::dynamic::carve_static_cells(untouched, roi_origin, object_px, {}), rack.area());
+  EXPECT_EQ(agvslam::dynamic::carve_static_cells(untouched, roi_origin, {}, static_px), rack.area());
+}

@@ -90,6 +90,10 @@ TEST(DynamicConfig, BadValuesNameFileAndField) {
   expect_error("detector:\n  confirm_below_px: -1\n", "detector.confirm_below_px");
   expect_error("detector:\n  growth_max_ratio: 0.5\n", "detector.growth_max_ratio");
   expect_error("detector:\n  growth_margin: -0.1\n", "detector.growth_margin");
+  expect_error("detector:\n  carve_min_tracks: -1\n", "detector.carve_min_tracks");
+  expect_error("detector:\n  carve_max_offset_px: -0.2\n", "detector.carve_max_offset_px");
+  expect_error("detector:\n  carve_max_multiframe_px: 200\n", "detector.carve_max_multiframe_px");
+  expect_error("detector:\n  carve_min_distance_px: -5\n", "detector.carve_min_distance_px");
   expect_error("detector:\n  roi_row_step_min_area_px: -1\n", "detector.roi_row_step_min_area_px");
   expect_error("detector:\n  extend_min_rows: 0\n", "detector.extend_min_rows");
   expect_error("detector:\n  extend_step_m: 0\n", "detector.extend_step_m");

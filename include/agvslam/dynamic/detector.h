@@ -171,6 +171,15 @@ struct DetectorOptions {
   // motion of its tracks and grown by growth_margin of its last width / height (+2 px) (0 = off).
   double growth_max_ratio = 1.6;
   double growth_margin = 0.08;
+  // Beyond the paper: an outline kept as dynamic that holds clearly static tracks (depth-test offset <=
+  // carve_max_offset_px and multi-frame offset <= carve_max_multiframe_px, both tested), each at least
+  // carve_min_distance_px from every dynamic point of its group, flooded the surface those tracks lie on (a rack
+  // at the person's depth): the outline loses the pixels nearer to such a track than to any of its dynamic points.
+  // It needs >= carve_min_tracks such tracks (0 = off). Applied to outlines already kept (see params/dynamic.yaml).
+  int carve_min_tracks = 2;
+  double carve_max_offset_px = 0.3;
+  double carve_max_multiframe_px = 1.0;
+  double carve_min_distance_px = 12;
   // Beyond the paper: an object (an instance of the mask) is reported only when its bounding box overlaps, by at
   // least this IoU, one found in the previous frame (a moving object persists; a false region seldom does). The
   // first frame of each object is therefore not reported; unreported objects still confirm the next frame's
@@ -298,6 +307,13 @@ struct DetectorResult {
 int cut_to_moved_pixels(cv::Mat& outline, cv::Point outline_origin, const cv::Mat& last_pixels, cv::Point last_origin,
                         cv::Point shift_px, cv::Size grow_px);
 
+// detector.carve_min_tracks: removes from `outline` (CV_8UC1, its top-left pixel at `outline_origin` in the image)
+// every pixel nearer (image distance) to one of `static_px` than to all of `object_px` (image coordinates), a
+// Voronoi split between the object's dynamic points and the static tracks of a flooded surface. Returns the pixels
+// kept (all of them when either set is empty).
+int carve_static_cells(cv::Mat& outline, cv::Point outline_origin, const std::vector<cv::Point2f>& object_px,
+                       const std::vector<cv::Point2f>& static_px);
+
 class DynamicDetector {
  public:
   // calibration: of the rectified frames that detect() receives. Validates both configurations
@@ -331,6 +347,7 @@ class DynamicDetector {
   // Objects of the last frame near the left border: their pixels carried into the band x < d (band_carry_*).
   void carry_band_masks(DetectorResult& result, int& next_instance);
   void clamp_growth(const DetectorResult& result, RoiSegmentation& seg);
+  void carve_static(const DetectorResult& result, RoiSegmentation& seg);
   // The objects with regions in this frame become objects_.
   void update_objects(const DetectorResult& result);
   // SGBM of one ROI (detector.pad_left_border: in left-padded images near the left border).
@@ -419,6 +436,7 @@ class DynamicDetector {
   std::vector<std::pair<int, ObjectTrack>> next_objects_;
   std::vector<int> coast_tracks_;
   std::vector<float> motion_dx_, motion_dy_;  // scratch: tracks' image motion (coasting, band carry, growth cut)
+  std::vector<cv::Point2f> carve_static_px_;  // scratch: clearly static tracks inside an outline (carve_min_tracks)
   std::vector<uint8_t> coast_own_;
   struct CarriedObject {
     int id;
