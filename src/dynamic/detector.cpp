@@ -1051,32 +1051,114 @@ int cut_to_moved_pixels(cv::Mat& outline, cv::Point outline_origin, const cv::Ma
   return cv::countNonZero(outline);
 }
 
+namespace {
+// True when image point (x, y) is nearer to one of static_px than to every point of object_px (squared distances).
+bool nearer_static(float x, float y, const std::vector<cv::Point2f>& object_px, const std::vector<cv::Point2f>& static_px) {
+  float nearest_static = std::numeric_limits<float>::max();
+  for (const cv::Point2f& q : static_px) nearest_static = std::min(nearest_static, (q.x - x) * (q.x - x) + (q.y - y) * (q.y - y));
+  for (const cv::Point2f& q : object_px) {
+    if ((q.x - x) * (q.x - x) + (q.y - y) * (q.y - y) <= nearest_static) return false;
+  }
+  return true;
+}
+
+// The points of `points` that can be the nearest one to some pixel of a block centred at c: within the nearest
+// distance from c plus the block's diagonal (triangle inequality, both ways).
+void near_block(const std::vector<cv::Point2f>& points, cv::Point2f c, float nearest, float diagonal,
+                std::vector<cv::Point2f>& out) {
+  const float reach = (nearest + 2 * diagonal) * (nearest + 2 * diagonal);
+  for (const cv::Point2f& q : points) {
+    if ((q.x - c.x) * (q.x - c.x) + (q.y - c.y) * (q.y - c.y) <= reach) out.push_back(q);
+  }
+}
+
+float nearest_distance(const std::vector<cv::Point2f>& points, cv::Point2f c) {
+  float best = std::numeric_limits<float>::max();
+  for (const cv::Point2f& q : points) best = std::min(best, (q.x - c.x) * (q.x - c.x) + (q.y - c.y) * (q.y - c.y));
+  return std::sqrt(best);
+}
+}  // namespace
+
 int carve_static_cells(cv::Mat& outline, cv::Point outline_origin, const std::vector<cv::Point2f>& object_px,
                        const std::vector<cv::Point2f>& static_px) {
   CV_Assert(outline.type() == CV_8UC1);
-  if (object_px.empty() || static_px.empty()) return cv::countNonZero(outline);
-  int kept = 0;
-  for (int y = 0; y < outline.rows; ++y) {
-    uint8_t* row = outline.ptr<uint8_t>(y);
-    const float py = static_cast<float>(y + outline_origin.y);
-    for (int x = 0; x < outline.cols; ++x) {
-      if (!row[x]) continue;
-      const float px = static_cast<float>(x + outline_origin.x);
-      float nearest_static = std::numeric_limits<float>::max();
-      for (const cv::Point2f& q : static_px) {
-        nearest_static = std::min(nearest_static, (q.x - px) * (q.x - px) + (q.y - py) * (q.y - py));
+  if (object_px.empty() || static_px.empty() || outline.empty()) return cv::countNonZero(outline);
+  // The Voronoi split on a grid of 4x4 blocks first: a distance transform from the cells holding each set's points
+  // (O(blocks), whatever the number of points). Blocks with a neighbour decided otherwise (where a cell boundary
+  // passes) are then decided pixel by pixel, against the few points that can be nearest there.
+  constexpr int kBlock = 4;
+  const int gw = (outline.cols + kBlock - 1) / kBlock, gh = (outline.rows + kBlock - 1) / kBlock;
+  cv::Mat static_seeds(gh, gw, CV_8UC1, cv::Scalar(255)), object_seeds(gh, gw, CV_8UC1, cv::Scalar(255));
+  const auto mark = [&](const std::vector<cv::Point2f>& points, cv::Mat& seeds) {
+    for (const cv::Point2f& q : points) {
+      const int gx = std::clamp(static_cast<int>(std::floor((q.x - static_cast<float>(outline_origin.x)) / kBlock)), 0, gw - 1);
+      const int gy = std::clamp(static_cast<int>(std::floor((q.y - static_cast<float>(outline_origin.y)) / kBlock)), 0, gh - 1);
+      seeds.at<uint8_t>(gy, gx) = 0;
+    }
+  };
+  mark(static_px, static_seeds);
+  mark(object_px, object_seeds);
+  cv::Mat static_distance, object_distance;
+  cv::distanceTransform(static_seeds, static_distance, cv::DIST_L2, cv::DIST_MASK_PRECISE);
+  cv::distanceTransform(object_seeds, object_distance, cv::DIST_L2, cv::DIST_MASK_PRECISE);
+  enum : uint8_t { kEmpty = 0, kObject = 1, kStatic = 2 };
+  std::vector<uint8_t> block(static_cast<std::size_t>(gw) * static_cast<std::size_t>(gh), kEmpty);
+  for (int by = 0; by < gh; ++by) {
+    const float* ds = static_distance.ptr<float>(by);
+    const float* dobj = object_distance.ptr<float>(by);
+    for (int bx = 0; bx < gw; ++bx) {
+      const cv::Rect r = cv::Rect(bx * kBlock, by * kBlock, kBlock, kBlock) & cv::Rect(0, 0, outline.cols, outline.rows);
+      bool any = false;
+      for (int y = r.y; y < r.br().y && !any; ++y) {
+        const uint8_t* row = outline.ptr<uint8_t>(y);
+        for (int x = r.x; x < r.br().x; ++x) any = any || row[x] != 0;
       }
-      bool object_nearer = false;
-      for (const cv::Point2f& q : object_px) {
-        if ((q.x - px) * (q.x - px) + (q.y - py) * (q.y - py) <= nearest_static) {
-          object_nearer = true;
-          break;
+      if (any) block[static_cast<std::size_t>(by * gw + bx)] = ds[bx] < dobj[bx] ? kStatic : kObject;
+    }
+  }
+  std::vector<cv::Point2f> near_object, near_static;
+  const float diagonal = kBlock * 0.7072f;
+  int kept = 0;
+  for (int by = 0; by < gh; ++by) {
+    for (int bx = 0; bx < gw; ++bx) {
+      const uint8_t b = block[static_cast<std::size_t>(by * gw + bx)];
+      if (b == kEmpty) continue;
+      bool uniform = true;
+      for (int ny = std::max(0, by - 1); ny <= std::min(gh - 1, by + 1) && uniform; ++ny) {
+        for (int nx = std::max(0, bx - 1); nx <= std::min(gw - 1, bx + 1); ++nx) {
+          const uint8_t n = block[static_cast<std::size_t>(ny * gw + nx)];
+          if (n != kEmpty && n != b) {
+            uniform = false;
+            break;
+          }
         }
       }
-      if (object_nearer) {
-        ++kept;
-      } else {
-        row[x] = 0;
+      const int y1 = std::min(outline.rows, (by + 1) * kBlock), x1 = std::min(outline.cols, (bx + 1) * kBlock);
+      if (!uniform) {
+        const cv::Point2f c(static_cast<float>(outline_origin.x) + static_cast<float>(bx * kBlock + x1 - 1) * 0.5f,
+                            static_cast<float>(outline_origin.y) + static_cast<float>(by * kBlock + y1 - 1) * 0.5f);
+        const float nearest = std::min(nearest_distance(object_px, c), nearest_distance(static_px, c));
+        near_object.clear();
+        near_static.clear();
+        near_block(object_px, c, nearest, diagonal, near_object);
+        near_block(static_px, c, nearest, diagonal, near_static);
+      }
+      for (int y = by * kBlock; y < y1; ++y) {
+        uint8_t* row = outline.ptr<uint8_t>(y);
+        for (int x = bx * kBlock; x < x1; ++x) {
+          if (!row[x]) continue;
+          bool carve = b == kStatic;
+          if (!uniform) {
+            carve = !near_static.empty() && (near_object.empty() || nearer_static(static_cast<float>(x + outline_origin.x),
+                                                                                  static_cast<float>(y + outline_origin.y),
+                                                                                  near_object, near_static));
+          }
+          if (carve) {
+            row[x] = 0;
+          } else {
+            ++kept;
+          }
+        }
       }
     }
   }

@@ -309,8 +309,9 @@ int cut_to_moved_pixels(cv::Mat& outline, cv::Point outline_origin, const cv::Ma
 
 // detector.carve_min_tracks: removes from `outline` (CV_8UC1, its top-left pixel at `outline_origin` in the image)
 // every pixel nearer (image distance) to one of `static_px` than to all of `object_px` (image coordinates), a
-// Voronoi split between the object's dynamic points and the static tracks of a flooded surface. Returns the pixels
-// kept (all of them when either set is empty).
+// Voronoi split between the object's dynamic points and the static tracks of a flooded surface (decided per 4x4
+// block by distance transforms, and exactly per pixel in the blocks a cell boundary passes). Returns the pixels kept
+// (all of them when either set is empty).
 int carve_static_cells(cv::Mat& outline, cv::Point outline_origin, const std::vector<cv::Point2f>& object_px,
                        const std::vector<cv::Point2f>& static_px);
 
