@@ -1062,11 +1062,11 @@ bool nearer_static(float x, float y, const std::vector<cv::Point2f>& object_px, 
   return true;
 }
 
-// The points of `points` that can be the nearest one to some pixel of a block centred at c: within the nearest
-// distance from c plus the block's diagonal (triangle inequality, both ways).
-void near_block(const std::vector<cv::Point2f>& points, cv::Point2f c, float nearest, float diagonal,
+// The points of `points` that can be the nearest one to some pixel of a block centred at c, whose pixels lie within
+// half_diagonal of c: within the nearest distance from c plus twice that (triangle inequality, both ways).
+void near_block(const std::vector<cv::Point2f>& points, cv::Point2f c, float nearest, float half_diagonal,
                 std::vector<cv::Point2f>& out) {
-  const float reach = (nearest + 2 * diagonal) * (nearest + 2 * diagonal);
+  const float reach = (nearest + 2 * half_diagonal) * (nearest + 2 * half_diagonal);
   for (const cv::Point2f& q : points) {
     if ((q.x - c.x) * (q.x - c.x) + (q.y - c.y) * (q.y - c.y) <= reach) out.push_back(q);
   }
@@ -1117,7 +1117,7 @@ int carve_static_cells(cv::Mat& outline, cv::Point outline_origin, const std::ve
     }
   }
   std::vector<cv::Point2f> near_object, near_static;
-  const float diagonal = kBlock * 0.7072f;
+  const float half_diagonal = kBlock * 0.7072f;  // >= the 1.5 * sqrt(2) px from a block's centre to its pixels
   int kept = 0;
   for (int by = 0; by < gh; ++by) {
     for (int bx = 0; bx < gw; ++bx) {
@@ -1140,8 +1140,8 @@ int carve_static_cells(cv::Mat& outline, cv::Point outline_origin, const std::ve
         const float nearest = std::min(nearest_distance(object_px, c), nearest_distance(static_px, c));
         near_object.clear();
         near_static.clear();
-        near_block(object_px, c, nearest, diagonal, near_object);
-        near_block(static_px, c, nearest, diagonal, near_static);
+        near_block(object_px, c, nearest, half_diagonal, near_object);
+        near_block(static_px, c, nearest, half_diagonal, near_static);
       }
       for (int y = by * kBlock; y < y1; ++y) {
         uint8_t* row = outline.ptr<uint8_t>(y);
