@@ -1052,12 +1052,17 @@ int cut_to_moved_pixels(cv::Mat& outline, cv::Point outline_origin, const cv::Ma
 }
 
 namespace {
-// True when image point (x, y) is nearer to one of static_px than to every point of object_px (squared distances).
-bool nearer_static(float x, float y, const std::vector<cv::Point2f>& object_px, const std::vector<cv::Point2f>& static_px) {
+float squared_distance(cv::Point2f a, cv::Point2f b) {
+  const cv::Point2f e = a - b;
+  return e.x * e.x + e.y * e.y;
+}
+
+// True when image point p is nearer to one of static_px than to every point of object_px.
+bool nearer_static(cv::Point2f p, const std::vector<cv::Point2f>& object_px, const std::vector<cv::Point2f>& static_px) {
   float nearest_static = std::numeric_limits<float>::max();
-  for (const cv::Point2f& q : static_px) nearest_static = std::min(nearest_static, (q.x - x) * (q.x - x) + (q.y - y) * (q.y - y));
+  for (const cv::Point2f& q : static_px) nearest_static = std::min(nearest_static, squared_distance(q, p));
   for (const cv::Point2f& q : object_px) {
-    if ((q.x - x) * (q.x - x) + (q.y - y) * (q.y - y) <= nearest_static) return false;
+    if (squared_distance(q, p) <= nearest_static) return false;
   }
   return true;
 }
@@ -1068,13 +1073,13 @@ void near_block(const std::vector<cv::Point2f>& points, cv::Point2f c, float nea
                 std::vector<cv::Point2f>& out) {
   const float reach = (nearest + 2 * half_diagonal) * (nearest + 2 * half_diagonal);
   for (const cv::Point2f& q : points) {
-    if ((q.x - c.x) * (q.x - c.x) + (q.y - c.y) * (q.y - c.y) <= reach) out.push_back(q);
+    if (squared_distance(q, c) <= reach) out.push_back(q);
   }
 }
 
 float nearest_distance(const std::vector<cv::Point2f>& points, cv::Point2f c) {
   float best = std::numeric_limits<float>::max();
-  for (const cv::Point2f& q : points) best = std::min(best, (q.x - c.x) * (q.x - c.x) + (q.y - c.y) * (q.y - c.y));
+  for (const cv::Point2f& q : points) best = std::min(best, squared_distance(q, c));
   return std::sqrt(best);
 }
 }  // namespace
@@ -1149,9 +1154,8 @@ int carve_static_cells(cv::Mat& outline, cv::Point outline_origin, const std::ve
           if (!row[x]) continue;
           bool carve = b == kStatic;
           if (!uniform) {
-            carve = !near_static.empty() && (near_object.empty() || nearer_static(static_cast<float>(x + outline_origin.x),
-                                                                                  static_cast<float>(y + outline_origin.y),
-                                                                                  near_object, near_static));
+            const cv::Point2f p(static_cast<float>(x + outline_origin.x), static_cast<float>(y + outline_origin.y));
+            carve = !near_static.empty() && (near_object.empty() || nearer_static(p, near_object, near_static));
           }
           if (carve) {
             row[x] = 0;
