@@ -41,7 +41,10 @@ std::string LkTrackerConfig::describe() const {
 LkTracker::LkTracker(const LkTrackerConfig& config) : config_(config) { config_.validate("LkTrackerConfig"); }
 
 void LkTracker::build_pyramid(const cv::Mat& grey, std::vector<cv::Mat>& pyramid) const {
-  cv::buildOpticalFlowPyramid(grey, pyramid, cv::Size(config_.window_px, config_.window_px), config_.levels, false);
+  // With the Scharr derivatives of every level: calcOpticalFlowPyrLK takes the derivatives of the pyramid it tracks
+  // from when they are not there, over the whole image at each level and call (forward, backward, the
+  // densified points, the multi-frame verification). Stored here, each image's derivatives are taken once.
+  cv::buildOpticalFlowPyramid(grey, pyramid, cv::Size(config_.window_px, config_.window_px), config_.levels, true);
 }
 
 void LkTracker::track(const std::vector<cv::Mat>& prev_pyramid, const std::vector<cv::Mat>& cur_pyramid,

@@ -40,7 +40,8 @@ class LkTracker {
   explicit LkTracker(const LkTrackerConfig& config = {});
   const LkTrackerConfig& config() const { return config_; }
 
-  // Builds the LK pyramid of a grey image (reused for tracking into and out of that image).
+  // Builds the LK pyramid of a grey image (reused for tracking into and out of that image): OpenCV's layout with
+  // derivatives, image and Scharr derivatives interleaved per level (pyramid[0] is the image itself).
   void build_pyramid(const cv::Mat& grey, std::vector<cv::Mat>& pyramid) const;
 
   // Tracks prev_pts from the image of prev_pyramid into that of cur_pyramid; ok[i] = 1 when the track
