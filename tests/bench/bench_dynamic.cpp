@@ -8,6 +8,8 @@
 #include <benchmark/benchmark.h>
 #include <spdlog/spdlog.h>
 
+#include <algorithm>
+#include <chrono>
 #include <cstdlib>
 #include <filesystem>
 #include <memory>
@@ -323,6 +325,9 @@ void run_detector(benchmark::State& state, const std::vector<agvslam::StereoFram
   StageTimings sum;
   int calls = 0, rois = 0, dynamic_points = 0;
   double mask_px = 0;
+  // Each frame's wall time: the figure is the per-frame median, which the mean per iteration that
+  // Google Benchmark reports can hide (frames differ in how many people they hold).
+  std::vector<double> frame_ms;
   for (auto _ : state) {
     if (i == frames.size()) {
       state.PauseTiming();
@@ -331,7 +336,9 @@ void run_detector(benchmark::State& state, const std::vector<agvslam::StereoFram
       i = 1;
       state.ResumeTiming();
     }
+    const auto t0 = std::chrono::steady_clock::now();
     detector.detect(frames[i++], result);
+    frame_ms.push_back(std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - t0).count());
     const StageTimings& t = result.timings;
     sum.pyramid_ms += t.pyramid_ms;
     sum.tracking_ms += t.tracking_ms;
@@ -372,6 +379,9 @@ void run_detector(benchmark::State& state, const std::vector<agvslam::StereoFram
   state.counters["rois"] = rois / n;
   state.counters["dyn_points"] = dynamic_points / n;
   state.counters["mask_px"] = mask_px / n;
+  std::sort(frame_ms.begin(), frame_ms.end());
+  state.counters["frame_median_ms"] = frame_ms[frame_ms.size() / 2];
+  state.counters["frame_p95_ms"] = frame_ms[std::min(frame_ms.size() - 1, frame_ms.size() * 95 / 100)];
 }
 
 void BM_DynamicDetectorStatic(benchmark::State& state) {
