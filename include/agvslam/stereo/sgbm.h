@@ -30,7 +30,7 @@ struct SgbmConfig {
   int speckle_window_size = 100; // connected blobs smaller than this are invalidated (0 disables)
   int speckle_range = 2;         // max disparity variation inside a blob (px)
   SgbmMode mode = SgbmMode::kSgbm3Way;
-  int roi_margin_px = 12;        // context added around each ROI (rows and columns) before matching the crop
+  int roi_margin_px = 4;         // context added around each ROI (rows and columns) before matching the crop
 
   int effective_p1(int channels) const { return p1 > 0 ? p1 : 8 * channels * block_size * block_size; }
   int effective_p2(int channels) const { return p2 > 0 ? p2 : 32 * channels * block_size * block_size; }
