@@ -27,16 +27,19 @@ void DepthTestConfig::validate(const std::string& source) const {
   require(b_disp >= 0 && b_disp <= 1, "b_disp", "expected a number in [0, 1]");
   require(adaptive_k > 0 && adaptive_k <= 20, "adaptive_k", "expected a number in (0, 20]");
   require(max_scale >= 1 && max_scale <= 100, "max_scale", "expected a number in [1, 100]");
+  require(prior_min_inlier_fraction >= 0 && prior_min_inlier_fraction <= 1, "prior_min_inlier_fraction",
+          "expected a fraction in [0, 1] (0: always RANSAC)");
 }
 
 std::string DepthTestConfig::describe() const {
-  char buf[360];
+  char buf[440];
   std::snprintf(buf, sizeof(buf),
                 "depth_test: PnP RANSAC %.2f px / %d iterations on >= %d tracks with d >= %.1f px; dynamic if "
                 "reprojection > %.2f + %.3f d px or disparity residual > %.2f + %.3f d px (adaptive %s, k %.1f, "
-                "<= %.1fx)",
+                "<= %.1fx); a motion prior's inliers replace RANSAC when >= %.0f %% of the tracks (0: never)",
                 ransac_reprojection_px, ransac_iterations, min_points, min_disparity_px,
-                a_reproj_px, b_reproj, a_disp_px, b_disp, adaptive ? "on" : "off", adaptive_k, max_scale);
+                a_reproj_px, b_reproj, a_disp_px, b_disp, adaptive ? "on" : "off", adaptive_k, max_scale,
+                100 * prior_min_inlier_fraction);
   return buf;
 }
 
@@ -47,13 +50,14 @@ DepthConsistencyTest::DepthConsistencyTest(const DepthTestConfig& config) : conf
 void DepthConsistencyTest::run(const PinholeCamera& camera, double bf_px_m, const std::vector<cv::Point2f>& prev_pts,
                                const std::vector<float>& prev_disparity_px, const std::vector<cv::Point2f>& cur_pts,
                                const std::vector<float>& cur_disparity_px, const std::vector<uint8_t>& usable,
-                               DepthTestResult& result) {
+                               DepthTestResult& result, const SE3d* T_cur_prev_prior) {
   const std::size_t n = prev_pts.size();
   CV_Assert(cur_pts.size() == n && usable.size() == n && prev_disparity_px.size() == n && cur_disparity_px.size() == n);
   result.valid = false;
   result.T_cur_prev = SE3d::Identity();
   result.used = 0;
   result.inliers = 0;
+  result.from_prior = false;
   result.a_reproj_used_px = config_.a_reproj_px;
   result.a_disp_used_px = config_.a_disp_px;
   result.reprojection_px.assign(n, -1.0);
@@ -79,12 +83,38 @@ void DepthConsistencyTest::run(const PinholeCamera& camera, double bf_px_m, cons
   cv::Mat rvec, tvec;
   inliers_.clear();
   bool ok = false;
-  try {
-    ok = cv::solvePnPRansac(object_, image_, K, cv::noArray(), rvec, tvec, false, config_.ransac_iterations,
-                            static_cast<float>(config_.ransac_reprojection_px), config_.ransac_confidence, inliers_,
-                            cv::SOLVEPNP_AP3P);
-  } catch (const cv::Exception&) {
-    ok = false;  // degenerate configurations (e.g. all points collinear)
+  if (T_cur_prev_prior && config_.prior_min_inlier_fraction > 0) {
+    // The prior's inliers, as RANSAC would count them for that motion.
+    const Eigen::Matrix3d R_p = T_cur_prev_prior->linear();
+    const Eigen::Vector3d t_p = T_cur_prev_prior->translation();
+    const double max_err2 = config_.ransac_reprojection_px * config_.ransac_reprojection_px;
+    for (std::size_t k = 0; k < object_.size(); ++k) {
+      const Eigen::Vector3d Xc = R_p * Eigen::Vector3d(object_[k].x, object_[k].y, object_[k].z) + t_p;
+      if (!(Xc.z() > 1e-3)) continue;
+      const double du = camera.fx * Xc.x() / Xc.z() + camera.cx - image_[k].x;
+      const double dv = camera.fy * Xc.y() / Xc.z() + camera.cy - image_[k].y;
+      if (du * du + dv * dv <= max_err2) inliers_.push_back(static_cast<int>(k));
+    }
+    if (static_cast<int>(inliers_.size()) >= std::max(6, config_.min_points) &&
+        static_cast<double>(inliers_.size()) >= config_.prior_min_inlier_fraction * static_cast<double>(result.used)) {
+      cv::Mat R_cv;
+      cv::eigen2cv(R_p, R_cv);
+      cv::Rodrigues(R_cv, rvec);
+      tvec = (cv::Mat_<double>(3, 1) << t_p.x(), t_p.y(), t_p.z());
+      ok = true;
+      result.from_prior = true;
+    } else {
+      inliers_.clear();
+    }
+  }
+  if (!ok) {
+    try {
+      ok = cv::solvePnPRansac(object_, image_, K, cv::noArray(), rvec, tvec, false, config_.ransac_iterations,
+                              static_cast<float>(config_.ransac_reprojection_px), config_.ransac_confidence, inliers_,
+                              cv::SOLVEPNP_AP3P);
+    } catch (const cv::Exception&) {
+      ok = false;  // degenerate configurations (e.g. all points collinear)
+    }
   }
   if (!ok || static_cast<int>(inliers_.size()) < 6) return;
   // Least-squares refinement on the inliers.

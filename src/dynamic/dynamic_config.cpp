@@ -49,7 +49,7 @@ DynamicDetectorConfig load_dynamic_config(const std::string& path) {
 
   in.check_keys("depth_test", {"min_points", "min_disparity_px", "ransac_reprojection_px", "ransac_iterations",
                                "ransac_confidence", "a_reproj_px", "b_reproj", "a_disp_px", "b_disp", "adaptive",
-                               "adaptive_k", "max_scale"});
+                               "adaptive_k", "max_scale", "prior_min_inlier_fraction"});
   DepthTestConfig& d = c.depth_test;
   in.read("depth_test", "min_points", d.min_points, integer);
   in.read("depth_test", "min_disparity_px", d.min_disparity_px, px);
@@ -63,12 +63,14 @@ DynamicDetectorConfig load_dynamic_config(const std::string& path) {
   in.read("depth_test", "adaptive", d.adaptive, flag);
   in.read("depth_test", "adaptive_k", d.adaptive_k, num);
   in.read("depth_test", "max_scale", d.max_scale, num);
+  in.read("depth_test", "prior_min_inlier_fraction", d.prior_min_inlier_fraction, num);
 
   in.check_keys("multiframe", {"enabled", "max_frames", "min_frames", "min_translation_m", "max_rotation_deg",
                                "min_points", "min_disparity_px", "ransac_reprojection_px", "a_reproj_px", "b_reproj",
                                "a_disp_px", "b_disp", "adaptive_k", "max_scale", "verify_levels", "verify_fb_px",
                                "verify_max_shift_px", "edge_check_px", "edge_tolerance_px", "edge_tolerance_rel",
-                               "check_half_window", "check_uniqueness_margin", "aperture_ratio", "chain_stereo_only", "chain_stereo_factor"});
+                               "check_half_window", "check_uniqueness_margin", "aperture_ratio", "chain_stereo_only", "chain_stereo_factor",
+                               "prior_min_inlier_fraction"});
   MultiFrameTestConfig& m = c.multiframe;
   in.read("multiframe", "enabled", m.enabled, flag);
   in.read("multiframe", "max_frames", m.max_frames, integer);
@@ -95,6 +97,7 @@ DynamicDetectorConfig load_dynamic_config(const std::string& path) {
   in.read("multiframe", "aperture_ratio", m.aperture_ratio, num);
   in.read("multiframe", "chain_stereo_only", m.chain_stereo_only, flag);
   in.read("multiframe", "chain_stereo_factor", m.chain_stereo_factor, num);
+  in.read("multiframe", "prior_min_inlier_fraction", m.prior_min_inlier_fraction, num);
 
   in.check_keys("grouping", {"a_s_px", "b_s", "t_disp_px", "t_disp_rel", "min_points", "margin_px",
                              "margin_disparity_factor", "merge_overlapping", "merge_side_gap_m"});

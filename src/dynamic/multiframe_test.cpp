@@ -38,6 +38,8 @@ void MultiFrameTestConfig::validate(const std::string& source) const {
           "expected a number in [0, 10]");
   require(aperture_ratio >= 0 && aperture_ratio < 1, "aperture_ratio", "expected a number in [0, 1)");
   require(chain_stereo_factor >= 1 && chain_stereo_factor <= 20, "chain_stereo_factor", "expected a number in [1, 20]");
+  require(prior_min_inlier_fraction >= 0 && prior_min_inlier_fraction <= 1, "prior_min_inlier_fraction",
+          "expected a fraction in [0, 1] (0: always RANSAC)");
 }
 
 std::string MultiFrameTestConfig::describe() const {
@@ -48,12 +50,14 @@ std::string MultiFrameTestConfig::describe() const {
                 "residual > %.2f + %.3f d px (adaptive k %.1f, <= %.1fx); verified by LK into the reference (%d levels, "
                 "fb <= %.2f px, same point within %.2f px); not at depth edges (disparity %d px away within %.2f + "
                 "%.3f d px); disparity confirmed with a %dx%d window, uniqueness %.2f; aperture ratio %.2f; histories "
-                "chained on %s (tracks the per-frame test flagged need %.1fx the thresholds)",
+                "chained on %s (tracks the per-frame test flagged need %.1fx the thresholds); the chained motion's "
+                "inliers replace RANSAC when >= %.0f %% of the tracks (0: never)",
                 enabled ? "on" : "off", min_frames, max_frames, min_translation_m, max_rotation_deg, min_points,
                 min_disparity_px, ransac_reprojection_px, a_reproj_px, b_reproj, a_disp_px, b_disp, adaptive_k, max_scale,
                 verify_levels, verify_fb_px, verify_max_shift_px, edge_check_px, edge_tolerance_px, edge_tolerance_rel,
                 2 * check_half_window + 1, 2 * check_half_window + 1, check_uniqueness_margin, aperture_ratio,
-                chain_stereo_only ? "stereo" : "the per-frame depth test", chain_stereo_factor);
+                chain_stereo_only ? "stereo" : "the per-frame depth test", chain_stereo_factor,
+                100 * prior_min_inlier_fraction);
   return buf;
 }
 
@@ -155,6 +159,7 @@ DepthTestConfig inner_test_config(const MultiFrameTestConfig& c) {
   d.adaptive = true;
   d.adaptive_k = c.adaptive_k;
   d.max_scale = c.max_scale;
+  d.prior_min_inlier_fraction = c.prior_min_inlier_fraction;
   return d;
 }
 }  // namespace
@@ -282,7 +287,8 @@ void MultiFrameTest::run(const PinholeCamera& camera, double bf_px_m, const Trac
     result.candidates += ref_d_[i] >= config_.min_disparity_px ? 1 : 0;
   }
   // The reference plays the "previous" frame of the depth-consistency test: motion, residuals, decisions.
-  test_.run(camera, bf_px_m, ref_px_, ref_d_, cur_px_, cur_d_, both_, result.test);
+  const SE3d T_cur_ref_chained = T_ref_cur.inverse();
+  test_.run(camera, bf_px_m, ref_px_, ref_d_, cur_px_, cur_d_, both_, result.test, &T_cur_ref_chained);
   if (!result.test.valid) return;
   result.T_cur_ref = result.test.T_cur_prev;
   result.reference_left = frames_[static_cast<std::size_t>(h - 1 - chosen)].left;

@@ -104,6 +104,60 @@ TEST(DepthTest, FlagsMotionAlongTheViewingRayThatTheEpipolarTestMisses) {
   EXPECT_LT(epi_movers, movers);
 }
 
+TEST(DepthTest, AMotionPriorReplacesRansacOnlyWhenMostTracksAgreeWithIt) {
+  // 150 static tracks and 40 movers (0.3 m sideways): 79 % of the tracks agree with the true motion.
+  Scene s = make_scene(150, 0, Eigen::Vector3d::Zero(), 0.2, 7);
+  const Scene moving = make_scene(40, 40, Eigen::Vector3d(0.3, 0, 0), 0.2, 8, 2.0, 5.0);
+  s.prev.insert(s.prev.begin(), moving.prev.begin(), moving.prev.end());
+  s.cur.insert(s.cur.begin(), moving.cur.begin(), moving.cur.end());
+  s.d_prev.insert(s.d_prev.begin(), moving.d_prev.begin(), moving.d_prev.end());
+  s.d_cur.insert(s.d_cur.begin(), moving.d_cur.begin(), moving.d_cur.end());
+  s.usable.insert(s.usable.begin(), moving.usable.begin(), moving.usable.end());
+  DepthTestConfig c;
+  c.prior_min_inlier_fraction = 0.5;
+  DepthConsistencyTest test(c);
+
+  // A prior 1 cm and 0.1 degrees off the truth: its inliers are static tracks, and the refinement lands on the truth
+  // (as RANSAC does without the prior).
+  SE3d near_truth = s.T_cur_prev;
+  near_truth.translation() += Eigen::Vector3d(0.01, 0, 0);
+  near_truth.linear() = Eigen::AngleAxisd(0.1 * M_PI / 180, Eigen::Vector3d::UnitX()).toRotationMatrix() * near_truth.linear();
+  DepthTestResult with_prior, without;
+  test.run(s.cam, s.bf, s.prev, s.d_prev, s.cur, s.d_cur, s.usable, with_prior, &near_truth);
+  test.run(s.cam, s.bf, s.prev, s.d_prev, s.cur, s.d_cur, s.usable, without);
+  ASSERT_TRUE(with_prior.valid);
+  ASSERT_TRUE(without.valid);
+  EXPECT_TRUE(with_prior.from_prior);
+  EXPECT_FALSE(without.from_prior);
+  // Its inliers: static tracks only (the movers are >= 25 px off), the nearest ones lost to the prior's 1 cm.
+  EXPECT_GE(with_prior.inliers, 120);
+  EXPECT_LE(with_prior.inliers, 150);
+  EXPECT_LT((with_prior.T_cur_prev.translation() - s.T_cur_prev.translation()).norm(), 0.01);
+  EXPECT_LT(rotation_angle_rad(with_prior.T_cur_prev.inverse() * s.T_cur_prev), 0.2 * M_PI / 180);
+  int movers = 0, statics = 0, same = 0;
+  for (std::size_t i = 0; i < s.prev.size(); ++i) {
+    (i < 40 ? movers : statics) += with_prior.dynamic[i];
+    same += with_prior.dynamic[i] == without.dynamic[i];
+  }
+  EXPECT_GE(movers, 38);
+  EXPECT_LE(statics, 2);
+  EXPECT_GE(same, static_cast<int>(s.prev.size()) - 2);
+
+  // A prior 0.3 m off (a broken chain) holds too few tracks: RANSAC decides, and finds the truth.
+  SE3d wrong = s.T_cur_prev;
+  wrong.translation() += Eigen::Vector3d(0.3, 0, 0);
+  DepthTestResult fallback;
+  test.run(s.cam, s.bf, s.prev, s.d_prev, s.cur, s.d_cur, s.usable, fallback, &wrong);
+  ASSERT_TRUE(fallback.valid);
+  EXPECT_FALSE(fallback.from_prior);
+  EXPECT_LT((fallback.T_cur_prev.translation() - s.T_cur_prev.translation()).norm(), 0.01);
+
+  // Without prior_min_inlier_fraction the prior is ignored.
+  DepthTestResult ignored;
+  DepthConsistencyTest(DepthTestConfig{}).run(s.cam, s.bf, s.prev, s.d_prev, s.cur, s.d_cur, s.usable, ignored, &near_truth);
+  EXPECT_FALSE(ignored.from_prior);
+}
+
 TEST(DepthTest, NeedsEnoughPointsWithDepth) {
   Scene s = make_scene(30, 0, Eigen::Vector3d::Zero(), 0.1, 6);
   for (std::size_t i = 0; i < 25; ++i) s.d_prev[i] = 0;  // no previous disparity
@@ -123,6 +177,17 @@ TEST(DepthTest, InvalidConfigNamesTheField) {
     c.validate("x.yaml");
   } catch (const InputError& e) {
     EXPECT_EQ(e.where(), "depth_test.max_scale");
+  }
+}
+
+TEST(DepthTest, APriorFractionOutsideZeroToOneIsRejected) {
+  DepthTestConfig c;
+  c.prior_min_inlier_fraction = 1.5;
+  try {
+    c.validate("x.yaml");
+    FAIL() << "expected an InputError";
+  } catch (const InputError& e) {
+    EXPECT_EQ(e.where(), "depth_test.prior_min_inlier_fraction");
   }
 }
 

@@ -34,6 +34,10 @@ struct DepthTestConfig {
   bool adaptive = true;               // raise the constants to k * robust sigma of this frame's residuals
   double adaptive_k = 3.0;
   double max_scale = 3.0;             // adaptive constants are at most max_scale x the configured ones
+  // With a motion prior (run()'s T_cur_prev_prior), the tracks within ransac_reprojection_px of where it puts them
+  // are the inliers when they are at least this fraction of the used tracks: RANSAC is skipped and the least-squares
+  // refinement starts from the prior. Otherwise (or 0) PnP RANSAC as without a prior.
+  double prior_min_inlier_fraction = 0.0;
 
   void validate(const std::string& source) const;
   std::string describe() const;
@@ -44,6 +48,7 @@ struct DepthTestResult {
   SE3d T_cur_prev = SE3d::Identity();       // estimated ego-motion (previous camera -> current camera)
   int used = 0;                             // tracks with both disparities
   int inliers = 0;                          // PnP inliers
+  bool from_prior = false;                  // the inliers came from the motion prior (no RANSAC)
   double a_reproj_used_px = 0, a_disp_used_px = 0;
   std::vector<double> reprojection_px;      // per track, -1 where not tested
   std::vector<double> disparity_residual_px;  // per track, -1 where not tested (no current disparity)
@@ -57,9 +62,11 @@ class DepthConsistencyTest {
 
   // camera: rectified left camera; bf_px_m = fx * baseline. usable[i] == 0 excludes a track. A track is
   // tested when its previous disparity is >= min_disparity_px; the disparity residual needs the current one.
+  // T_cur_prev_prior: a motion known beforehand (see prior_min_inlier_fraction), or nullptr.
   void run(const PinholeCamera& camera, double bf_px_m, const std::vector<cv::Point2f>& prev_pts,
            const std::vector<float>& prev_disparity_px, const std::vector<cv::Point2f>& cur_pts,
-           const std::vector<float>& cur_disparity_px, const std::vector<uint8_t>& usable, DepthTestResult& result);
+           const std::vector<float>& cur_disparity_px, const std::vector<uint8_t>& usable, DepthTestResult& result,
+           const SE3d* T_cur_prev_prior = nullptr);
 
   // Where a point seen at prev_px with prev_disparity_px appears after the motion: false when it has no disparity
   // or lands behind the camera. depth_m: its depth in the current camera.

@@ -61,6 +61,11 @@ struct MultiFrameTestConfig {
   double b_disp = 0.05;
   double adaptive_k = 3.0;          // a = clamp(k * robust sigma, a_*, max_scale * a_*)
   double max_scale = 2.5;
+  // The motion between reference and current frame is the chain of the per-frame depth test's motions (each from
+  // PnP RANSAC): the tracks within ransac_reprojection_px of where it puts them are the PnP inliers when they are
+  // >= this fraction of the tracks used, and the least-squares refinement starts from it; fewer (the chain drifted
+  // or broke): PnP RANSAC as before. 0 = always RANSAC.
+  double prior_min_inlier_fraction = 0.5;
   int verify_levels = 1;            // LK pyramid levels of the verification (reach ~4 x window / 2 px)
   double verify_fb_px = 1.0;        // its forward-backward check
   double verify_max_shift_px = 1.0; // the track's reference position is confirmed within this
