@@ -33,6 +33,13 @@ void accumulate_row_costs(const int16_t* ref_row, int side, const int16_t* strip
   }
   for (int e = 0; e < m; ++e) costs[e] += rc[e];
 }
+
+// Least of c[lo, hi) (INT32_MAX for an empty range).
+int32_t range_min(const int32_t* c, int lo, int hi) {
+  int32_t mn = std::numeric_limits<int32_t>::max();
+  for (int e = std::max(lo, 0); e < hi; ++e) mn = std::min(mn, c[e]);
+  return mn;
+}
 }  // namespace
 
 void SparseStereoConfig::validate(const std::string& source) const {
@@ -153,15 +160,15 @@ SparseStereoMatcher::Search SparseStereoMatcher::search(const cv::Mat& ref, cons
                          cs);
   }
 
+  // The first minimum and the least cost more than one column from it. Minima over plain ranges (vectorised),
+  // not a running arg-min (a chain of dependent compares per candidate).
+  const int32_t* c = costs_.data();
+  const int32_t best_cost = range_min(c, 0, m);
   int best = 0;
-  for (int e = 1; e < m; ++e) {
-    if (costs_[static_cast<std::size_t>(e)] < costs_[static_cast<std::size_t>(best)]) best = e;
-  }
-  int64_t second = std::numeric_limits<int64_t>::max();
-  for (int e = 0; e < m; ++e) {
-    if (std::abs(e - best) <= 1) continue;
-    second = std::min<int64_t>(second, costs_[static_cast<std::size_t>(e)]);
-  }
+  while (c[best] != best_cost) ++best;
+  const int32_t second_cost = std::min(range_min(c, 0, best - 1), range_min(c, best + 2, m));
+  const int64_t second =
+      second_cost == std::numeric_limits<int32_t>::max() ? std::numeric_limits<int64_t>::max() : second_cost;
   out.ok = true;
   out.best_column = c_lo + best;
   out.best_cost = costs_[static_cast<std::size_t>(best)];
