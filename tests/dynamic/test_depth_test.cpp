@@ -152,9 +152,11 @@ TEST(DepthTest, AMotionPriorReplacesRansacOnlyWhenMostTracksAgreeWithIt) {
   EXPECT_FALSE(fallback.from_prior);
   EXPECT_LT((fallback.T_cur_prev.translation() - s.T_cur_prev.translation()).norm(), 0.01);
 
-  // Without prior_min_inlier_fraction the prior is ignored.
+  // With prior_min_inlier_fraction 0 the prior is ignored.
+  DepthTestConfig never;
+  never.prior_min_inlier_fraction = 0;
   DepthTestResult ignored;
-  DepthConsistencyTest(DepthTestConfig{}).run(s.cam, s.bf, s.prev, s.d_prev, s.cur, s.d_cur, s.usable, ignored, &near_truth);
+  DepthConsistencyTest(never).run(s.cam, s.bf, s.prev, s.d_prev, s.cur, s.d_cur, s.usable, ignored, &near_truth);
   EXPECT_FALSE(ignored.from_prior);
 }
 

@@ -406,9 +406,13 @@ TEST(DynamicDetector, BoxAtTheLeftBorderIsCompletedIntoTheUnmatchedBand) {
   const int with_band = cv::countNonZero(with.result.mask.image(band) & with.gt_mask(band));
   const int with_false = cv::countNonZero(with.result.mask.image(band) & ~with.gt_mask(band));
   const int without_band = cv::countNonZero(without.result.mask.image(band));
+  const int without_false = cv::countNonZero(without.result.mask.image(band) & ~without.gt_mask(band));
   EXPECT_GT(with_band, gt_band * 8 / 10) << summary(with.result);
   EXPECT_LT(with_false, gt_band / 10) << summary(with.result);
-  EXPECT_LT(without_band, gt_band / 20) << summary(without.result);
+  // Unfilled, the band holds only what SGBM matched against the padding near x = d (262 px with a 12 px ROI
+  // context margin, 350 with 4 px; all on the box).
+  EXPECT_LT(without_band, gt_band / 10) << summary(without.result);
+  EXPECT_LT(without_false, gt_band / 100) << summary(without.result);
   const double iou_with = iou(with.result.mask.image, with.gt_mask);
   const double iou_without = iou(without.result.mask.image, without.gt_mask);
   EXPECT_GT(iou_with, iou_without + 0.05);
