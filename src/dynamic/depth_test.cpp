@@ -43,6 +43,75 @@ std::string DepthTestConfig::describe() const {
   return buf;
 }
 
+namespace {
+
+// PnP RANSAC: P3P (OpenCV's solveP3P) on 3-point samples, each of its solutions scored by the tracks it puts within
+// threshold_px (the projection done here, a few ns per track, where cv::solvePnPRansac's projectPoints costs most of
+// its time); the sample count adapts to the best inlier ratio as in OpenCV's RANSAC. Fixed seed: reproducible.
+// Returns the best motion's inliers (empty when no sample gave a motion).
+void ransac_p3p(const std::vector<cv::Point3f>& object, const std::vector<cv::Point2f>& image, const PinholeCamera& camera,
+                const cv::Matx33d& K, double threshold_px, double confidence, int max_iterations, cv::Mat& rvec,
+                cv::Mat& tvec, std::vector<int>& inliers) {
+  inliers.clear();
+  const int n = static_cast<int>(object.size());
+  if (n < 4) return;
+  const double max_err2 = threshold_px * threshold_px;
+  cv::RNG rng(0x5eed);
+  std::vector<cv::Point3f> sample_obj(3);
+  std::vector<cv::Point2f> sample_img(3);
+  std::vector<cv::Mat> rvecs, tvecs;
+  std::vector<int> candidate;
+  int best_count = 0;
+  int needed = max_iterations;
+  for (int it = 0; it < needed && it < max_iterations; ++it) {
+    int idx[3];
+    for (int k = 0; k < 3; ++k) {
+      bool fresh;
+      do {
+        idx[k] = rng.uniform(0, n);
+        fresh = true;
+        for (int j = 0; j < k; ++j) fresh = fresh && idx[j] != idx[k];
+      } while (!fresh);
+      sample_obj[static_cast<std::size_t>(k)] = object[static_cast<std::size_t>(idx[k])];
+      sample_img[static_cast<std::size_t>(k)] = image[static_cast<std::size_t>(idx[k])];
+    }
+    int solutions = 0;
+    try {
+      solutions = cv::solveP3P(sample_obj, sample_img, K, cv::noArray(), rvecs, tvecs, cv::SOLVEPNP_P3P);
+    } catch (const cv::Exception&) {
+      solutions = 0;  // degenerate sample (collinear points)
+    }
+    for (int s = 0; s < solutions; ++s) {
+      cv::Matx33d R;
+      cv::Rodrigues(rvecs[static_cast<std::size_t>(s)], R);
+      const cv::Vec3d t(tvecs[static_cast<std::size_t>(s)]);
+      candidate.clear();
+      for (int i = 0; i < n; ++i) {
+        const cv::Point3f& X = object[static_cast<std::size_t>(i)];
+        const double zc = R(2, 0) * X.x + R(2, 1) * X.y + R(2, 2) * X.z + t[2];
+        if (!(zc > 1e-3)) continue;
+        const double xc = R(0, 0) * X.x + R(0, 1) * X.y + R(0, 2) * X.z + t[0];
+        const double yc = R(1, 0) * X.x + R(1, 1) * X.y + R(1, 2) * X.z + t[1];
+        const double du = camera.fx * xc / zc + camera.cx - image[static_cast<std::size_t>(i)].x;
+        const double dv = camera.fy * yc / zc + camera.cy - image[static_cast<std::size_t>(i)].y;
+        if (du * du + dv * dv <= max_err2) candidate.push_back(i);
+      }
+      if (static_cast<int>(candidate.size()) <= best_count) continue;
+      best_count = static_cast<int>(candidate.size());
+      inliers.swap(candidate);
+      rvecs[static_cast<std::size_t>(s)].copyTo(rvec);
+      tvecs[static_cast<std::size_t>(s)].copyTo(tvec);
+      // Samples needed for `confidence` that one is all inliers: log(1 - p) / log(1 - w^3).
+      const double w = static_cast<double>(best_count) / n;
+      const double miss = 1.0 - w * w * w;
+      needed = miss <= 0 ? 0
+                         : static_cast<int>(std::ceil(std::log(1.0 - confidence) / std::log(std::max(miss, 1e-12))));
+    }
+  }
+}
+
+}  // namespace
+
 DepthConsistencyTest::DepthConsistencyTest(const DepthTestConfig& config) : config_(config) {
   config_.validate("DepthTestConfig");
 }
@@ -108,13 +177,9 @@ void DepthConsistencyTest::run(const PinholeCamera& camera, double bf_px_m, cons
     }
   }
   if (!ok) {
-    try {
-      ok = cv::solvePnPRansac(object_, image_, K, cv::noArray(), rvec, tvec, false, config_.ransac_iterations,
-                              static_cast<float>(config_.ransac_reprojection_px), config_.ransac_confidence, inliers_,
-                              cv::SOLVEPNP_AP3P);
-    } catch (const cv::Exception&) {
-      ok = false;  // degenerate configurations (e.g. all points collinear)
-    }
+    ransac_p3p(object_, image_, camera, K, config_.ransac_reprojection_px, config_.ransac_confidence,
+               config_.ransac_iterations, rvec, tvec, inliers_);
+    ok = !inliers_.empty();
   }
   if (!ok || static_cast<int>(inliers_.size()) < 6) return;
   // Least-squares refinement on the inliers.

@@ -160,6 +160,33 @@ TEST(DepthTest, AMotionPriorReplacesRansacOnlyWhenMostTracksAgreeWithIt) {
   EXPECT_FALSE(ignored.from_prior);
 }
 
+TEST(DepthTest, RansacFindsTheMotionAmongThirtyPercentOutliersAndRepeatsItself) {
+  // 140 static tracks and 60 gross mismatches (tracked 5-40 px off): the P3P RANSAC's motion is the true one, its
+  // inliers are the static tracks, and a second run gives the same motion (fixed seed).
+  Scene s = make_scene(200, 0, Eigen::Vector3d::Zero(), 0.2, 9);
+  cv::RNG rng(10);
+  for (std::size_t i = 0; i < 60; ++i) {
+    const double angle = rng.uniform(0.0, 2 * M_PI), length = rng.uniform(5.0, 40.0);
+    s.cur[i] += cv::Point2f(static_cast<float>(length * std::cos(angle)), static_cast<float>(length * std::sin(angle)));
+  }
+  DepthConsistencyTest test;
+  DepthTestResult a, b;
+  test.run(s.cam, s.bf, s.prev, s.d_prev, s.cur, s.d_cur, s.usable, a);
+  test.run(s.cam, s.bf, s.prev, s.d_prev, s.cur, s.d_cur, s.usable, b);
+  ASSERT_TRUE(a.valid);
+  EXPECT_FALSE(a.from_prior);
+  EXPECT_GE(a.inliers, 130);
+  EXPECT_LE(a.inliers, 142);
+  EXPECT_LT((a.T_cur_prev.translation() - s.T_cur_prev.translation()).norm(), 0.01);
+  EXPECT_LT(rotation_angle_rad(a.T_cur_prev.inverse() * s.T_cur_prev), 0.2 * M_PI / 180);
+  EXPECT_EQ(a.inliers, b.inliers);
+  EXPECT_TRUE(a.T_cur_prev.isApprox(b.T_cur_prev, 0.0));
+  int mismatches_flagged = 0, statics_flagged = 0;
+  for (std::size_t i = 0; i < s.prev.size(); ++i) (i < 60 ? mismatches_flagged : statics_flagged) += a.dynamic[i];
+  EXPECT_GE(mismatches_flagged, 57);
+  EXPECT_LE(statics_flagged, 2);
+}
+
 TEST(DepthTest, NeedsEnoughPointsWithDepth) {
   Scene s = make_scene(30, 0, Eigen::Vector3d::Zero(), 0.1, 6);
   for (std::size_t i = 0; i < 25; ++i) s.d_prev[i] = 0;  // no previous disparity

@@ -3,7 +3,7 @@
 //
 // The epipolar test cannot see motion along the epipolar line (a person walking straight ahead of a forward-
 // driving AGV). With stereo, a tracked point has a disparity in both frames, hence a 3-D position in the
-// previous camera. The ego-motion T_cur_prev is estimated from all tracks by PnP RANSAC (3-D previous
+// previous camera. The ego-motion T_cur_prev is estimated from all tracks by P3P RANSAC (3-D previous
 // points -> 2-D current points) and refined on the inliers; a point is dynamic when its predicted position
 // disagrees with what is observed:
 //   reprojection offset |pi(T X_prev) - p_cur|          > a_reproj_px + b_reproj * d, or
@@ -25,7 +25,7 @@ struct DepthTestConfig {
   int min_points = 12;                // tracks with both disparities needed to estimate the motion
   double min_disparity_px = 2.0;      // farther points (depth too uncertain) are neither used nor tested
   double ransac_reprojection_px = 2.0;
-  int ransac_iterations = 200;
+  int ransac_iterations = 200;       // at most this many 3-track P3P samples (fewer as the inlier ratio allows)
   double ransac_confidence = 0.999;
   double a_reproj_px = 1.5;           // reprojection threshold: constant (px) ...
   double b_reproj = 0.03;             // ... + slope per px of disparity
