@@ -12,9 +12,10 @@
 // least min_frames back whose camera is at least min_translation_m away from the current one along the chain
 // of per-frame ego-motions (the oldest allowed one when the vehicle stands still), with at most
 // max_rotation_deg of rotation between them and at least min_points tracks observed in both. The motion
-// between the two frames is estimated from those tracks (PnP RANSAC on their 3-D reference positions, as in
-// the depth-consistency test), and a track is dynamic when its current position or disparity is off the
-// prediction by more than a + b d (a adapts to the robust scale of this frame's residuals).
+// between the two frames is estimated from those tracks (PnP on their 3-D reference positions, from the chained
+// motion's inliers or by RANSAC as in the depth-consistency test), and a track is dynamic when its current
+// position or disparity is off the prediction by more than a + b d (a adapts to the robust scale of this frame's
+// residuals).
 //
 // Following tracks over frames instead of re-finding them in the reference image keeps the per-step motion
 // small: re-localising a point 0.3-0.6 s back from the chained prediction aliases on repeated structure (the
