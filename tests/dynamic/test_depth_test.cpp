@@ -56,6 +56,12 @@ Scene make_scene(int n, int movers, const Eigen::Vector3d& motion_m, double nois
   return s;
 }
 
+// The estimated motion is the scene's within 1 cm and 0.2 degrees.
+void expect_true_motion(const DepthTestResult& r, const Scene& s) {
+  EXPECT_LT((r.T_cur_prev.translation() - s.T_cur_prev.translation()).norm(), 0.01);
+  EXPECT_LT(rotation_angle_rad(r.T_cur_prev.inverse() * s.T_cur_prev), 0.2 * M_PI / 180);
+}
+
 TEST(DepthTest, RecoversTheEgoMotionAndPassesStaticPoints) {
   const Scene s = make_scene(150, 0, Eigen::Vector3d::Zero(), 0.2, 3);
   DepthConsistencyTest test;
@@ -64,8 +70,7 @@ TEST(DepthTest, RecoversTheEgoMotionAndPassesStaticPoints) {
   ASSERT_TRUE(r.valid);
   EXPECT_EQ(r.used, 150);
   EXPECT_GT(r.inliers, 140);
-  EXPECT_LT((r.T_cur_prev.translation() - s.T_cur_prev.translation()).norm(), 0.01);
-  EXPECT_LT(rotation_angle_rad(r.T_cur_prev.inverse() * s.T_cur_prev), 0.2 * M_PI / 180);
+  expect_true_motion(r, s);
   int flagged = 0;
   for (uint8_t f : r.dynamic) flagged += f;
   EXPECT_LE(flagged, 2);
@@ -132,8 +137,7 @@ TEST(DepthTest, AMotionPriorReplacesRansacOnlyWhenMostTracksAgreeWithIt) {
   // Its inliers: static tracks only (the movers are >= 25 px off), the nearest ones lost to the prior's 1 cm.
   EXPECT_GE(with_prior.inliers, 120);
   EXPECT_LE(with_prior.inliers, 150);
-  EXPECT_LT((with_prior.T_cur_prev.translation() - s.T_cur_prev.translation()).norm(), 0.01);
-  EXPECT_LT(rotation_angle_rad(with_prior.T_cur_prev.inverse() * s.T_cur_prev), 0.2 * M_PI / 180);
+  expect_true_motion(with_prior, s);
   int movers = 0, statics = 0, same = 0;
   for (std::size_t i = 0; i < s.prev.size(); ++i) {
     (i < 40 ? movers : statics) += with_prior.dynamic[i];
@@ -150,7 +154,7 @@ TEST(DepthTest, AMotionPriorReplacesRansacOnlyWhenMostTracksAgreeWithIt) {
   test.run(s.cam, s.bf, s.prev, s.d_prev, s.cur, s.d_cur, s.usable, fallback, &wrong);
   ASSERT_TRUE(fallback.valid);
   EXPECT_FALSE(fallback.from_prior);
-  EXPECT_LT((fallback.T_cur_prev.translation() - s.T_cur_prev.translation()).norm(), 0.01);
+  expect_true_motion(fallback, s);
 
   // With prior_min_inlier_fraction 0 the prior is ignored.
   DepthTestConfig never;
@@ -177,8 +181,7 @@ TEST(DepthTest, RansacFindsTheMotionAmongThirtyPercentOutliersAndRepeatsItself) 
   EXPECT_FALSE(a.from_prior);
   EXPECT_GE(a.inliers, 130);
   EXPECT_LE(a.inliers, 142);
-  EXPECT_LT((a.T_cur_prev.translation() - s.T_cur_prev.translation()).norm(), 0.01);
-  EXPECT_LT(rotation_angle_rad(a.T_cur_prev.inverse() * s.T_cur_prev), 0.2 * M_PI / 180);
+  expect_true_motion(a, s);
   EXPECT_EQ(a.inliers, b.inliers);
   EXPECT_TRUE(a.T_cur_prev.isApprox(b.T_cur_prev, 0.0));
   int mismatches_flagged = 0, statics_flagged = 0;
