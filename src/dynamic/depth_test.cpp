@@ -34,7 +34,7 @@ void DepthTestConfig::validate(const std::string& source) const {
 std::string DepthTestConfig::describe() const {
   char buf[440];
   std::snprintf(buf, sizeof(buf),
-                "depth_test: PnP RANSAC %.2f px / %d iterations on >= %d tracks with d >= %.1f px; dynamic if "
+                "depth_test: P3P RANSAC %.2f px / <= %d samples on >= %d tracks with d >= %.1f px; dynamic if "
                 "reprojection > %.2f + %.3f d px or disparity residual > %.2f + %.3f d px (adaptive %s, k %.1f, "
                 "<= %.1fx); a motion prior's inliers replace RANSAC when >= %.0f %% of the tracks (0: never)",
                 ransac_reprojection_px, ransac_iterations, min_points, min_disparity_px,
@@ -44,6 +44,23 @@ std::string DepthTestConfig::describe() const {
 }
 
 namespace {
+
+// The indices of the tracks a motion (R, t) puts within threshold_px of where they are seen.
+void inliers_of(const std::vector<cv::Point3f>& object, const std::vector<cv::Point2f>& image, const PinholeCamera& camera,
+                const cv::Matx33d& R, const cv::Vec3d& t, double threshold_px, std::vector<int>& inliers) {
+  inliers.clear();
+  const double max_err2 = threshold_px * threshold_px;
+  for (std::size_t i = 0; i < object.size(); ++i) {
+    const cv::Point3f& X = object[i];
+    const double zc = R(2, 0) * X.x + R(2, 1) * X.y + R(2, 2) * X.z + t[2];
+    if (!(zc > 1e-3)) continue;
+    const double xc = R(0, 0) * X.x + R(0, 1) * X.y + R(0, 2) * X.z + t[0];
+    const double yc = R(1, 0) * X.x + R(1, 1) * X.y + R(1, 2) * X.z + t[1];
+    const double du = camera.fx * xc / zc + camera.cx - image[i].x;
+    const double dv = camera.fy * yc / zc + camera.cy - image[i].y;
+    if (du * du + dv * dv <= max_err2) inliers.push_back(static_cast<int>(i));
+  }
+}
 
 // PnP RANSAC: P3P (OpenCV's solveP3P) on 3-point samples, each of its solutions scored by the tracks it puts within
 // threshold_px (the projection done here, a few ns per track, where cv::solvePnPRansac's projectPoints costs most of
@@ -55,7 +72,6 @@ void ransac_p3p(const std::vector<cv::Point3f>& object, const std::vector<cv::Po
   inliers.clear();
   const int n = static_cast<int>(object.size());
   if (n < 4) return;
-  const double max_err2 = threshold_px * threshold_px;
   cv::RNG rng(0x5eed);
   std::vector<cv::Point3f> sample_obj(3);
   std::vector<cv::Point2f> sample_img(3);
@@ -85,17 +101,7 @@ void ransac_p3p(const std::vector<cv::Point3f>& object, const std::vector<cv::Po
       cv::Matx33d R;
       cv::Rodrigues(rvecs[static_cast<std::size_t>(s)], R);
       const cv::Vec3d t(tvecs[static_cast<std::size_t>(s)]);
-      candidate.clear();
-      for (int i = 0; i < n; ++i) {
-        const cv::Point3f& X = object[static_cast<std::size_t>(i)];
-        const double zc = R(2, 0) * X.x + R(2, 1) * X.y + R(2, 2) * X.z + t[2];
-        if (!(zc > 1e-3)) continue;
-        const double xc = R(0, 0) * X.x + R(0, 1) * X.y + R(0, 2) * X.z + t[0];
-        const double yc = R(1, 0) * X.x + R(1, 1) * X.y + R(1, 2) * X.z + t[1];
-        const double du = camera.fx * xc / zc + camera.cx - image[static_cast<std::size_t>(i)].x;
-        const double dv = camera.fy * yc / zc + camera.cy - image[static_cast<std::size_t>(i)].y;
-        if (du * du + dv * dv <= max_err2) candidate.push_back(i);
-      }
+      inliers_of(object, image, camera, R, t, threshold_px, candidate);
       if (static_cast<int>(candidate.size()) <= best_count) continue;
       best_count = static_cast<int>(candidate.size());
       inliers.swap(candidate);
@@ -154,21 +160,13 @@ void DepthConsistencyTest::run(const PinholeCamera& camera, double bf_px_m, cons
   bool ok = false;
   if (T_cur_prev_prior && config_.prior_min_inlier_fraction > 0) {
     // The prior's inliers, as RANSAC would count them for that motion.
-    const Eigen::Matrix3d R_p = T_cur_prev_prior->linear();
+    cv::Matx33d R_p;
+    cv::eigen2cv(Eigen::Matrix3d(T_cur_prev_prior->linear()), R_p);
     const Eigen::Vector3d t_p = T_cur_prev_prior->translation();
-    const double max_err2 = config_.ransac_reprojection_px * config_.ransac_reprojection_px;
-    for (std::size_t k = 0; k < object_.size(); ++k) {
-      const Eigen::Vector3d Xc = R_p * Eigen::Vector3d(object_[k].x, object_[k].y, object_[k].z) + t_p;
-      if (!(Xc.z() > 1e-3)) continue;
-      const double du = camera.fx * Xc.x() / Xc.z() + camera.cx - image_[k].x;
-      const double dv = camera.fy * Xc.y() / Xc.z() + camera.cy - image_[k].y;
-      if (du * du + dv * dv <= max_err2) inliers_.push_back(static_cast<int>(k));
-    }
+    inliers_of(object_, image_, camera, R_p, cv::Vec3d(t_p.x(), t_p.y(), t_p.z()), config_.ransac_reprojection_px, inliers_);
     if (static_cast<int>(inliers_.size()) >= std::max(6, config_.min_points) &&
         static_cast<double>(inliers_.size()) >= config_.prior_min_inlier_fraction * static_cast<double>(result.used)) {
-      cv::Mat R_cv;
-      cv::eigen2cv(R_p, R_cv);
-      cv::Rodrigues(R_cv, rvec);
+      cv::Rodrigues(R_p, rvec);
       tvec = (cv::Mat_<double>(3, 1) << t_p.x(), t_p.y(), t_p.z());
       ok = true;
       result.from_prior = true;
