@@ -49,7 +49,7 @@ DynamicDetectorConfig load_dynamic_config(const std::string& path) {
 
   in.check_keys("depth_test", {"min_points", "min_disparity_px", "ransac_reprojection_px", "ransac_iterations",
                                "ransac_confidence", "a_reproj_px", "b_reproj", "a_disp_px", "b_disp", "adaptive",
-                               "adaptive_k", "max_scale", "prior_min_inlier_fraction"});
+                               "adaptive_k", "max_scale"});
   DepthTestConfig& d = c.depth_test;
   in.read("depth_test", "min_points", d.min_points, integer);
   in.read("depth_test", "min_disparity_px", d.min_disparity_px, px);
@@ -63,7 +63,6 @@ DynamicDetectorConfig load_dynamic_config(const std::string& path) {
   in.read("depth_test", "adaptive", d.adaptive, flag);
   in.read("depth_test", "adaptive_k", d.adaptive_k, num);
   in.read("depth_test", "max_scale", d.max_scale, num);
-  in.read("depth_test", "prior_min_inlier_fraction", d.prior_min_inlier_fraction, num);
 
   in.check_keys("multiframe", {"enabled", "max_frames", "min_frames", "min_translation_m", "max_rotation_deg",
                                "min_points", "min_disparity_px", "ransac_reprojection_px", "a_reproj_px", "b_reproj",

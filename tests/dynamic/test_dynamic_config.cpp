@@ -57,13 +57,14 @@ TEST(DynamicConfig, ShippedParamsFileEqualsTheDefaults) {
 TEST(DynamicConfig, OverridesOnlyTheGivenKeys) {
   TempYaml f(
       "epipolar:\n  a_epi_px: 1.5\n  adaptive: false\nslic:\n  incremental: true\nregions:\n  mask_mode: rectangle\n"
-      "detector:\n  roi_scale: 1\n");
+      "detector:\n  roi_scale: 1\nmultiframe:\n  prior_min_inlier_fraction: 0\n");
   const DynamicDetectorConfig c = load_dynamic_config(f.path());
   EXPECT_DOUBLE_EQ(c.epipolar.a_epi_px, 1.5);
   EXPECT_FALSE(c.epipolar.adaptive);
   EXPECT_TRUE(c.slic.incremental);
   EXPECT_EQ(c.regions.mask_mode, MaskMode::kRectangle);
   EXPECT_DOUBLE_EQ(c.detector.roi_scale, 1.0);
+  EXPECT_DOUBLE_EQ(c.multiframe.prior_min_inlier_fraction, 0.0);
   EXPECT_EQ(c.features.target_count, QuadtreeFastConfig{}.target_count);
 }
 
@@ -106,6 +107,9 @@ TEST(DynamicConfig, BadValuesNameFileAndField) {
   expect_error("detector:\n  coast_min_detections: 0\n", "detector.coast_min_detections");
   expect_error("photometric:\n  multiframe_min_disparity_px: -2\n", "photometric.multiframe_min_disparity_px");
   expect_error("slic:\n  superpixel_size: 12\n", "slic.superpixel_size");  // unknown key
+  // The per-frame depth test takes no motion prior: the key is the multi-frame test's only.
+  expect_error("depth_test:\n  prior_min_inlier_fraction: 0.5\n", "depth_test.prior_min_inlier_fraction");
+  expect_error("multiframe:\n  prior_min_inlier_fraction: 1.5\n", "multiframe.prior_min_inlier_fraction");
   expect_error("regions:\n  mask_mode: blob\n", "regions.mask_mode");
   expect_error("detector:\n  roi_scale: 0.3\n", "detector.roi_scale");
   expect_error("detector:\n  use_epipolar_test: false\n  use_depth_test: false\n", "detector.use_epipolar_test");

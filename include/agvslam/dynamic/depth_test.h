@@ -36,7 +36,9 @@ struct DepthTestConfig {
   double max_scale = 3.0;             // adaptive constants are at most max_scale x the configured ones
   // With a motion prior (run()'s T_cur_prev_prior), the tracks within ransac_reprojection_px of where it puts them
   // are the inliers when they are at least this fraction of the used tracks: RANSAC is skipped and the least-squares
-  // refinement starts from the prior. Otherwise (or 0) PnP RANSAC as without a prior.
+  // refinement starts from the prior. Otherwise (or 0) PnP RANSAC as without a prior. Only the multi-frame test has
+  // a prior (multiframe.prior_min_inlier_fraction sets it there); the per-frame test has none, so params/dynamic.yaml
+  // has no such key under depth_test.
   double prior_min_inlier_fraction = 0.0;
 
   void validate(const std::string& source) const;
