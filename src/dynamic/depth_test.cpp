@@ -45,20 +45,25 @@ std::string DepthTestConfig::describe() const {
 
 namespace {
 
-// The indices of the tracks a motion (R, t) puts within threshold_px of where they are seen.
+// The motion of an OpenCV rotation vector and translation.
+SE3d pose_of(const cv::Mat& rvec, const cv::Mat& tvec) {
+  cv::Matx33d R;
+  cv::Rodrigues(rvec, R);
+  Eigen::Matrix3d R_e;
+  cv::cv2eigen(R, R_e);
+  return make_se3(R_e, Eigen::Vector3d(tvec.at<double>(0), tvec.at<double>(1), tvec.at<double>(2)));
+}
+
+// The indices of the tracks a motion puts within threshold_px of where they are seen.
 void inliers_of(const std::vector<cv::Point3f>& object, const std::vector<cv::Point2f>& image, const PinholeCamera& camera,
-                const cv::Matx33d& R, const cv::Vec3d& t, double threshold_px, std::vector<int>& inliers) {
+                const SE3d& T_cur_prev, double threshold_px, std::vector<int>& inliers) {
   inliers.clear();
   const double max_err2 = threshold_px * threshold_px;
   for (std::size_t i = 0; i < object.size(); ++i) {
-    const cv::Point3f& X = object[i];
-    const double zc = R(2, 0) * X.x + R(2, 1) * X.y + R(2, 2) * X.z + t[2];
-    if (!(zc > 1e-3)) continue;
-    const double xc = R(0, 0) * X.x + R(0, 1) * X.y + R(0, 2) * X.z + t[0];
-    const double yc = R(1, 0) * X.x + R(1, 1) * X.y + R(1, 2) * X.z + t[1];
-    const double du = camera.fx * xc / zc + camera.cx - image[i].x;
-    const double dv = camera.fy * yc / zc + camera.cy - image[i].y;
-    if (du * du + dv * dv <= max_err2) inliers.push_back(static_cast<int>(i));
+    const Eigen::Vector3d X_cur = T_cur_prev * Eigen::Vector3d(object[i].x, object[i].y, object[i].z);
+    if (!(X_cur.z() > 1e-3)) continue;
+    const Eigen::Vector2d error = camera.project(X_cur) - Eigen::Vector2d(image[i].x, image[i].y);
+    if (error.squaredNorm() <= max_err2) inliers.push_back(static_cast<int>(i));
   }
 }
 
@@ -67,11 +72,12 @@ void inliers_of(const std::vector<cv::Point3f>& object, const std::vector<cv::Po
 // its time); the sample count adapts to the best inlier ratio as in OpenCV's RANSAC. Fixed seed: reproducible.
 // Returns the best motion's inliers (empty when no sample gave a motion).
 void ransac_p3p(const std::vector<cv::Point3f>& object, const std::vector<cv::Point2f>& image, const PinholeCamera& camera,
-                const cv::Matx33d& K, double threshold_px, double confidence, int max_iterations, cv::Mat& rvec,
-                cv::Mat& tvec, std::vector<int>& inliers) {
+                double threshold_px, double confidence, int max_iterations, cv::Mat& rvec, cv::Mat& tvec,
+                std::vector<int>& inliers) {
   inliers.clear();
   const int n = static_cast<int>(object.size());
   if (n < 4) return;
+  const cv::Matx33d K = camera.K();
   cv::RNG rng(0x5eed);
   std::vector<cv::Point3f> sample_obj(3);
   std::vector<cv::Point2f> sample_img(3);
@@ -98,10 +104,8 @@ void ransac_p3p(const std::vector<cv::Point3f>& object, const std::vector<cv::Po
       solutions = 0;  // degenerate sample (collinear points)
     }
     for (int s = 0; s < solutions; ++s) {
-      cv::Matx33d R;
-      cv::Rodrigues(rvecs[static_cast<std::size_t>(s)], R);
-      const cv::Vec3d t(tvecs[static_cast<std::size_t>(s)]);
-      inliers_of(object, image, camera, R, t, threshold_px, candidate);
+      inliers_of(object, image, camera, pose_of(rvecs[static_cast<std::size_t>(s)], tvecs[static_cast<std::size_t>(s)]),
+                 threshold_px, candidate);
       if (static_cast<int>(candidate.size()) <= best_count) continue;
       best_count = static_cast<int>(candidate.size());
       inliers.swap(candidate);
@@ -160,12 +164,12 @@ void DepthConsistencyTest::run(const PinholeCamera& camera, double bf_px_m, cons
   bool ok = false;
   if (T_cur_prev_prior && config_.prior_min_inlier_fraction > 0) {
     // The prior's inliers, as RANSAC would count them for that motion.
-    cv::Matx33d R_p;
-    cv::eigen2cv(Eigen::Matrix3d(T_cur_prev_prior->linear()), R_p);
-    const Eigen::Vector3d t_p = T_cur_prev_prior->translation();
-    inliers_of(object_, image_, camera, R_p, cv::Vec3d(t_p.x(), t_p.y(), t_p.z()), config_.ransac_reprojection_px, inliers_);
+    inliers_of(object_, image_, camera, *T_cur_prev_prior, config_.ransac_reprojection_px, inliers_);
     if (static_cast<int>(inliers_.size()) >= std::max(6, config_.min_points) &&
         static_cast<double>(inliers_.size()) >= config_.prior_min_inlier_fraction * static_cast<double>(result.used)) {
+      cv::Matx33d R_p;
+      cv::eigen2cv(Eigen::Matrix3d(T_cur_prev_prior->linear()), R_p);
+      const Eigen::Vector3d t_p = T_cur_prev_prior->translation();
       cv::Rodrigues(R_p, rvec);
       tvec = (cv::Mat_<double>(3, 1) << t_p.x(), t_p.y(), t_p.z());
       ok = true;
@@ -175,7 +179,7 @@ void DepthConsistencyTest::run(const PinholeCamera& camera, double bf_px_m, cons
     }
   }
   if (!ok) {
-    ransac_p3p(object_, image_, camera, K, config_.ransac_reprojection_px, config_.ransac_confidence,
+    ransac_p3p(object_, image_, camera, config_.ransac_reprojection_px, config_.ransac_confidence,
                config_.ransac_iterations, rvec, tvec, inliers_);
     ok = !inliers_.empty();
   }
@@ -192,12 +196,7 @@ void DepthConsistencyTest::run(const PinholeCamera& camera, double bf_px_m, cons
   cv::solvePnPRefineLM(obj_in, img_in, K, cv::noArray(), rvec, tvec);
   result.inliers = static_cast<int>(inliers_.size());
 
-  cv::Matx33d R;
-  cv::Rodrigues(rvec, R);
-  const cv::Vec3d t(tvec.at<double>(0), tvec.at<double>(1), tvec.at<double>(2));
-  Eigen::Matrix3d R_e;
-  cv::cv2eigen(cv::Mat(R), R_e);
-  result.T_cur_prev = make_se3(R_e, Eigen::Vector3d(t[0], t[1], t[2]));
+  result.T_cur_prev = pose_of(rvec, tvec);
   result.valid = true;
 
   // Residuals of every tested track, then the (adaptive) thresholds.
