@@ -85,7 +85,7 @@ void ransac_p3p(const std::vector<cv::Point3f>& object, const std::vector<cv::Po
   std::vector<int> candidate;
   int best_count = 0;
   int needed = max_iterations;
-  for (int it = 0; it < needed && it < max_iterations; ++it) {
+  for (int it = 0; it < needed; ++it) {
     int idx[3];
     for (int k = 0; k < 3; ++k) {
       bool fresh;
@@ -111,11 +111,10 @@ void ransac_p3p(const std::vector<cv::Point3f>& object, const std::vector<cv::Po
       inliers.swap(candidate);
       rvecs[static_cast<std::size_t>(s)].copyTo(rvec);
       tvecs[static_cast<std::size_t>(s)].copyTo(tvec);
-      // Samples needed for `confidence` that one is all inliers: log(1 - p) / log(1 - w^3).
+      // Samples needed for `confidence` that one is all inliers: log(1 - p) / log(1 - w^3), at most max_iterations.
       const double w = static_cast<double>(best_count) / n;
-      const double miss = 1.0 - w * w * w;
-      needed = miss <= 0 ? 0
-                         : static_cast<int>(std::ceil(std::log(1.0 - confidence) / std::log(std::max(miss, 1e-12))));
+      const double all_in = std::log(std::max(1.0 - w * w * w, 1e-12));
+      needed = std::min(max_iterations, static_cast<int>(std::ceil(std::log(1.0 - confidence) / all_in)));
     }
   }
 }
