@@ -113,8 +113,8 @@ void ransac_p3p(const std::vector<cv::Point3f>& object, const std::vector<cv::Po
       tvecs[static_cast<std::size_t>(s)].copyTo(tvec);
       // Samples needed for `confidence` that one is all inliers: log(1 - p) / log(1 - w^3), at most max_iterations.
       const double w = static_cast<double>(best_count) / n;
-      const double all_in = std::log(std::max(1.0 - w * w * w, 1e-12));
-      needed = std::min(max_iterations, static_cast<int>(std::ceil(std::log(1.0 - confidence) / all_in)));
+      const double log_miss = std::log(std::max(1.0 - w * w * w, 1e-12));
+      needed = std::min(max_iterations, static_cast<int>(std::ceil(std::log(1.0 - confidence) / log_miss)));
     }
   }
 }
