@@ -577,6 +577,7 @@ int run(const Options& o) {
       }
       jf["mask_pixels"] = result.mask.pixel_count();
       jf["total_ms"] = result.timings.total_ms;
+      jf["lk_levels"] = result.lk_levels;
       if (result.ground_plane.valid) {
         jf["ground_plane"] = {result.ground_plane.a, result.ground_plane.b, result.ground_plane.c};
       }

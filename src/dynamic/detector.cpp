@@ -226,6 +226,7 @@ DynamicDetector::DynamicDetector(const StereoCalibration& calibration, const Dyn
 
 void DynamicDetector::reset() {
   has_previous_ = false;
+  last_max_motion_px_ = -1;
   prev_left_.release();
   prev_right_.release();
   prev_pts_.clear();
@@ -303,7 +304,15 @@ void DynamicDetector::detect(const StereoFrame& frame, DetectorResult& result) {
   if (result.has_previous) {
     // Tracks and their disparity in the current frame.
     t = Clock::now();
-    tracker_.track(prev_pyramid_, cur_pyramid_, prev_pts_, cur_pts_, tracked_);
+    result.lk_levels = tracker_.levels_for_motion(last_max_motion_px_);
+    tracker_.track(prev_pyramid_, cur_pyramid_, prev_pts_, cur_pts_, tracked_, result.lk_levels);
+    // The largest motion among this frame's tracks chooses the next frame's levels (unknown without tracks).
+    last_max_motion_px_ = -1;
+    for (std::size_t i = 0; i < tracked_.size(); ++i) {
+      if (!tracked_[i]) continue;
+      const cv::Point2f m = cur_pts_[i] - prev_pts_[i];
+      last_max_motion_px_ = std::max(last_max_motion_px_, static_cast<double>(std::sqrt(m.dot(m))));
+    }
     tm.tracking_ms = ms_since(t);
     t = Clock::now();
     usable_ = tracked_;
@@ -1591,7 +1600,7 @@ void DynamicDetector::densify(const StereoFrame& frame, DetectorResult& result) 
   }
   if (extra_prev_.empty()) return;
 
-  tracker_.track(prev_pyramid_, cur_pyramid_, extra_prev_, extra_cur_, extra_ok_);
+  tracker_.track(prev_pyramid_, cur_pyramid_, extra_prev_, extra_cur_, extra_ok_, result.lk_levels);
   extra_prev_disp_.assign(extra_prev_.size(), 0.0f);
   extra_cur_disp_.assign(extra_prev_.size(), 0.0f);
   for (std::size_t i = 0; i < extra_prev_.size(); ++i) {

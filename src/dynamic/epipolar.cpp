@@ -16,6 +16,8 @@ void LkTrackerConfig::validate(const std::string& source) const {
   };
   require(window_px >= 5 && window_px <= 63, "window_px", "expected an integer in [5, 63] px");
   require(levels >= 0 && levels <= 6, "levels", "expected an integer in [0, 6]");
+  require(min_levels >= 0 && min_levels <= 6, "min_levels", "expected an integer in [0, 6] (above `levels`: `levels`)");
+  require(motion_margin >= 1 && motion_margin <= 10, "motion_margin", "expected a number in [1, 10]");
   require(max_iterations >= 1 && max_iterations <= 200, "max_iterations", "expected an integer in [1, 200]");
   require(epsilon > 0 && epsilon <= 1, "epsilon", "expected a number in (0, 1] px");
   require(fb_max_error_px > 0 && fb_max_error_px <= 20, "fb_max_error_px", "expected a number in (0, 20] px");
@@ -26,15 +28,22 @@ void LkTrackerConfig::validate(const std::string& source) const {
 }
 
 std::string LkTrackerConfig::describe() const {
-  char buf[320];
+  char buf[400];
   char persistence[120] = "tracks end after one frame";
+  char level_text[120];
+  if (min_levels < levels) {
+    std::snprintf(level_text, sizeof(level_text), "%d-%d levels (the fewest that follow %.1fx the last frame's largest motion)",
+                  min_levels, levels, motion_margin);
+  } else {
+    std::snprintf(level_text, sizeof(level_text), "%d levels", levels);
+  }
   if (persistent) {
     std::snprintf(persistence, sizeof(persistence), "tracks persist, new corners >= %.1f px from them, <= %d tracks",
                   min_track_distance_px, max_tracks);
   }
   std::snprintf(buf, sizeof(buf),
-                "tracking: pyramidal LK %dx%d, %d levels, %d iterations / %.3f px, forward-backward <= %.2f px, %s",
-                window_px, window_px, levels, max_iterations, epsilon, fb_max_error_px, persistence);
+                "tracking: pyramidal LK %dx%d, %s, %d iterations / %.3f px, forward-backward <= %.2f px, %s",
+                window_px, window_px, level_text, max_iterations, epsilon, fb_max_error_px, persistence);
   return buf;
 }
 
@@ -47,20 +56,29 @@ void LkTracker::build_pyramid(const cv::Mat& grey, std::vector<cv::Mat>& pyramid
   cv::buildOpticalFlowPyramid(grey, pyramid, cv::Size(config_.window_px, config_.window_px), config_.levels, true);
 }
 
+int LkTracker::levels_for_motion(double max_motion_px) const {
+  if (!(max_motion_px >= 0)) return config_.levels;
+  const double needed = config_.motion_margin * max_motion_px;
+  int levels = std::min(config_.min_levels, config_.levels);
+  while (levels < config_.levels && 0.5 * config_.window_px * static_cast<double>(1 << levels) < needed) ++levels;
+  return levels;
+}
+
 void LkTracker::track(const std::vector<cv::Mat>& prev_pyramid, const std::vector<cv::Mat>& cur_pyramid,
                       const std::vector<cv::Point2f>& prev_pts, std::vector<cv::Point2f>& cur_pts,
-                      std::vector<uint8_t>& ok) {
+                      std::vector<uint8_t>& ok, int levels) {
   ok.assign(prev_pts.size(), 0);
   cur_pts.clear();
   if (prev_pts.empty()) return;
+  if (levels < 0 || levels > config_.levels) levels = config_.levels;
   const cv::Size win(config_.window_px, config_.window_px);
   const cv::TermCriteria crit(cv::TermCriteria::COUNT | cv::TermCriteria::EPS, config_.max_iterations, config_.epsilon);
-  cv::calcOpticalFlowPyrLK(prev_pyramid, cur_pyramid, prev_pts, cur_pts, status_, errors_, win, config_.levels, crit, 0,
+  cv::calcOpticalFlowPyrLK(prev_pyramid, cur_pyramid, prev_pts, cur_pts, status_, errors_, win, levels, crit, 0,
                            config_.min_eigen_threshold);
   // Backward pass from the forward result with no prior (starting it at prev_pts would let a wrong forward
   // track converge back to where it came from).
-  cv::calcOpticalFlowPyrLK(cur_pyramid, prev_pyramid, cur_pts, back_pts_, back_status_, errors_, win, config_.levels,
-                           crit, 0, config_.min_eigen_threshold);
+  cv::calcOpticalFlowPyrLK(cur_pyramid, prev_pyramid, cur_pts, back_pts_, back_status_, errors_, win, levels, crit, 0,
+                           config_.min_eigen_threshold);
   const cv::Size size = cur_pyramid.front().size();
   const float max_fb2 = static_cast<float>(config_.fb_max_error_px * config_.fb_max_error_px);
   for (std::size_t i = 0; i < prev_pts.size(); ++i) {

@@ -201,5 +201,56 @@ TEST(LkTracker, TracksAKnownShiftAndRejectsFlatPoints) {
   EXPECT_FALSE(ok[4]) << "a point in a flat region cannot be tracked";
 }
 
+TEST(LkTracker, LevelsFollowTheLastMotion) {
+  LkTrackerConfig c;  // 11x11 window: (11 / 2) * 2^L = 22, 44, 88 px on 2, 3, 4 levels
+  c.min_levels = 2;
+  c.levels = 4;
+  c.motion_margin = 2.0;
+  const LkTracker tracker(c);
+  EXPECT_EQ(tracker.levels_for_motion(-1), 4) << "unknown motion (no tracks before): every level";
+  EXPECT_EQ(tracker.levels_for_motion(0.0), 2);
+  EXPECT_EQ(tracker.levels_for_motion(11.0), 2);
+  EXPECT_EQ(tracker.levels_for_motion(11.5), 3);
+  EXPECT_EQ(tracker.levels_for_motion(22.0), 3);
+  EXPECT_EQ(tracker.levels_for_motion(22.5), 4);
+  EXPECT_EQ(tracker.levels_for_motion(300.0), 4) << "never more than `levels`";
+  c.min_levels = 6;  // above `levels`: `levels`
+  EXPECT_EQ(LkTracker(c).levels_for_motion(0.0), 4);
+  c.min_levels = 2;
+  c.levels = 1;
+  EXPECT_EQ(LkTracker(c).levels_for_motion(0.0), 1);
+}
+
+TEST(LkTracker, LargeMotionNeedsTheLevelsItIsGiven) {
+  const cv::Mat tex = testing::make_texture(512, 128, 140, 31)(cv::Rect(0, 0, 400, 300)).clone();
+  cv::Mat moved;
+  const cv::Point2f shift(36.0f, 5.0f);  // an AGV turning: 36 px in one frame
+  const cv::Mat M = (cv::Mat_<double>(2, 3) << 1, 0, shift.x, 0, 1, shift.y);
+  cv::warpAffine(tex, moved, M, tex.size(), cv::INTER_CUBIC, cv::BORDER_REFLECT);
+  LkTracker tracker;
+  std::vector<cv::Mat> p0, p1;
+  tracker.build_pyramid(tex, p0);
+  tracker.build_pyramid(moved, p1);
+  std::vector<cv::Point2f> prev;
+  for (int y = 80; y <= 220; y += 35) {
+    for (int x = 80; x <= 300; x += 44) prev.emplace_back(static_cast<float>(x), static_cast<float>(y));
+  }
+  auto correct = [&](int levels) {
+    std::vector<cv::Point2f> cur;
+    std::vector<uint8_t> ok;
+    tracker.track(p0, p1, prev, cur, ok, levels);
+    int n = 0;
+    for (std::size_t i = 0; i < prev.size(); ++i) {
+      const cv::Point2f e = cur[i] - (prev[i] + shift);
+      n += ok[i] && e.dot(e) < 0.01f ? 1 : 0;
+    }
+    return n;
+  };
+  const int chosen = tracker.levels_for_motion(std::hypot(shift.x, shift.y));
+  EXPECT_EQ(chosen, 4);
+  EXPECT_EQ(correct(chosen), static_cast<int>(prev.size()));
+  EXPECT_LT(correct(1), static_cast<int>(prev.size()) / 2) << "one level (~11 px of reach) loses most of them";
+}
+
 }  // namespace
 }  // namespace agvslam::dynamic

@@ -297,6 +297,7 @@ struct DetectorResult {
   StageTimings timings;
   int unconfirmed_objects = 0;   // objects found but not reported: nothing overlapped them in the previous frame
                                  // (detector.confirm_min_box_iou)
+  int lk_levels = -1;            // the pyramid levels the tracks were followed on (tracking.min_levels; -1: none)
 
   int dynamic_point_count() const;
 };
@@ -457,6 +458,7 @@ class DynamicDetector {
   cv::Mat padded_left_, padded_right_;
   cv::Mat strip_disparity_, widened_disparity_;
   int roi_max_disparity_px_ = 0;  // the search range of the ROI being outlined (for its widening)
+  double last_max_motion_px_ = -1;  // the previous frame's largest track motion (-1: unknown), for its LK levels
   double roi_scale_used_ = 1.0;
   int roi_row_step_used_ = 1;
   double widen_ms_ = 0;           // time spent matching widened strips (counted as ROI disparity)
