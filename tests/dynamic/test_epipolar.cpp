@@ -177,22 +177,31 @@ TEST(RobustSigma, IsTheScaledMedian) {
   EXPECT_EQ(robust_sigma(empty), 0.0);
 }
 
+// The LK pyramids of `image` and of `image` shifted by `shift_px` (cubic interpolation, reflected borders).
+struct ShiftedPyramids {
+  std::vector<cv::Mat> before, after;
+};
+ShiftedPyramids shifted_pyramids(const LkTracker& tracker, const cv::Mat& image, cv::Point2f shift_px) {
+  cv::Mat moved;
+  const cv::Mat M = (cv::Mat_<double>(2, 3) << 1, 0, shift_px.x, 0, 1, shift_px.y);
+  cv::warpAffine(image, moved, M, image.size(), cv::INTER_CUBIC, cv::BORDER_REFLECT);
+  ShiftedPyramids p;
+  tracker.build_pyramid(image, p.before);
+  tracker.build_pyramid(moved, p.after);
+  return p;
+}
+
 TEST(LkTracker, TracksAKnownShiftAndRejectsFlatPoints) {
   const cv::Mat tex = testing::make_texture(512, 128, 140, 31)(cv::Rect(0, 0, 400, 300)).clone();
   cv::Mat flat_patch = tex.clone();
   flat_patch(cv::Rect(0, 0, 60, 60)).setTo(100);
-  cv::Mat moved;
   const cv::Point2f shift(3.3f, -2.1f);
-  const cv::Mat M = (cv::Mat_<double>(2, 3) << 1, 0, shift.x, 0, 1, shift.y);
-  cv::warpAffine(flat_patch, moved, M, flat_patch.size(), cv::INTER_CUBIC, cv::BORDER_REFLECT);
   LkTracker tracker;
-  std::vector<cv::Mat> p0, p1;
-  tracker.build_pyramid(flat_patch, p0);
-  tracker.build_pyramid(moved, p1);
+  const ShiftedPyramids p = shifted_pyramids(tracker, flat_patch, shift);
   std::vector<cv::Point2f> prev = {{100, 100}, {200, 150}, {300, 220}, {150, 250}, {25, 25}};
   std::vector<cv::Point2f> cur;
   std::vector<uint8_t> ok;
-  tracker.track(p0, p1, prev, cur, ok);
+  tracker.track(p.before, p.after, prev, cur, ok);
   for (int i = 0; i < 4; ++i) {
     ASSERT_TRUE(ok[static_cast<std::size_t>(i)]) << i;
     EXPECT_NEAR(cur[static_cast<std::size_t>(i)].x, prev[static_cast<std::size_t>(i)].x + shift.x, 0.1);
@@ -223,14 +232,9 @@ TEST(LkTracker, LevelsFollowTheLastMotion) {
 
 TEST(LkTracker, LargeMotionNeedsTheLevelsItIsGiven) {
   const cv::Mat tex = testing::make_texture(512, 128, 140, 31)(cv::Rect(0, 0, 400, 300)).clone();
-  cv::Mat moved;
   const cv::Point2f shift(36.0f, 5.0f);  // an AGV turning: 36 px in one frame
-  const cv::Mat M = (cv::Mat_<double>(2, 3) << 1, 0, shift.x, 0, 1, shift.y);
-  cv::warpAffine(tex, moved, M, tex.size(), cv::INTER_CUBIC, cv::BORDER_REFLECT);
   LkTracker tracker;
-  std::vector<cv::Mat> p0, p1;
-  tracker.build_pyramid(tex, p0);
-  tracker.build_pyramid(moved, p1);
+  const ShiftedPyramids p = shifted_pyramids(tracker, tex, shift);
   std::vector<cv::Point2f> prev;
   for (int y = 80; y <= 220; y += 35) {
     for (int x = 80; x <= 300; x += 44) prev.emplace_back(static_cast<float>(x), static_cast<float>(y));
@@ -238,7 +242,7 @@ TEST(LkTracker, LargeMotionNeedsTheLevelsItIsGiven) {
   auto correct = [&](int levels) {
     std::vector<cv::Point2f> cur;
     std::vector<uint8_t> ok;
-    tracker.track(p0, p1, prev, cur, ok, levels);
+    tracker.track(p.before, p.after, prev, cur, ok, levels);
     int n = 0;
     for (std::size_t i = 0; i < prev.size(); ++i) {
       const cv::Point2f e = cur[i] - (prev[i] + shift);
