@@ -22,8 +22,9 @@ DynamicDetectorConfig load_dynamic_config(const std::string& path) {
   in.read("features", "min_threshold", c.features.min_threshold, "an integer (grey levels)");
   in.read("features", "border_px", c.features.border_px, "an integer (px)");
 
-  in.check_keys("tracking", {"window_px", "levels", "min_levels", "motion_margin", "max_iterations", "epsilon", "fb_max_error_px", "min_eigen_threshold",
-                             "persistent", "min_track_distance_px", "max_tracks"});
+  in.check_keys("tracking", {"window_px", "levels", "min_levels", "motion_margin", "max_iterations", "epsilon",
+                             "fb_max_error_px", "min_eigen_threshold", "persistent", "min_track_distance_px",
+                             "max_tracks"});
   in.read("tracking", "window_px", c.tracking.window_px, "an integer (px)");
   in.read("tracking", "levels", c.tracking.levels, integer);
   in.read("tracking", "min_levels", c.tracking.min_levels, integer);

@@ -32,8 +32,9 @@ std::string LkTrackerConfig::describe() const {
   char persistence[120] = "tracks end after one frame";
   char level_text[120];
   if (min_levels < levels) {
-    std::snprintf(level_text, sizeof(level_text), "%d-%d levels (the fewest that follow %.1fx the last frame's largest motion)",
-                  min_levels, levels, motion_margin);
+    std::snprintf(level_text, sizeof(level_text),
+                  "%d-%d levels (the fewest that follow %.1fx the last frame's largest motion)", min_levels, levels,
+                  motion_margin);
   } else {
     std::snprintf(level_text, sizeof(level_text), "%d levels", levels);
   }
