@@ -138,15 +138,33 @@ void QuadtreeFast::detect(const cv::Mat& grey, std::vector<Corner>& corners, Qua
   const cv::Rect area(b, b, grey.cols - 2 * b, grey.rows - 2 * b);
   if (area.width < 8 || area.height < 8) return;
 
-  // (1) FAST once at the fallback threshold (with non-maximum suppression) on the area plus the 3 px the
-  // FAST circle needs; the per-cell choice below then keeps, in each cell, the corners that pass the normal
-  // threshold, or all of them where none does. This equals running FAST per cell with the two thresholds
-  // (up to non-maximum suppression between a strong and a weak corner).
+  // (1) FAST (with non-maximum suppression) on the area plus the 3 px the FAST circle needs; in each cell the
+  // corners that pass the normal threshold are kept, or all those at the fallback threshold where none does. This
+  // equals running FAST per cell with the two thresholds (up to non-maximum suppression between a strong and a weak
+  // corner). single_pass and two_pass find the same candidates; which is cheaper depends on the texture.
   const cv::Rect with_ring = cv::Rect(area.x - 3, area.y - 3, area.width + 6, area.height + 6) &
                              cv::Rect(0, 0, grey.cols, grey.rows);
+  const int cs = config_.cell_size_px;
+  const int cells = ((area.width + cs - 1) / cs) * ((area.height + cs - 1) / cs);
+  constexpr double kTwoPassMaxWeakFraction = 0.4;
+  const bool two = config_.min_threshold < config_.threshold &&
+                   (extraction_ == Extraction::kTwoPass ||
+                    (extraction_ == Extraction::kAuto && last_weak_fraction_ >= 0 &&
+                     last_weak_fraction_ < kTwoPassMaxWeakFraction));
+  const int weak_cells = two ? two_pass(grey, area, with_ring) : single_pass(grey, area, with_ring);
+  last_weak_fraction_ = static_cast<double>(weak_cells) / static_cast<double>(std::max(1, cells));
+
+  std::vector<cv::Rect2f>* rects = (stats && collect_nodes) ? &stats->node_rects : nullptr;
+  corners = distribute_quadtree(candidates_, cv::Rect2f(area), config_.target_count, rects);
+  if (stats) {
+    stats->candidates = static_cast<int>(candidates_.size());
+    stats->weak_cells = weak_cells;
+  }
+}
+
+int QuadtreeFast::single_pass(const cv::Mat& grey, const cv::Rect& area, const cv::Rect& with_ring) {
   keypoints_.clear();
   cv::FAST(grey(with_ring), keypoints_, config_.min_threshold, true, cv::FastFeatureDetector::TYPE_9_16);
-
   const int cs = config_.cell_size_px;
   const int cells_x = (area.width + cs - 1) / cs, cells_y = (area.height + cs - 1) / cs;
   cell_best_.assign(static_cast<std::size_t>(cells_x * cells_y), -1.0f);
@@ -172,13 +190,62 @@ void QuadtreeFast::detect(const cv::Mat& grey, std::vector<Corner>& corners, Qua
                                      return c.response < strong && cell_best_[cell_of(c.pt)] >= strong;
                                    }),
                     candidates_.end());
+  return weak_cells;
+}
 
-  std::vector<cv::Rect2f>* rects = (stats && collect_nodes) ? &stats->node_rects : nullptr;
-  corners = distribute_quadtree(candidates_, cv::Rect2f(area), config_.target_count, rects);
-  if (stats) {
-    stats->candidates = static_cast<int>(candidates_.size());
-    stats->weak_cells = weak_cells;
+int QuadtreeFast::two_pass(const cv::Mat& grey, const cv::Rect& area, const cv::Rect& with_ring) {
+  const int cs = config_.cell_size_px;
+  const int cells_x = (area.width + cs - 1) / cs, cells_y = (area.height + cs - 1) / cs;
+  cell_best_.assign(static_cast<std::size_t>(cells_x * cells_y), -1.0f);
+  auto cell_of = [&](const cv::Point2f& p) {
+    const int cx = std::clamp(static_cast<int>(p.x - static_cast<float>(area.x)) / cs, 0, cells_x - 1);
+    const int cy = std::clamp(static_cast<int>(p.y - static_cast<float>(area.y)) / cs, 0, cells_y - 1);
+    return static_cast<std::size_t>(cy * cells_x + cx);
+  };
+  // The strong corners everywhere. Non-maximum suppression only ever removes a corner for a stronger neighbour,
+  // which this pass finds as well, so these are the single pass's strong corners.
+  candidates_.clear();
+  keypoints_.clear();
+  cv::FAST(grey(with_ring), keypoints_, config_.threshold, true, cv::FastFeatureDetector::TYPE_9_16);
+  for (const cv::KeyPoint& kp : keypoints_) {
+    const cv::Point2f p(kp.pt.x + static_cast<float>(with_ring.x), kp.pt.y + static_cast<float>(with_ring.y));
+    if (!area.contains(cv::Point(static_cast<int>(p.x), static_cast<int>(p.y)))) continue;
+    float& best = cell_best_[cell_of(p)];
+    best = std::max(best, kp.response);
+    candidates_.push_back({p, kp.response});
   }
+  // The weak corners of each run of cells without a strong one: FAST on the run plus 4 px (the circle's 3 and the
+  // suppression's neighbour), within what the single pass sees, so suppression compares the same neighbours.
+  const float strong = static_cast<float>(config_.threshold);
+  int weak_cells = 0;
+  for (int cy = 0; cy < cells_y; ++cy) {
+    for (int cx = 0; cx < cells_x;) {
+      if (cell_best_[static_cast<std::size_t>(cy * cells_x + cx)] >= strong) {
+        ++cx;
+        continue;
+      }
+      int end = cx;
+      while (end < cells_x && cell_best_[static_cast<std::size_t>(cy * cells_x + end)] < strong) ++end;
+      const cv::Rect run = cv::Rect(area.x + cx * cs, area.y + cy * cs, (end - cx) * cs, cs) & area;
+      const cv::Rect padded = cv::Rect(run.x - 4, run.y - 4, run.width + 8, run.height + 8) & with_ring;
+      keypoints_.clear();
+      cv::FAST(grey(padded), keypoints_, config_.min_threshold, true, cv::FastFeatureDetector::TYPE_9_16);
+      for (const cv::KeyPoint& kp : keypoints_) {
+        const cv::Point2f p(kp.pt.x + static_cast<float>(padded.x), kp.pt.y + static_cast<float>(padded.y));
+        if (!run.contains(cv::Point(static_cast<int>(p.x), static_cast<int>(p.y)))) continue;
+        float& best = cell_best_[cell_of(p)];
+        best = std::max(best, kp.response);
+        candidates_.push_back({p, kp.response});
+      }
+      cx = end;
+    }
+  }
+  for (float best : cell_best_) weak_cells += best >= 0 && best < strong;
+  // FAST's order: row by row, left to right (the quadtree breaks ties between equal responses by this order).
+  std::sort(candidates_.begin(), candidates_.end(), [](const Corner& a, const Corner& c) {
+    return a.pt.y < c.pt.y || (a.pt.y == c.pt.y && a.pt.x < c.pt.x);
+  });
+  return weak_cells;
 }
 
 }  // namespace agvslam::dynamic

@@ -2,11 +2,13 @@
 #include <gtest/gtest.h>
 
 #include <opencv2/features2d.hpp>
+#include <opencv2/imgcodecs.hpp>
 #include <opencv2/imgproc.hpp>
 
 #include "agvslam/core/error.h"
 #include "agvslam/dynamic/quadtree_fast.h"
 #include "synthetic_scene.h"
+#include "common/test_data.h"
 
 namespace agvslam::dynamic {
 namespace {
@@ -153,6 +155,40 @@ TEST(QuadtreeFast, WeakCellsFallBackToTheLowerThreshold) {
   right = 0;
   for (const Corner& c : corners) right += c.pt.x >= 380.f;
   EXPECT_LT(right, 20);
+}
+
+// Both ways of finding the candidates give the same corners, bit for bit and in the same order, on images where
+// the two-pass extraction pays (textured: few weak cells) and where it does not (EuRoC's plain walls, a faint half).
+void expect_same_extraction(const cv::Mat& grey, const std::string& what) {
+  QuadtreeFast one, two;
+  one.set_extraction(QuadtreeFast::Extraction::kSinglePass);
+  two.set_extraction(QuadtreeFast::Extraction::kTwoPass);
+  std::vector<Corner> a, b;
+  QuadtreeStats sa, sb;
+  one.detect(grey, a, &sa);
+  two.detect(grey, b, &sb);
+  EXPECT_EQ(sa.candidates, sb.candidates) << what;
+  EXPECT_EQ(sa.weak_cells, sb.weak_cells) << what;
+  ASSERT_EQ(a.size(), b.size()) << what;
+  for (std::size_t i = 0; i < a.size(); ++i) {
+    ASSERT_EQ(a[i].pt, b[i].pt) << what << ", corner " << i;
+    ASSERT_EQ(a[i].response, b[i].response) << what << ", corner " << i;
+  }
+}
+
+TEST(QuadtreeFast, TwoPassExtractionFindsTheSinglePassCorners) {
+  expect_same_extraction(textured_image({752, 480}, 160, 21), "textured");
+  cv::Mat half = textured_image({752, 480}, 160, 23);
+  textured_image({376, 480}, 35, 24).copyTo(half(cv::Rect(376, 0, 376, 480)));
+  expect_same_extraction(half, "strong left half, faint right half");
+  AGVSLAM_REQUIRE_SHARED(euroc, "data/euroc_v101_f000-094/mav0/cam0/data");
+  AGVSLAM_REQUIRE_SHARED(kitti, "data/kitti06_f000-050/image_l");
+  for (const std::string& dir : {euroc, kitti}) {
+    std::vector<cv::String> files;
+    cv::glob(dir + "/*.png", files);
+    ASSERT_GE(files.size(), 40u) << dir;
+    for (std::size_t i = 0; i < files.size(); i += 10) expect_same_extraction(cv::imread(files[i], cv::IMREAD_GRAYSCALE), files[i]);
+  }
 }
 
 TEST(QuadtreeFast, InvalidConfigNamesTheField) {
