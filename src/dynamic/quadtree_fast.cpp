@@ -147,6 +147,7 @@ void QuadtreeFast::detect(const cv::Mat& grey, std::vector<Corner>& corners, Qua
   const int cs = config_.cell_size_px;
   const int cells = ((area.width + cs - 1) / cs) * ((area.height + cs - 1) / cs);
   constexpr double kTwoPassMaxWeakFraction = 0.4;
+  cell_best_.assign(static_cast<std::size_t>(cells), -1.0f);
   const bool two = config_.min_threshold < config_.threshold &&
                    (extraction_ == Extraction::kTwoPass ||
                     (extraction_ == Extraction::kAuto && last_weak_fraction_ >= 0 &&
@@ -162,84 +163,67 @@ void QuadtreeFast::detect(const cv::Mat& grey, std::vector<Corner>& corners, Qua
   }
 }
 
-int QuadtreeFast::single_pass(const cv::Mat& grey, const cv::Rect& area, const cv::Rect& with_ring) {
-  keypoints_.clear();
-  cv::FAST(grey(with_ring), keypoints_, config_.min_threshold, true, cv::FastFeatureDetector::TYPE_9_16);
+std::size_t QuadtreeFast::cell_of(const cv::Point2f& p, const cv::Rect& area) const {
   const int cs = config_.cell_size_px;
   const int cells_x = (area.width + cs - 1) / cs, cells_y = (area.height + cs - 1) / cs;
-  cell_best_.assign(static_cast<std::size_t>(cells_x * cells_y), -1.0f);
-  auto cell_of = [&](const cv::Point2f& p) {
-    const int cx = std::clamp(static_cast<int>(p.x - static_cast<float>(area.x)) / cs, 0, cells_x - 1);
-    const int cy = std::clamp(static_cast<int>(p.y - static_cast<float>(area.y)) / cs, 0, cells_y - 1);
-    return static_cast<std::size_t>(cy * cells_x + cx);
-  };
-  candidates_.clear();
-  for (cv::KeyPoint& kp : keypoints_) {
-    kp.pt.x += static_cast<float>(with_ring.x);
-    kp.pt.y += static_cast<float>(with_ring.y);
-    if (!area.contains(cv::Point(static_cast<int>(kp.pt.x), static_cast<int>(kp.pt.y)))) continue;
-    float& best = cell_best_[cell_of(kp.pt)];
+  const int cx = std::clamp(static_cast<int>(p.x - static_cast<float>(area.x)) / cs, 0, cells_x - 1);
+  const int cy = std::clamp(static_cast<int>(p.y - static_cast<float>(area.y)) / cs, 0, cells_y - 1);
+  return static_cast<std::size_t>(cy * cells_x + cx);
+}
+
+void QuadtreeFast::fast_into_candidates(const cv::Mat& grey, const cv::Rect& rect, int threshold, const cv::Rect& keep,
+                                        const cv::Rect& area) {
+  keypoints_.clear();
+  cv::FAST(grey(rect), keypoints_, threshold, true, cv::FastFeatureDetector::TYPE_9_16);
+  for (const cv::KeyPoint& kp : keypoints_) {
+    const cv::Point2f p(kp.pt.x + static_cast<float>(rect.x), kp.pt.y + static_cast<float>(rect.y));
+    if (!keep.contains(cv::Point(static_cast<int>(p.x), static_cast<int>(p.y)))) continue;
+    float& best = cell_best_[cell_of(p, area)];
     best = std::max(best, kp.response);
-    candidates_.push_back({kp.pt, kp.response});
+    candidates_.push_back({p, kp.response});
   }
+}
+
+int QuadtreeFast::single_pass(const cv::Mat& grey, const cv::Rect& area, const cv::Rect& with_ring) {
+  candidates_.clear();
+  fast_into_candidates(grey, with_ring, config_.min_threshold, area, area);
   const float strong = static_cast<float>(config_.threshold);
   int weak_cells = 0;
   for (float best : cell_best_) weak_cells += best >= 0 && best < strong;
   candidates_.erase(std::remove_if(candidates_.begin(), candidates_.end(),
                                    [&](const Corner& c) {
-                                     return c.response < strong && cell_best_[cell_of(c.pt)] >= strong;
+                                     return c.response < strong && cell_best_[cell_of(c.pt, area)] >= strong;
                                    }),
                     candidates_.end());
   return weak_cells;
 }
 
 int QuadtreeFast::two_pass(const cv::Mat& grey, const cv::Rect& area, const cv::Rect& with_ring) {
-  const int cs = config_.cell_size_px;
-  const int cells_x = (area.width + cs - 1) / cs, cells_y = (area.height + cs - 1) / cs;
-  cell_best_.assign(static_cast<std::size_t>(cells_x * cells_y), -1.0f);
-  auto cell_of = [&](const cv::Point2f& p) {
-    const int cx = std::clamp(static_cast<int>(p.x - static_cast<float>(area.x)) / cs, 0, cells_x - 1);
-    const int cy = std::clamp(static_cast<int>(p.y - static_cast<float>(area.y)) / cs, 0, cells_y - 1);
-    return static_cast<std::size_t>(cy * cells_x + cx);
-  };
   // The strong corners everywhere. Non-maximum suppression only ever removes a corner for a stronger neighbour,
   // which this pass finds as well, so these are the single pass's strong corners.
   candidates_.clear();
-  keypoints_.clear();
-  cv::FAST(grey(with_ring), keypoints_, config_.threshold, true, cv::FastFeatureDetector::TYPE_9_16);
-  for (const cv::KeyPoint& kp : keypoints_) {
-    const cv::Point2f p(kp.pt.x + static_cast<float>(with_ring.x), kp.pt.y + static_cast<float>(with_ring.y));
-    if (!area.contains(cv::Point(static_cast<int>(p.x), static_cast<int>(p.y)))) continue;
-    float& best = cell_best_[cell_of(p)];
-    best = std::max(best, kp.response);
-    candidates_.push_back({p, kp.response});
-  }
+  fast_into_candidates(grey, with_ring, config_.threshold, area, area);
   // The weak corners of each run of cells without a strong one: FAST on the run plus 4 px (the circle's 3 and the
   // suppression's neighbour), within what the single pass sees, so suppression compares the same neighbours.
+  const int cs = config_.cell_size_px;
+  const int cells_x = (area.width + cs - 1) / cs, cells_y = (area.height + cs - 1) / cs;
   const float strong = static_cast<float>(config_.threshold);
-  int weak_cells = 0;
+  auto weak = [&](int cx, int cy) { return cell_best_[static_cast<std::size_t>(cy * cells_x + cx)] < strong; };
   for (int cy = 0; cy < cells_y; ++cy) {
     for (int cx = 0; cx < cells_x;) {
-      if (cell_best_[static_cast<std::size_t>(cy * cells_x + cx)] >= strong) {
+      if (!weak(cx, cy)) {
         ++cx;
         continue;
       }
       int end = cx;
-      while (end < cells_x && cell_best_[static_cast<std::size_t>(cy * cells_x + end)] < strong) ++end;
+      while (end < cells_x && weak(end, cy)) ++end;
       const cv::Rect run = cv::Rect(area.x + cx * cs, area.y + cy * cs, (end - cx) * cs, cs) & area;
       const cv::Rect padded = cv::Rect(run.x - 4, run.y - 4, run.width + 8, run.height + 8) & with_ring;
-      keypoints_.clear();
-      cv::FAST(grey(padded), keypoints_, config_.min_threshold, true, cv::FastFeatureDetector::TYPE_9_16);
-      for (const cv::KeyPoint& kp : keypoints_) {
-        const cv::Point2f p(kp.pt.x + static_cast<float>(padded.x), kp.pt.y + static_cast<float>(padded.y));
-        if (!run.contains(cv::Point(static_cast<int>(p.x), static_cast<int>(p.y)))) continue;
-        float& best = cell_best_[cell_of(p)];
-        best = std::max(best, kp.response);
-        candidates_.push_back({p, kp.response});
-      }
+      fast_into_candidates(grey, padded, config_.min_threshold, run, area);
       cx = end;
     }
   }
+  int weak_cells = 0;
   for (float best : cell_best_) weak_cells += best >= 0 && best < strong;
   // FAST's order: row by row, left to right (the quadtree breaks ties between equal responses by this order).
   std::sort(candidates_.begin(), candidates_.end(), [](const Corner& a, const Corner& c) {

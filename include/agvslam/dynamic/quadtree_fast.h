@@ -66,6 +66,10 @@ class QuadtreeFast {
   // number of weak cells.
   int single_pass(const cv::Mat& grey, const cv::Rect& area, const cv::Rect& with_ring);
   int two_pass(const cv::Mat& grey, const cv::Rect& area, const cv::Rect& with_ring);
+  // FAST at `threshold` on grey(rect); the corners inside `keep` join candidates_ and their cells' best responses.
+  void fast_into_candidates(const cv::Mat& grey, const cv::Rect& rect, int threshold, const cv::Rect& keep,
+                            const cv::Rect& area);
+  std::size_t cell_of(const cv::Point2f& p, const cv::Rect& area) const;  // index of the cell holding p
 
   QuadtreeFastConfig config_;
   Extraction extraction_ = Extraction::kAuto;
