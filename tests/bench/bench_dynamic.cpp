@@ -129,6 +129,26 @@ void BM_DynamicQuadtreeFast(benchmark::State& state) {
 }
 BENCHMARK(BM_DynamicQuadtreeFast)->Unit(benchmark::kMillisecond);
 
+// The two ways of finding the quadtree's candidates (the same corners): arg 0 = EuRoC frame 0 (plain walls: most
+// cells weak), 1 = a textured 752x480 board (few weak cells, like the simulator's warehouse); arg 1 = single pass
+// (FAST at 7 everywhere) or two passes (FAST at 20, then at 7 where no cell corner passes 20).
+void BM_DynamicQuadtreeFastExtraction(benchmark::State& state) {
+  const BenchData* d = data_or_skip(state);
+  if (!d) return;
+  const cv::Mat image = state.range(0) == 0 ? d->frames[0].left : board_texture({752, 480}, 128, 5);
+  QuadtreeFast fast;
+  fast.set_extraction(state.range(1) == 0 ? QuadtreeFast::Extraction::kSinglePass : QuadtreeFast::Extraction::kTwoPass);
+  std::vector<Corner> corners;
+  QuadtreeStats stats;
+  for (auto _ : state) {
+    fast.detect(image, corners, &stats);
+    benchmark::DoNotOptimize(corners.data());
+  }
+  state.counters["candidates"] = stats.candidates;
+  state.counters["weak_cells"] = stats.weak_cells;
+}
+BENCHMARK(BM_DynamicQuadtreeFastExtraction)->ArgsProduct({{0, 1}, {0, 1}})->Unit(benchmark::kMillisecond);
+
 void BM_DynamicLkPyramid(benchmark::State& state) {
   const BenchData* d = data_or_skip(state);
   if (!d) return;
