@@ -307,12 +307,13 @@ void DynamicDetector::detect(const StereoFrame& frame, DetectorResult& result) {
     result.lk_levels = tracker_.levels_for_motion(last_max_motion_px_);
     tracker_.track(prev_pyramid_, cur_pyramid_, prev_pts_, cur_pts_, tracked_, result.lk_levels);
     // The largest motion among this frame's tracks chooses the next frame's levels (unknown without tracks).
-    last_max_motion_px_ = -1;
+    float max_motion2 = -1;
     for (std::size_t i = 0; i < tracked_.size(); ++i) {
       if (!tracked_[i]) continue;
       const cv::Point2f m = cur_pts_[i] - prev_pts_[i];
-      last_max_motion_px_ = std::max(last_max_motion_px_, static_cast<double>(std::sqrt(m.dot(m))));
+      max_motion2 = std::max(max_motion2, m.dot(m));
     }
+    last_max_motion_px_ = max_motion2 < 0 ? -1.0 : std::sqrt(static_cast<double>(max_motion2));
     tm.tracking_ms = ms_since(t);
     t = Clock::now();
     usable_ = tracked_;

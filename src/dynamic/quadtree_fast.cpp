@@ -145,15 +145,23 @@ void QuadtreeFast::detect(const cv::Mat& grey, std::vector<Corner>& corners, Qua
   const cv::Rect with_ring = cv::Rect(area.x - 3, area.y - 3, area.width + 6, area.height + 6) &
                              cv::Rect(0, 0, grey.cols, grey.rows);
   const int cs = config_.cell_size_px;
-  const int cells = ((area.width + cs - 1) / cs) * ((area.height + cs - 1) / cs);
+  cells_x_ = (area.width + cs - 1) / cs;
+  cells_y_ = (area.height + cs - 1) / cs;
+  cell_best_.assign(static_cast<std::size_t>(cells_x_ * cells_y_), -1.0f);
   constexpr double kTwoPassMaxWeakFraction = 0.4;
-  cell_best_.assign(static_cast<std::size_t>(cells), -1.0f);
   const bool two = config_.min_threshold < config_.threshold &&
                    (extraction_ == Extraction::kTwoPass ||
                     (extraction_ == Extraction::kAuto && last_weak_fraction_ >= 0 &&
                      last_weak_fraction_ < kTwoPassMaxWeakFraction));
-  const int weak_cells = two ? two_pass(grey, area, with_ring) : single_pass(grey, area, with_ring);
-  last_weak_fraction_ = static_cast<double>(weak_cells) / static_cast<double>(std::max(1, cells));
+  if (two) {
+    two_pass(grey, area, with_ring);
+  } else {
+    single_pass(grey, area, with_ring);
+  }
+  const float strong = static_cast<float>(config_.threshold);
+  int weak_cells = 0;
+  for (float best : cell_best_) weak_cells += best >= 0 && best < strong;
+  last_weak_fraction_ = static_cast<double>(weak_cells) / static_cast<double>(cell_best_.size());
 
   std::vector<cv::Rect2f>* rects = (stats && collect_nodes) ? &stats->node_rects : nullptr;
   corners = distribute_quadtree(candidates_, cv::Rect2f(area), config_.target_count, rects);
@@ -165,10 +173,9 @@ void QuadtreeFast::detect(const cv::Mat& grey, std::vector<Corner>& corners, Qua
 
 std::size_t QuadtreeFast::cell_of(const cv::Point2f& p, const cv::Rect& area) const {
   const int cs = config_.cell_size_px;
-  const int cells_x = (area.width + cs - 1) / cs, cells_y = (area.height + cs - 1) / cs;
-  const int cx = std::clamp(static_cast<int>(p.x - static_cast<float>(area.x)) / cs, 0, cells_x - 1);
-  const int cy = std::clamp(static_cast<int>(p.y - static_cast<float>(area.y)) / cs, 0, cells_y - 1);
-  return static_cast<std::size_t>(cy * cells_x + cx);
+  const int cx = std::clamp(static_cast<int>(p.x - static_cast<float>(area.x)) / cs, 0, cells_x_ - 1);
+  const int cy = std::clamp(static_cast<int>(p.y - static_cast<float>(area.y)) / cs, 0, cells_y_ - 1);
+  return static_cast<std::size_t>(cy * cells_x_ + cx);
 }
 
 void QuadtreeFast::fast_into_candidates(const cv::Mat& grey, const cv::Rect& rect, int threshold, const cv::Rect& keep,
@@ -184,21 +191,18 @@ void QuadtreeFast::fast_into_candidates(const cv::Mat& grey, const cv::Rect& rec
   }
 }
 
-int QuadtreeFast::single_pass(const cv::Mat& grey, const cv::Rect& area, const cv::Rect& with_ring) {
+void QuadtreeFast::single_pass(const cv::Mat& grey, const cv::Rect& area, const cv::Rect& with_ring) {
   candidates_.clear();
   fast_into_candidates(grey, with_ring, config_.min_threshold, area, area);
   const float strong = static_cast<float>(config_.threshold);
-  int weak_cells = 0;
-  for (float best : cell_best_) weak_cells += best >= 0 && best < strong;
   candidates_.erase(std::remove_if(candidates_.begin(), candidates_.end(),
                                    [&](const Corner& c) {
                                      return c.response < strong && cell_best_[cell_of(c.pt, area)] >= strong;
                                    }),
                     candidates_.end());
-  return weak_cells;
 }
 
-int QuadtreeFast::two_pass(const cv::Mat& grey, const cv::Rect& area, const cv::Rect& with_ring) {
+void QuadtreeFast::two_pass(const cv::Mat& grey, const cv::Rect& area, const cv::Rect& with_ring) {
   // The strong corners everywhere. Non-maximum suppression only ever removes a corner for a stronger neighbour,
   // which this pass finds as well, so these are the single pass's strong corners.
   candidates_.clear();
@@ -206,30 +210,26 @@ int QuadtreeFast::two_pass(const cv::Mat& grey, const cv::Rect& area, const cv::
   // The weak corners of each run of cells without a strong one: FAST on the run plus 4 px (the circle's 3 and the
   // suppression's neighbour), within what the single pass sees, so suppression compares the same neighbours.
   const int cs = config_.cell_size_px;
-  const int cells_x = (area.width + cs - 1) / cs, cells_y = (area.height + cs - 1) / cs;
   const float strong = static_cast<float>(config_.threshold);
-  auto weak = [&](int cx, int cy) { return cell_best_[static_cast<std::size_t>(cy * cells_x + cx)] < strong; };
-  for (int cy = 0; cy < cells_y; ++cy) {
-    for (int cx = 0; cx < cells_x;) {
+  auto weak = [&](int cx, int cy) { return cell_best_[static_cast<std::size_t>(cy * cells_x_ + cx)] < strong; };
+  for (int cy = 0; cy < cells_y_; ++cy) {
+    for (int cx = 0; cx < cells_x_;) {
       if (!weak(cx, cy)) {
         ++cx;
         continue;
       }
       int end = cx;
-      while (end < cells_x && weak(end, cy)) ++end;
+      while (end < cells_x_ && weak(end, cy)) ++end;
       const cv::Rect run = cv::Rect(area.x + cx * cs, area.y + cy * cs, (end - cx) * cs, cs) & area;
       const cv::Rect padded = cv::Rect(run.x - 4, run.y - 4, run.width + 8, run.height + 8) & with_ring;
       fast_into_candidates(grey, padded, config_.min_threshold, run, area);
       cx = end;
     }
   }
-  int weak_cells = 0;
-  for (float best : cell_best_) weak_cells += best >= 0 && best < strong;
   // FAST's order: row by row, left to right (the quadtree breaks ties between equal responses by this order).
   std::sort(candidates_.begin(), candidates_.end(), [](const Corner& a, const Corner& c) {
     return a.pt.y < c.pt.y || (a.pt.y == c.pt.y && a.pt.x < c.pt.x);
   });
-  return weak_cells;
 }
 
 }  // namespace agvslam::dynamic

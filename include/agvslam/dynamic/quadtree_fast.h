@@ -62,10 +62,10 @@ class QuadtreeFast {
   void set_extraction(Extraction e) { extraction_ = e; }
 
  private:
-  // Candidates of step (1) in `area` (image coordinates) into candidates_, FAST's order (row by row); returns the
-  // number of weak cells.
-  int single_pass(const cv::Mat& grey, const cv::Rect& area, const cv::Rect& with_ring);
-  int two_pass(const cv::Mat& grey, const cv::Rect& area, const cv::Rect& with_ring);
+  // Candidates of step (1) in `area` (image coordinates) into candidates_, FAST's order (row by row), and each
+  // cell's best response into cell_best_ (cells_x_ x cells_y_ cells, -1 = none).
+  void single_pass(const cv::Mat& grey, const cv::Rect& area, const cv::Rect& with_ring);
+  void two_pass(const cv::Mat& grey, const cv::Rect& area, const cv::Rect& with_ring);
   // FAST at `threshold` on grey(rect); the corners inside `keep` join candidates_ and their cells' best responses.
   void fast_into_candidates(const cv::Mat& grey, const cv::Rect& rect, int threshold, const cv::Rect& keep,
                             const cv::Rect& area);
@@ -77,6 +77,7 @@ class QuadtreeFast {
   std::vector<cv::KeyPoint> keypoints_;
   std::vector<Corner> candidates_;
   std::vector<float> cell_best_;
+  int cells_x_ = 0, cells_y_ = 0;  // the cell grid of the current image's area
 };
 
 }  // namespace agvslam::dynamic
