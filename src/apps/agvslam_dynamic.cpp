@@ -28,6 +28,7 @@
 #include <ctime>
 #include <filesystem>
 #include <map>
+#include <optional>
 #include <nlohmann/json.hpp>
 #include <opencv2/imgcodecs.hpp>
 #include <opencv2/imgproc.hpp>
@@ -38,6 +39,7 @@
 #include "agvslam/dynamic/detector.h"
 #include "agvslam/dynamic/median.h"
 #include "agvslam/eval/detection_scoring.h"
+#include "agvslam/eval/object_motion.h"
 #include "agvslam/io/dataset.h"
 #include "agvslam/io/objects_io.h"
 #include "agvslam/io/trajectory_io.h"
@@ -324,6 +326,11 @@ struct RecallBreakdown {
   static constexpr const char* kMissStageNames[kMissStages] = {"no_track", "no_dynamic_point", "no_roi", "roi_not_masked",
                                                                "outline_below_iou"};
   int misses[kMissBands][kMissStages] = {};
+  // By the object's ground-truth image motion against a static object's (eval/object_motion.h, frame to frame;
+  // "visible part changed": entering, leaving or passing behind something), per distance band as the misses.
+  static constexpr int kMotionBins = 5;
+  static constexpr double kMotionUpperPx[kMotionBins - 2] = {1.0, 2.0, 4.0};
+  int motion_found[kMissBands][kMotionBins] = {}, motion_total[kMissBands][kMotionBins] = {};
   static constexpr double kNearM = 4.0;
   static constexpr double kFarM = 12.0;
   static constexpr int kBorderPx = 2;  // a box within this of the left/right edge is cut by it
@@ -349,8 +356,18 @@ struct RecallBreakdown {
       right_total += cut_right;
       right_found += cut_right && hit;
       const double distance_m = d.value("distance_m", -1.0);
+      const int band = !(distance_m > 0) ? 3 : distance_m < kNearM ? 0 : distance_m < kFarM ? 1 : 2;
+      if (d.contains("gt_motion_px")) {
+        int k = kMotionBins - 1;  // visible part changed
+        if (d["gt_motion_valid"].get<bool>()) {
+          const double motion_px = d["gt_motion_px"].get<double>();
+          k = 0;
+          while (k < kMotionBins - 2 && motion_px >= kMotionUpperPx[k]) ++k;
+        }
+        ++motion_total[band][k];
+        motion_found[band][k] += hit;
+      }
       if (!hit) {
-        const int band = !(distance_m > 0) ? 3 : distance_m < kNearM ? 0 : distance_m < kFarM ? 1 : 2;
         const int stage = d["in_mask"].get<int>() > 0           ? 4
                           : d["in_roi"].get<int>() > 0          ? 3
                           : d["dynamic_points"].get<int>() > 0  ? 2
@@ -399,6 +416,37 @@ struct RecallBreakdown {
     }
     if (text.back() == ';') text.pop_back();
     return text;
+  }
+  bool has_motion() const {
+    for (int b = 0; b < kMissBands; ++b)
+      for (int k = 0; k < kMotionBins; ++k)
+        if (motion_total[b][k] > 0) return true;
+    return false;
+  }
+  std::string describe_motion() const {
+    std::string text = "recall by ground-truth image motion against a static object's, frame to frame (< 1 / 1-2 / 2-4 / "
+                       ">= 4 px / visible part changed):";
+    const char* labels[kMissBands] = {"< 4 m", "4-12 m", ">= 12 m", "distance unknown"};
+    for (int b = 0; b < kMissBands; ++b) {
+      int sum = 0;
+      for (int k = 0; k < kMotionBins; ++k) sum += motion_total[b][k];
+      if (sum == 0) continue;
+      text += std::string(" ") + labels[b] + " " + ratio(motion_found[b][0], motion_total[b][0]);
+      for (int k = 1; k < kMotionBins; ++k) text += " / " + ratio(motion_found[b][k], motion_total[b][k]);
+      text += ";";
+    }
+    if (text.back() == ';') text.pop_back();
+    return text;
+  }
+  nlohmann::json motion_json() const {
+    const char* names[kMotionBins] = {"lt1px", "1_2px", "2_4px", "ge4px", "visible_part_changed"};
+    nlohmann::json j;
+    for (int b = 0; b < kMissBands; ++b) {
+      for (int k = 0; k < kMotionBins; ++k) {
+        j[kMissBandNames[b]][names[k]] = {{"found", motion_found[b][k]}, {"objects", motion_total[b][k]}};
+      }
+    }
+    return j;
   }
   nlohmann::json misses_json() const {
     nlohmann::json j;
@@ -514,6 +562,10 @@ int run(const Options& o) {
   int instances_scored = 0;  // frames whose objects were scored with instance_0/ (their own pixels only)
   RecallBreakdown breakdown;
   nlohmann::json per_frame = nlohmann::json::array();
+  // Ground-truth poses (the simulator's poses.txt) and the last frame's instances and disparity: each object's
+  // image motion against a static object's.
+  const std::optional<agvslam::Trajectory> gt_poses = has_gt_masks ? dataset->ground_truth() : std::nullopt;
+  cv::Mat last_gt_instances, last_gt_disparity;
 
   for (std::size_t i = first; i <= last; ++i) {
     const agvslam::StereoFrame frame = dataset->frame(i);
@@ -615,11 +667,27 @@ int run(const Options& o) {
         jf["iou"] = f.matched_iou;
         jf["objects"] = object_diagnostics(it == objects.end() ? nullptr : &it->second, gt_mask, gt_instances, gt_disparity,
                                            dataset->calibration().bf(), result, f);
+        // Each object's image motion against a static object's since the last frame (ground-truth poses,
+        // disparity and instances; eval/object_motion.h).
+        if (gt_poses && i < gt_poses->size() && i > first && !gt_instances.empty() && !gt_disparity.empty() &&
+            !last_gt_instances.empty() && !last_gt_disparity.empty()) {
+          const agvslam::SE3d T_now_then = (*gt_poses)[i].T_w_c.inverse() * (*gt_poses)[i - 1].T_w_c;
+          for (auto& d : jf["objects"]) {
+            if (!d["moving"].get<bool>()) continue;
+            const eval::ObjectImageMotion m = eval::ground_truth_image_motion(
+                last_gt_instances, last_gt_disparity, gt_instances, gt_disparity, d["id"].get<int>(),
+                dataset->calibration().left, dataset->calibration().bf(), T_now_then);
+            d["gt_motion_px"] = m.offset_px;
+            d["gt_motion_valid"] = m.valid;
+          }
+        }
         if (it != objects.end()) breakdown.add(it->second, jf["objects"], gt_mask.size(), scoring);
         jf["detections"] = detection_diagnostics(f, result.mask.instances, gt_mask);
       }
     }
     per_frame.push_back(jf);
+    last_gt_instances = gt_instances;
+    last_gt_disparity = gt_disparity;
     if (o.overlay_every > 0 && result.has_previous && (i - first) % static_cast<std::size_t>(o.overlay_every) == 0) {
       write_png((out / "overlay" / frame_name(i)).string(),
                 compose_overlay(frame.left, frame.right, result, gt_mask, display_sgbm));
@@ -647,6 +715,7 @@ int run(const Options& o) {
                 score.pixel_iou());
     std::printf("%s\n", breakdown.describe().c_str());
     std::printf("%s\n", breakdown.describe_misses().c_str());
+    if (breakdown.has_motion()) std::printf("%s\n", breakdown.describe_motion().c_str());
   } else {
     std::printf("no ground-truth masks (mask_0/) in the dataset: not scored\n");
   }
@@ -676,6 +745,7 @@ int run(const Options& o) {
       j["pixel"] = {{"precision", score.pixel_precision()}, {"recall", score.pixel_recall()}, {"iou", score.pixel_iou()}};
       j["recall_breakdown"] = breakdown.to_json();
       j["misses_by_stage"] = breakdown.misses_json();
+      if (breakdown.has_motion()) j["recall_by_ground_truth_motion"] = breakdown.motion_json();
     }
     nlohmann::json jt;
     for (const auto& name : stage_order) {
