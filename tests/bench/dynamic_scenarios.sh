@@ -52,6 +52,7 @@ scenarios, seeds = args[:sep], args[sep + 1:]
 tot = {"tp": 0, "fp": 0, "fn": 0, "iou": 0.0}
 breakdown = {}
 misses = {}
+motion = {}
 print(f"{'sequence':<14}{'frames':>7}{'P':>8}{'R':>8}{'IoU':>8}{'TP':>6}{'FP':>6}{'FN':>6}{'FP/100f':>9}{'med ms':>8}{'p95 ms':>8}"
       f"{'cpu med':>9}{'cpu p95':>9}")
 static_frames = static_regions = 0
@@ -67,6 +68,9 @@ for sc in scenarios:
                 m = misses.setdefault(band, {})
                 for stage, n in stages.items():
                     m[stage] = m.get(stage, 0) + n
+            for band, bins in j.get("recall_by_ground_truth_motion", {}).items():
+                for k, v in bins.items():
+                    b = motion.setdefault(band, {}).setdefault(k, [0, 0]); b[0] += v["found"]; b[1] += v["objects"]
         else:
             static_frames += j["frames"]["detected"]; static_regions += j["regions"]["total"]
         t = j["timings"]["total"]
@@ -94,6 +98,18 @@ if misses:
         f"{label} " + " / ".join(str(misses[band].get(k, 0)) for k, _ in stages)
         for band, label in [("lt4m", "< 4 m"), ("4_12m", "4-12 m"), ("ge12m", ">= 12 m"), ("unknown", "distance unknown")]
         if sum(misses.get(band, {}).values()) > 0))
+if motion:
+    bins = [("lt1px", "< 1 px"), ("1_2px", "1-2 px"), ("2_4px", "2-4 px"), ("ge4px", ">= 4 px"),
+            ("visible_part_changed", "visible part changed")]
+    parts = []
+    for band, label in [("lt4m", "< 4 m"), ("4_12m", "4-12 m"), ("ge12m", ">= 12 m"), ("unknown", "distance unknown")]:
+        m = motion.get(band, {})
+        if sum(v[1] for v in m.values()) == 0:
+            continue
+        parts.append(f"{label} " + " / ".join(f"{m.get(k, [0, 0])[0] / max(1, m.get(k, [0, 0])[1]):.3f} "
+                                             f"({m.get(k, [0, 0])[0]}/{m.get(k, [0, 0])[1]})" for k, _ in bins))
+    print("scene1..5 recall by ground-truth image motion against a static object's, frame to frame (" +
+          " / ".join(label for _, label in bins) + "): " + "; ".join(parts))
 if static_frames:
     print(f"static: {static_regions} regions in {static_frames} frames ({100 * static_regions / static_frames:.2f} per 100 frames)")
 PY
