@@ -46,6 +46,8 @@ void DetectorOptions::validate(const std::string& source) const {
   require(densify_min_distance_px >= 0 && densify_min_distance_px <= 100, "densify_min_distance_px",
           "expected a number in [0, 100] px");
   require(densify_min_seeds >= 1 && densify_min_seeds <= 100, "densify_min_seeds", "expected an integer in [1, 100]");
+  require(densify_depth_seed_factor >= 0 && densify_depth_seed_factor <= 100, "densify_depth_seed_factor",
+          "expected a number in [0, 100] (0: depth-test points alone never seed)");
   require(densify_extra_tracks >= 0 && densify_extra_tracks <= 10000, "densify_extra_tracks",
           "expected an integer in [0, 10000]");
   require(densify_multiframe_levels >= -1 && densify_multiframe_levels <= 5, "densify_multiframe_levels",
@@ -86,7 +88,7 @@ void DetectorOptions::validate(const std::string& source) const {
 }
 
 std::string DetectorOptions::describe() const {
-  char densify_text[320] = "off";
+  char densify_text[400] = "off";
   char widen_text[200] = "off";
   if (extend_max_rounds > 0) {
     std::snprintf(widen_text, sizeof(widen_text),
@@ -95,10 +97,10 @@ std::string DetectorOptions::describe() const {
   }
   if (densify) {
     std::snprintf(densify_text, sizeof(densify_text),
-                  "<= %d points within %.0f + %.2f d px, %.0f px apart, >= %d seeds, <= %d tracks beyond the cap, static "
-                  "ones kept %s, multi-frame test %s (%d levels)",
+                  "<= %d points within %.0f + %.2f d px, %.0f px apart, >= %d seeds (depth-test points alone at >= %.2fx "
+                  "its threshold, 0 = never), <= %d tracks beyond the cap, static ones kept %s, multi-frame test %s (%d levels)",
                   densify_max_points, densify_radius_px, densify_radius_disparity_factor, densify_min_distance_px,
-                  densify_min_seeds, densify_extra_tracks, densify_keep_static ? "yes" : "no",
+                  densify_min_seeds, densify_depth_seed_factor, densify_extra_tracks, densify_keep_static ? "yes" : "no",
                   densify_multiframe_levels >= 0 ? "on" : "off", std::max(0, densify_multiframe_levels));
   }
   char objects_text[640] = "off";
@@ -1492,12 +1494,18 @@ void DynamicDetector::densify(const StereoFrame& frame, DetectorResult& result) 
   // Seeds: dynamic points with strong evidence. When both tests ran, a point both flag (a track that slid
   // along an edge can fool one of them, rarely both); otherwise every dynamic point.
   const bool both = opt.use_epipolar_test && opt.use_depth_test && result.epipolar.valid && result.depth.valid;
+  // ... or one the depth test flags well beyond its threshold: a far person walking along the epipolar lines.
+  const double depth_factor = opt.densify_depth_seed_factor;
   seed_pts_.clear();
   seed_disp_.clear();
   seed_index_.clear();
   for (std::size_t k = 0; k < dyn_index_.size(); ++k) {
     const TrackedPoint& p = result.points[static_cast<std::size_t>(dyn_index_[k])];
-    if (both && !(p.dynamic_epipolar && p.dynamic_depth) && !p.dynamic_multiframe) continue;
+    const bool strong_depth = depth_factor > 0 && p.dynamic_depth && p.reprojection_px >= 0 &&
+                              p.reprojection_px >= depth_factor * (result.depth.a_reproj_used_px +
+                                                                   config_.depth_test.b_reproj *
+                                                                       std::max(0.0f, p.cur_disparity_px));
+    if (both && !(p.dynamic_epipolar && p.dynamic_depth) && !p.dynamic_multiframe && !strong_depth) continue;
     seed_pts_.push_back(dyn_pts_[k]);
     seed_disp_.push_back(dyn_disp_[k]);
     seed_index_.push_back(dyn_index_[k]);

@@ -220,7 +220,7 @@ DynamicDetectorConfig load_dynamic_config(const std::string& path) {
                              "extend_max_rounds", "extend_min_rows", "extend_step_m", "extend_static_guard_px", "half_scale_min_area_px", "half_scale_erode_px", "extend_to_floor", "extend_to_height_m", "split_side_by_side", "mask_dilation_px", "densify",
                              "densify_radius_px",
                              "densify_radius_disparity_factor", "densify_max_points", "densify_min_distance_px",
-                             "densify_min_seeds", "densify_extra_tracks", "densify_keep_static", "densify_multiframe_levels", "densify_multiframe_agreement", "densify_multiframe_factor",
+                             "densify_min_seeds", "densify_depth_seed_factor", "densify_extra_tracks", "densify_keep_static", "densify_multiframe_levels", "densify_multiframe_agreement", "densify_multiframe_factor",
                              "track_objects", "continue_min_points", "coast_max_frames", "coast_min_detections",
                              "coast_min_tracks", "coast_min_area_ratio", "band_carry_max_frames", "band_carry_min_tracks", "band_carry_min_dynamic", "growth_max_ratio", "growth_margin", "carve_min_tracks", "carve_max_offset_px", "carve_max_multiframe_px", "carve_min_distance_px", "confirm_min_box_iou", "confirm_below_px",
                              "pad_left_border", "roi_speckle_filter", "merge_stacked_regions"});
@@ -248,6 +248,7 @@ DynamicDetectorConfig load_dynamic_config(const std::string& path) {
   in.read("detector", "densify_max_points", c.detector.densify_max_points, integer);
   in.read("detector", "densify_min_distance_px", c.detector.densify_min_distance_px, px);
   in.read("detector", "densify_min_seeds", c.detector.densify_min_seeds, integer);
+  in.read("detector", "densify_depth_seed_factor", c.detector.densify_depth_seed_factor, "a number");
   in.read("detector", "densify_extra_tracks", c.detector.densify_extra_tracks, integer);
   in.read("detector", "densify_keep_static", c.detector.densify_keep_static, flag);
   in.read("detector", "densify_multiframe_levels", c.detector.densify_multiframe_levels, integer);

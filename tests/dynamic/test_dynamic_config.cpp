@@ -86,6 +86,7 @@ TEST(DynamicConfig, BadValuesNameFileAndField) {
   expect_error("edge_refine:\n  occlusion_cost: 0\n", "edge_refine.occlusion_cost");
   expect_error("edge_refine:\n  width_px: 3\n", "edge_refine.width_px");  // unknown key
   expect_error("detector:\n  extend_max_rounds: -1\n", "detector.extend_max_rounds");
+  expect_error("detector:\n  densify_depth_seed_factor: -1\n", "detector.densify_depth_seed_factor");
   expect_error("detector:\n  roi_row_step: 3\n", "detector.roi_row_step");
   expect_error("detector:\n  confirm_min_box_iou: 1.5\n", "detector.confirm_min_box_iou");
   expect_error("detector:\n  confirm_below_px: -1\n", "detector.confirm_below_px");

@@ -108,7 +108,8 @@ struct DetectorOptions {
   // densify_max_points extra FAST corners (features.min_threshold) of the previous frame within
   // densify_radius_px + densify_radius_disparity_factor * d of the group are tracked and tested with this
   // frame's F, motion and thresholds. Seeds are the points both tests flag (when both ran): a track that slid
-  // along an edge can fool one test, rarely both. Isolated single points (usually noise) are not densified.
+  // along an edge can fool one test, rarely both; and those the multi-frame test flags, and those the depth test
+  // flags by densify_depth_seed_factor times its threshold. Isolated single points (usually noise) are not densified.
   // The persistent tracks keep tracking.max_tracks full, so densified tracks may go densify_extra_tracks beyond
   // it; those the tests pass as static end with the frame unless densify_keep_static.
   bool densify = true;
@@ -117,6 +118,9 @@ struct DetectorOptions {
   int densify_max_points = 24;
   double densify_min_distance_px = 5;  // from existing tracks and from each other
   int densify_min_seeds = 2;           // seed points a group needs to be densified (1: a lone strong seed too)
+  // A point only the per-frame depth test flags (a far person walking along the epipolar lines, which the epipolar
+  // test cannot see) seeds too when its offset is at least this many times that test's threshold (0 = never).
+  double densify_depth_seed_factor = 1.5;
   int densify_extra_tracks = 150;      // tracks densification may add beyond tracking.max_tracks (0: none)
   bool densify_keep_static = false;    // densified tracks the tests pass as static continue into the next frame
   // A densified point has no history, so the multi-frame test cannot see it: a person 7 m away walking along the
