@@ -167,13 +167,19 @@ TEST(DynamicDetector, ResetAndSizeChangeStartOver) {
   EXPECT_EQ(r.mask.image.size(), cv::Size(376, 240));
 }
 
-TEST(DynamicDetector, SmallFarObjectIsFoundThroughDensification) {
-  // A 0.5 x 0.9 m box 5 m away (~46 x 83 px) with 120 quadtree points (~55 px apart): two or three points
-  // fall on it, fewer than the five a ROI needs; the tracks added around them make it a ROI.
+// A 0.5 x 0.9 m box 5 m away, a little left of and above the optical axis (~46 x 83 px).
+CorridorScene small_far_box_scene() {
   CorridorScene scene;
   scene.box.origin = {-0.4, -0.4, 5.0};
   scene.box.width_m = 0.5;
   scene.box.height_m = 0.9;
+  return scene;
+}
+
+TEST(DynamicDetector, SmallFarObjectIsFoundThroughDensification) {
+  // A 0.5 x 0.9 m box 5 m away (~46 x 83 px) with 120 quadtree points (~55 px apart): two or three points
+  // fall on it, fewer than the five a ROI needs; the tracks added around them make it a ROI.
+  const CorridorScene scene = small_far_box_scene();
   DynamicDetectorConfig sparse = per_frame();
   sparse.features.target_count = 120;
   sparse.detector.densify = false;
@@ -197,10 +203,7 @@ TEST(DynamicDetector, DepthTestPointsSeedDensificationAlongTheEpipolarLines) {
   // the focus of expansion, on the epipolar lines, so only the depth test flags its two or three points. With
   // detector.densify_depth_seed_factor they seed densification and the box becomes a ROI; without, nothing grows
   // around them.
-  CorridorScene scene;
-  scene.box.origin = {-0.4, -0.4, 5.0};
-  scene.box.width_m = 0.5;
-  scene.box.height_m = 0.9;
+  const CorridorScene scene = small_far_box_scene();
   DynamicDetectorConfig off = per_frame();
   off.features.target_count = 160;
   off.detector.densify_depth_seed_factor = 0;
