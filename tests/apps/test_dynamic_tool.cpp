@@ -195,6 +195,40 @@ TEST(DynamicTool, WritesMasksOverlaysScoresAndJson) {
     }
   }
   EXPECT_EQ(counted, missed);
+  // Recall by ground-truth image motion (eval::ground_truth_image_motion), recounted from the per-object motions.
+  ASSERT_TRUE(j.contains("recall_by_ground_truth_motion"));
+  EXPECT_NE(stdout_text.find("recall by ground-truth image motion"), std::string::npos);
+  std::map<std::string, std::map<std::string, std::pair<int, int>>> motion;  // band -> bin -> (found, objects)
+  int with_motion = 0;
+  for (const auto& jf : j["per_frame"]) {
+    if (!jf.contains("objects")) continue;
+    for (const auto& o : jf["objects"]) {
+      if (!o["moving"].get<bool>() || o["pixels"].get<int>() < 400 || !o.contains("gt_motion_px")) continue;
+      const double object_m = o["distance_m"].get<double>();
+      const std::string band = !(object_m > 0) ? "unknown" : object_m < 4.0 ? "lt4m" : object_m < 12.0 ? "4_12m" : "ge12m";
+      const double motion_px = o["gt_motion_px"].get<double>();
+      const std::string bin = !o["gt_motion_valid"].get<bool>() ? "visible_part_changed"
+                              : motion_px < 1.0                 ? "lt1px"
+                              : motion_px < 2.0                 ? "1_2px"
+                              : motion_px < 4.0                 ? "2_4px"
+                                                                : "ge4px";
+      motion[band][bin].first += o["iou"].get<double>() >= 0.5 ? 1 : 0;
+      motion[band][bin].second += 1;
+      ++with_motion;
+    }
+  }
+  EXPECT_GT(with_motion, 0);
+  int motion_counted = 0;
+  for (const auto& [band, bins] : j["recall_by_ground_truth_motion"].items()) {
+    for (const auto& [bin, v] : bins.items()) {
+      EXPECT_EQ(v["objects"].get<int>(), motion[band][bin].second) << band << " " << bin;
+      EXPECT_EQ(v["found"].get<int>(), motion[band][bin].first) << band << " " << bin;
+      motion_counted += v["objects"].get<int>();
+    }
+  }
+  EXPECT_EQ(motion_counted, with_motion);
+  // The person crossing in front of the standing AGV moves several px per frame.
+  EXPECT_GT(motion["lt4m"]["2_4px"].second + motion["lt4m"]["ge4px"].second, 0);
 }
 
 TEST(DynamicTool, BadInputNamesTheOptionOrFolder) {
