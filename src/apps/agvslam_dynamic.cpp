@@ -402,20 +402,26 @@ struct RecallBreakdown {
     std::snprintf(buf, sizeof(buf), "%.3f (%d/%d)", static_cast<double>(f) / t, f, t);
     return buf;
   }
-  std::string describe_misses() const {
-    std::string text = "misses by where they were lost (no track / no dynamic point / no ROI / ROI, not in the mask / "
-                       "outline IoU too low):";
+  // "<title> <band> c0 / c1 / ...; <band> ..." over the distance bands with objects; cell(b, k) formats one entry.
+  template <typename Cell>
+  static std::string per_band(std::string text, int columns, const int (&totals)[kMissBands], Cell cell) {
     const char* labels[kMissBands] = {"< 4 m", "4-12 m", ">= 12 m", "distance unknown"};
     for (int b = 0; b < kMissBands; ++b) {
-      int sum = 0;
-      for (int k = 0; k < kMissStages; ++k) sum += misses[b][k];
-      if (sum == 0) continue;
-      text += std::string(" ") + labels[b] + " " + std::to_string(misses[b][0]);
-      for (int k = 1; k < kMissStages; ++k) text += " / " + std::to_string(misses[b][k]);
+      if (totals[b] == 0) continue;
+      text += std::string(" ") + labels[b] + " " + cell(b, 0);
+      for (int k = 1; k < columns; ++k) text += " / " + cell(b, k);
       text += ";";
     }
     if (text.back() == ';') text.pop_back();
     return text;
+  }
+  std::string describe_misses() const {
+    int totals[kMissBands] = {};
+    for (int b = 0; b < kMissBands; ++b)
+      for (int k = 0; k < kMissStages; ++k) totals[b] += misses[b][k];
+    return per_band("misses by where they were lost (no track / no dynamic point / no ROI / ROI, not in the mask / "
+                    "outline IoU too low):",
+                    kMissStages, totals, [&](int b, int k) { return std::to_string(misses[b][k]); });
   }
   bool has_motion() const {
     for (int b = 0; b < kMissBands; ++b)
@@ -424,19 +430,12 @@ struct RecallBreakdown {
     return false;
   }
   std::string describe_motion() const {
-    std::string text = "recall by ground-truth image motion against a static object's, frame to frame (< 1 / 1-2 / 2-4 / "
-                       ">= 4 px / visible part changed):";
-    const char* labels[kMissBands] = {"< 4 m", "4-12 m", ">= 12 m", "distance unknown"};
-    for (int b = 0; b < kMissBands; ++b) {
-      int sum = 0;
-      for (int k = 0; k < kMotionBins; ++k) sum += motion_total[b][k];
-      if (sum == 0) continue;
-      text += std::string(" ") + labels[b] + " " + ratio(motion_found[b][0], motion_total[b][0]);
-      for (int k = 1; k < kMotionBins; ++k) text += " / " + ratio(motion_found[b][k], motion_total[b][k]);
-      text += ";";
-    }
-    if (text.back() == ';') text.pop_back();
-    return text;
+    int totals[kMissBands] = {};
+    for (int b = 0; b < kMissBands; ++b)
+      for (int k = 0; k < kMotionBins; ++k) totals[b] += motion_total[b][k];
+    return per_band("recall by ground-truth image motion against a static object's, frame to frame (< 1 / 1-2 / 2-4 / "
+                    ">= 4 px / visible part changed):",
+                    kMotionBins, totals, [&](int b, int k) { return ratio(motion_found[b][k], motion_total[b][k]); });
   }
   nlohmann::json motion_json() const {
     const char* names[kMotionBins] = {"lt1px", "1_2px", "2_4px", "ge4px", "visible_part_changed"};
