@@ -260,7 +260,7 @@ bool DepthConsistencyTest::predict(const PinholeCamera& camera, double bf_px_m, 
 bool DepthConsistencyTest::is_dynamic(const DepthTestResult& fitted, double reprojection_px,
                                       double disparity_residual_px, double disparity_px) const {
   if (!fitted.valid || reprojection_px < 0) return false;
-  const bool off_2d = reprojection_px > fitted.a_reproj_used_px + config_.b_reproj * disparity_px;
+  const bool off_2d = reprojection_px > reprojection_threshold_px(fitted, disparity_px);
   return off_2d || disparity_off(fitted, disparity_residual_px, disparity_px);
 }
 

@@ -1495,17 +1495,17 @@ void DynamicDetector::densify(const StereoFrame& frame, DetectorResult& result) 
   // along an edge can fool one of them, rarely both); otherwise every dynamic point.
   const bool both = opt.use_epipolar_test && opt.use_depth_test && result.epipolar.valid && result.depth.valid;
   // ... or one the depth test flags well beyond its threshold: a far person walking along the epipolar lines.
-  const double depth_factor = opt.densify_depth_seed_factor;
+  auto strong_depth = [&](const TrackedPoint& p) {
+    return opt.densify_depth_seed_factor > 0 && p.dynamic_depth && p.reprojection_px >= 0 &&
+           p.reprojection_px >= opt.densify_depth_seed_factor *
+                                    depth_test_.reprojection_threshold_px(result.depth, std::max(0.0f, p.cur_disparity_px));
+  };
   seed_pts_.clear();
   seed_disp_.clear();
   seed_index_.clear();
   for (std::size_t k = 0; k < dyn_index_.size(); ++k) {
     const TrackedPoint& p = result.points[static_cast<std::size_t>(dyn_index_[k])];
-    const bool strong_depth = depth_factor > 0 && p.dynamic_depth && p.reprojection_px >= 0 &&
-                              p.reprojection_px >= depth_factor * (result.depth.a_reproj_used_px +
-                                                                   config_.depth_test.b_reproj *
-                                                                       std::max(0.0f, p.cur_disparity_px));
-    if (both && !(p.dynamic_epipolar && p.dynamic_depth) && !p.dynamic_multiframe && !strong_depth) continue;
+    if (both && !(p.dynamic_epipolar && p.dynamic_depth) && !p.dynamic_multiframe && !strong_depth(p)) continue;
     seed_pts_.push_back(dyn_pts_[k]);
     seed_disp_.push_back(dyn_disp_[k]);
     seed_index_.push_back(dyn_index_[k]);

@@ -83,6 +83,10 @@ class DepthConsistencyTest {
   // (for tracks added after run(), e.g. around dynamic points). disparity_px: the track's disparity.
   bool is_dynamic(const DepthTestResult& fitted, double reprojection_px, double disparity_residual_px,
                   double disparity_px) const;
+  // Its image half's threshold: the reprojection offset above which a track with this disparity is dynamic.
+  double reprojection_threshold_px(const DepthTestResult& fitted, double disparity_px) const {
+    return fitted.a_reproj_used_px + config_.b_reproj * disparity_px;
+  }
   // Its depth half: the disparity residual (>= 0: measured) is over the threshold of `fitted`.
   bool disparity_off(const DepthTestResult& fitted, double disparity_residual_px, double disparity_px) const {
     return disparity_residual_px >= 0 && disparity_residual_px > fitted.a_disp_used_px + config_.b_disp * disparity_px;
