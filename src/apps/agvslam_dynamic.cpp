@@ -640,7 +640,9 @@ int run(const Options& o) {
           const int on_gt = gt_mask.empty() ? -1 : cv::countNonZero(roi.outline & gt_mask(roi.roi));
           jr.push_back({{"roi", {roi.roi.x, roi.roi.y, roi.roi.width, roi.roi.height}}, {"pixels", px}, {"on_gt", on_gt},
                         {"points", roi.points.size()}, {"tracked_inside", roi.outline_stats.tracked_inside},
-                        {"dynamic_inside", roi.outline_stats.dynamic_inside}, {"d", roi.mean_disparity_px},
+                        {"dynamic_inside", roi.outline_stats.dynamic_inside},
+                        {"multiframe_tested_inside", roi.outline_stats.multiframe_tested_inside},
+                        {"multiframe_dynamic_inside", roi.outline_stats.multiframe_dynamic_inside}, {"d", roi.mean_disparity_px},
                         {"motion", roi.outline_motion.apparent_motion_px},
                         {"motion_multiframe", roi.outline_motion_multiframe.apparent_motion_px},
                         {"verdict", dyn::to_string(roi.outline_verdict)}, {"coasted", roi.coasted}, {"median_offset", roi.outline_stats.median_offset_px},

@@ -931,6 +931,8 @@ void DynamicDetector::outline_region(const StereoFrame& frame, DetectorResult& r
     if (q.x < 0 || q.y < 0 || q.x >= seg.outline.cols || q.y >= seg.outline.rows || !seg.outline.at<uint8_t>(q)) continue;
     ++seg.outline_stats.tracked_inside;
     seg.outline_stats.dynamic_inside += p.dynamic ? 1 : 0;
+    seg.outline_stats.multiframe_tested_inside += p.multiframe_px >= 0 ? 1 : 0;
+    seg.outline_stats.multiframe_dynamic_inside += p.dynamic_multiframe ? 1 : 0;
     if (p.reprojection_px >= 0) inside_offsets_.push_back(static_cast<float>(p.reprojection_px));
   }
   const OutlineStats& st = seg.outline_stats;
@@ -953,7 +955,9 @@ void DynamicDetector::outline_region(const StereoFrame& frame, DetectorResult& r
       }
       static_offset_median_px_ = static_offsets_.empty() ? 0.0 : median_of(static_offsets_);
     }
-    moves_together = tracks_move_together(st.median_offset_px, static_offset_median_px_, oc);
+    moves_together = tracks_move_together(st.median_offset_px, static_offset_median_px_, oc) ||
+                     tracks_move_together_multiframe(st.multiframe_tested_inside, st.multiframe_dynamic_inside,
+                                                     st.median_offset_px, oc);
   }
   int coast_min_pixels = 0;  // a coasted outline: a good part of the object's last one
   if (seg.coasted) {

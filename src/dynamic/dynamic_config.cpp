@@ -168,7 +168,8 @@ DynamicDetectorConfig load_dynamic_config(const std::string& path) {
   in.check_keys("outline", {"seed_radius_px", "seed_tolerance_px", "seed_tolerance_rel", "step_tolerance_px",
                             "step_tolerance_rel", "depth_band_m", "ground_tolerance_px", "ground_tolerance_rel",
                             "static_competition", "max_hole_invalid_fraction", "min_hole_fill_px", "erode_px", "min_pixels",
-                            "min_dynamic_fraction", "min_tracked_for_fraction", "aggregate_ratio", "aggregate_min_px", "aggregate_min_tracks", "max_height_m", "close_far_m",
+                            "min_dynamic_fraction", "min_tracked_for_fraction", "aggregate_ratio", "aggregate_min_px", "aggregate_min_tracks", "aggregate_multiframe_fraction",
+                            "aggregate_multiframe_min_px", "max_height_m", "close_far_m",
                             "close_max_disparity_px", "left_band_touch_px"});
   OutlineConfig& o = c.outline;
   in.read("outline", "seed_radius_px", o.seed_radius_px, "an integer (px)");
@@ -189,6 +190,8 @@ DynamicDetectorConfig load_dynamic_config(const std::string& path) {
   in.read("outline", "aggregate_ratio", o.aggregate_ratio, num);
   in.read("outline", "aggregate_min_px", o.aggregate_min_px, px);
   in.read("outline", "aggregate_min_tracks", o.aggregate_min_tracks, "an integer");
+  in.read("outline", "aggregate_multiframe_fraction", o.aggregate_multiframe_fraction, "a number in [0, 1]");
+  in.read("outline", "aggregate_multiframe_min_px", o.aggregate_multiframe_min_px, px);
   in.read("outline", "max_height_m", o.max_height_m, "a number (m)");
   in.read("outline", "close_far_m", o.close_far_m, "a number (m)");
   in.read("outline", "left_band_touch_px", o.left_band_touch_px, "an integer (px)");

@@ -40,21 +40,25 @@ void OutlineConfig::validate(const std::string& source) const {
           "expected an integer in [0, 10000] (0: off)");
   require(aggregate_ratio >= 0 && aggregate_ratio <= 1000, "aggregate_ratio", "expected a number in [0, 1000] (0: off)");
   require(aggregate_min_px >= 0 && aggregate_min_px <= 100, "aggregate_min_px", "expected a number in [0, 100] px");
+  require(aggregate_multiframe_fraction >= 0 && aggregate_multiframe_fraction <= 1, "aggregate_multiframe_fraction",
+          "expected a number in [0, 1] (0: off)");
+  require(aggregate_multiframe_min_px >= 0 && aggregate_multiframe_min_px <= 100, "aggregate_multiframe_min_px",
+          "expected a number in [0, 100] px");
 }
 
 std::string OutlineConfig::describe() const {
-  char buf[1200];
+  char buf[1400];
   std::snprintf(buf, sizeof(buf),
                 "outline: seeds within %d px agreeing to %.2f + %.3f d px; flood steps <= %.2f + %.3f d px within "
                 "%.2f m of the seed's depth; floor within %.2f + %.3f d px of the ground plane; static competition %s; "
                 "enclosed parts join when >= %.0f %% without disparity or < %d px; eroded by %d px; kept when >= %d px "
                 "and (< %d tracks inside or >= %.0f %% of them dynamic or their median offset >= %.2f px and %.1fx the "
-                "static tracks', 0: off; an outline with >= %d such tracks must always move so, 0: off) and <= %.1f m tall; far ones (d <= %.1f px) closed "
+                "static tracks', 0: off; or >= %.0f %% of those the multi-frame test measured flagged by it and median offset >= %.2f px, 0: off; an outline with >= %d such tracks must always move so, 0: off) and <= %.1f m tall; far ones (d <= %.1f px) closed "
                 "over %.2f m; rows within %d px of the unmatched left band filled to the border (-1: off)",
                 seed_radius_px, seed_tolerance_px, seed_tolerance_rel, step_tolerance_px, step_tolerance_rel, depth_band_m,
                 ground_tolerance_px, ground_tolerance_rel, static_competition ? "on" : "off",
                 100 * max_hole_invalid_fraction, min_hole_fill_px, erode_px, min_pixels, min_tracked_for_fraction,
-                100 * min_dynamic_fraction, aggregate_min_px, aggregate_ratio, aggregate_min_tracks, max_height_m, close_max_disparity_px, close_far_m, left_band_touch_px);
+                100 * min_dynamic_fraction, aggregate_min_px, aggregate_ratio, 100 * aggregate_multiframe_fraction, aggregate_multiframe_min_px, aggregate_min_tracks, max_height_m, close_max_disparity_px, close_far_m, left_band_touch_px);
   return buf;
 }
 
@@ -62,6 +66,16 @@ bool tracks_move_together(double median_offset_px, double static_median_px, cons
   if (!(config.aggregate_ratio > 0) || median_offset_px < 0) return false;
   return median_offset_px >= config.aggregate_min_px &&
          median_offset_px >= config.aggregate_ratio * std::max(0.0, static_median_px);
+}
+
+bool tracks_move_together_multiframe(int multiframe_tested, int multiframe_dynamic, double median_offset_px,
+                                     const OutlineConfig& config) {
+  if (!(config.aggregate_multiframe_fraction > 0) || multiframe_tested <= 0 ||
+      multiframe_tested < config.aggregate_min_tracks) {
+    return false;
+  }
+  return multiframe_dynamic >= config.aggregate_multiframe_fraction * multiframe_tested &&
+         median_offset_px >= config.aggregate_multiframe_min_px;
 }
 
 ObjectOutliner::ObjectOutliner(const OutlineConfig& config) : config_(config) { config_.validate("OutlineConfig"); }

@@ -81,6 +81,8 @@ TEST(DynamicConfig, BadValuesNameFileAndField) {
   expect_error("outline:\n  aggregate_ratio: -1\n", "outline.aggregate_ratio");
   expect_error("outline:\n  aggregate_min_px: many\n", "outline.aggregate_min_px");
   expect_error("outline:\n  aggregate_min_tracks: -3\n", "outline.aggregate_min_tracks");
+  expect_error("outline:\n  aggregate_multiframe_fraction: 1.5\n", "outline.aggregate_multiframe_fraction");
+  expect_error("outline:\n  aggregate_multiframe_min_px: -0.1\n", "outline.aggregate_multiframe_min_px");
   expect_error("detector:\n  coast_max_frames: -1\n", "detector.coast_max_frames");
   expect_error("edge_refine:\n  band_px: 40\n", "edge_refine.band_px");
   expect_error("edge_refine:\n  occlusion_cost: 0\n", "edge_refine.occlusion_cost");

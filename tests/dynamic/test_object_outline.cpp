@@ -159,6 +159,27 @@ TEST(ObjectOutline, TracksMovingTogetherBelowTheirOwnThresholds) {
   EXPECT_FALSE(tracks_move_together(0.94, 0.15, c));
 }
 
+TEST(ObjectOutline, TracksMovingTogetherByTheMultiFrameTest) {
+  OutlineConfig c;
+  c.aggregate_min_tracks = 5;
+  c.aggregate_multiframe_fraction = 0.5;
+  c.aggregate_multiframe_min_px = 0.2;
+  // A person walking ahead in a turn: 30 of its 41 tracks off the multi-frame reference, per-frame median 0.77 px.
+  EXPECT_TRUE(tracks_move_together_multiframe(41, 30, 0.77, c));
+  EXPECT_TRUE(tracks_move_together_multiframe(10, 5, 0.2, c));    // exactly half, exactly the floor
+  EXPECT_FALSE(tracks_move_together_multiframe(10, 4, 0.77, c));  // fewer than half flagged
+  // A person who has just stopped: still off the reference, frame to frame at the static tracks' 0.11 px.
+  EXPECT_FALSE(tracks_move_together_multiframe(34, 31, 0.11, c));
+  EXPECT_FALSE(tracks_move_together_multiframe(4, 4, 0.77, c));   // fewer than aggregate_min_tracks tested
+  EXPECT_FALSE(tracks_move_together_multiframe(0, 0, 0.77, c));
+  EXPECT_FALSE(tracks_move_together_multiframe(41, 30, -1, c));   // no per-frame offset measured
+  c.aggregate_min_tracks = 0;
+  EXPECT_TRUE(tracks_move_together_multiframe(2, 2, 0.5, c));
+  EXPECT_FALSE(tracks_move_together_multiframe(0, 0, 0.5, c));
+  c.aggregate_multiframe_fraction = 0;  // off
+  EXPECT_FALSE(tracks_move_together_multiframe(41, 30, 0.77, c));
+}
+
 TEST(ObjectOutline, InvalidConfigurationNamesTheField) {
   OutlineConfig c;
   c.depth_band_m = 0;

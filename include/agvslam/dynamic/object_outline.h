@@ -61,6 +61,14 @@ struct OutlineConfig {
   // An outline holding at least this many tracks with a depth-test offset must move together as above even when
   // more than min_dynamic_fraction of them are dynamic (0 = only for mostly static outlines).
   int aggregate_min_tracks = 5;
+  // They also move together when the multi-frame test flagged at least aggregate_multiframe_fraction of the (at
+  // least aggregate_min_tracks) tracks inside that it tested, with their median depth-test offset at least
+  // aggregate_multiframe_min_px. A person walking ahead of the AGV can stay below aggregate_min_px, or below
+  // aggregate_ratio times the static tracks' median, frame to frame, but is off by several of the multi-frame test's
+  // thresholds over its 0.3-0.6 s. A person who has just stopped is still off the multi-frame
+  // reference; frame to frame its offsets are the static ones (0.05-0.2 px), hence the floor. 0 = off.
+  double aggregate_multiframe_fraction = 0.5;
+  double aggregate_multiframe_min_px = 0.2;
   // ... or one taller than max_height_m at its median disparity (people, forklifts and AGVs are lower; a rack
   // upright flooded from a few false tracks at its edge is not). 0 = no limit.
   double max_height_m = 3.0;
@@ -83,6 +91,7 @@ struct OutlineStats {
   int object_seeds = 0, static_seeds = 0;
   int object_pixels = 0;
   int tracked_inside = 0, dynamic_inside = 0;  // tracked points inside the outline, and the dynamic ones (detector)
+  int multiframe_tested_inside = 0, multiframe_dynamic_inside = 0;  // ... those the multi-frame test tested / flagged
   double median_offset_px = -1;                // their median depth-test reprojection offset (detector; -1 none)
   double median_disparity_px = 0;              // of the outline's pixels with a disparity
 };
@@ -91,6 +100,11 @@ struct OutlineStats {
 // offset (median_offset_px, < 0 = none measured) at least aggregate_min_px and aggregate_ratio x static_median_px
 // (the frame's static tracks'). False when aggregate_ratio is 0.
 bool tracks_move_together(double median_offset_px, double static_median_px, const OutlineConfig& config);
+// outline.aggregate_multiframe_*: whether the tracks inside an outline move together by the multi-frame test:
+// multiframe_dynamic of multiframe_tested (>= aggregate_min_tracks) at least aggregate_multiframe_fraction, with
+// median_offset_px >= aggregate_multiframe_min_px. False when aggregate_multiframe_fraction is 0.
+bool tracks_move_together_multiframe(int multiframe_tested, int multiframe_dynamic, double median_offset_px,
+                                     const OutlineConfig& config);
 
 // Reusable buffers (no allocation per call once sizes have settled).
 class ObjectOutliner {
