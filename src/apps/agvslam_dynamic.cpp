@@ -23,6 +23,7 @@
 #include <spdlog/spdlog.h>
 
 #include <algorithm>
+#include <array>
 #include <cmath>
 #include <cstdio>
 #include <ctime>
@@ -404,10 +405,10 @@ struct RecallBreakdown {
   }
   // "<title> <band> c0 / c1 / ...; <band> ..." over the distance bands with objects; cell(b, k) formats one entry.
   template <typename Cell>
-  static std::string per_band(std::string text, int columns, const int (&totals)[kMissBands], Cell cell) {
+  static std::string per_band(std::string text, int columns, const std::array<int, kMissBands>& totals, Cell cell) {
     const char* labels[kMissBands] = {"< 4 m", "4-12 m", ">= 12 m", "distance unknown"};
     for (int b = 0; b < kMissBands; ++b) {
-      if (totals[b] == 0) continue;
+      if (totals[static_cast<std::size_t>(b)] == 0) continue;
       text += std::string(" ") + labels[b] + " " + cell(b, 0);
       for (int k = 1; k < columns; ++k) text += " / " + cell(b, k);
       text += ";";
@@ -415,27 +416,28 @@ struct RecallBreakdown {
     if (text.back() == ';') text.pop_back();
     return text;
   }
-  std::string describe_misses() const {
-    int totals[kMissBands] = {};
+  // Per distance band, the sum over its columns.
+  template <int Columns>
+  static std::array<int, kMissBands> band_totals(const int (&counts)[kMissBands][Columns]) {
+    std::array<int, kMissBands> totals{};
     for (int b = 0; b < kMissBands; ++b)
-      for (int k = 0; k < kMissStages; ++k) totals[b] += misses[b][k];
+      for (int k = 0; k < Columns; ++k) totals[static_cast<std::size_t>(b)] += counts[b][k];
+    return totals;
+  }
+  std::string describe_misses() const {
     return per_band("misses by where they were lost (no track / no dynamic point / no ROI / ROI, not in the mask / "
                     "outline IoU too low):",
-                    kMissStages, totals, [&](int b, int k) { return std::to_string(misses[b][k]); });
+                    kMissStages, band_totals(misses), [&](int b, int k) { return std::to_string(misses[b][k]); });
   }
   bool has_motion() const {
-    for (int b = 0; b < kMissBands; ++b)
-      for (int k = 0; k < kMotionBins; ++k)
-        if (motion_total[b][k] > 0) return true;
-    return false;
+    const std::array<int, kMissBands> totals = band_totals(motion_total);
+    return std::any_of(totals.begin(), totals.end(), [](int n) { return n > 0; });
   }
   std::string describe_motion() const {
-    int totals[kMissBands] = {};
-    for (int b = 0; b < kMissBands; ++b)
-      for (int k = 0; k < kMotionBins; ++k) totals[b] += motion_total[b][k];
     return per_band("recall by ground-truth image motion against a static object's, frame to frame (< 1 / 1-2 / 2-4 / "
                     ">= 4 px / visible part changed):",
-                    kMotionBins, totals, [&](int b, int k) { return ratio(motion_found[b][k], motion_total[b][k]); });
+                    kMotionBins, band_totals(motion_total),
+                    [&](int b, int k) { return ratio(motion_found[b][k], motion_total[b][k]); });
   }
   nlohmann::json motion_json() const {
     const char* names[kMotionBins] = {"lt1px", "1_2px", "2_4px", "ge4px", "visible_part_changed"};

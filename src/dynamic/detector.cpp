@@ -944,10 +944,11 @@ void DynamicDetector::outline_region(const StereoFrame& frame, DetectorResult& r
                                                st.dynamic_inside < oc.min_dynamic_fraction * st.tracked_inside) ||
                                               (oc.aggregate_min_tracks > 0 && oc.aggregate_ratio > 0 &&
                                                static_cast<int>(inside_offsets_.size()) >= oc.aggregate_min_tracks));
-  // ... unless they move together (outline.aggregate_*): their median offset against the frame's static tracks',
-  // taken once per frame and only when an outline needs it.
-  bool moves_together = false;
-  if (mostly_static && oc.aggregate_ratio > 0) {
+  // ... unless they move together (outline.aggregate_*): most of them off the multi-frame reference, or their median
+  // offset against the frame's static tracks' (taken once per frame and only when an outline needs it).
+  bool moves_together = mostly_static && tracks_move_together_multiframe(st.multiframe_tested_inside,
+                                                                         st.multiframe_dynamic_inside, st.median_offset_px, oc);
+  if (mostly_static && !moves_together && oc.aggregate_ratio > 0) {
     if (static_offset_median_px_ < 0) {
       static_offsets_.clear();
       for (const TrackedPoint& p : result.points) {
@@ -955,9 +956,7 @@ void DynamicDetector::outline_region(const StereoFrame& frame, DetectorResult& r
       }
       static_offset_median_px_ = static_offsets_.empty() ? 0.0 : median_of(static_offsets_);
     }
-    moves_together = tracks_move_together(st.median_offset_px, static_offset_median_px_, oc) ||
-                     tracks_move_together_multiframe(st.multiframe_tested_inside, st.multiframe_dynamic_inside,
-                                                     st.median_offset_px, oc);
+    moves_together = tracks_move_together(st.median_offset_px, static_offset_median_px_, oc);
   }
   int coast_min_pixels = 0;  // a coasted outline: a good part of the object's last one
   if (seg.coasted) {

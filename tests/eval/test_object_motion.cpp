@@ -7,16 +7,8 @@
 namespace agvslam::eval {
 namespace {
 
-// A 752x480 camera (the simulator's), bf = 55.2 px*m.
-PinholeCamera camera() {
-  PinholeCamera c;
-  c.fx = c.fy = 460;
-  c.cx = 375.5;
-  c.cy = 239.5;
-  c.width = 752;
-  c.height = 480;
-  return c;
-}
+// A 752x480 camera (the simulator's: fx, fy, cx, cy, width, height), bf = 55.2 px*m.
+PinholeCamera camera() { return {460, 460, 375.5, 239.5, 752, 480}; }
 constexpr double kBf = 55.2;
 
 // Object `id` as a fronto-parallel rectangle at disparity_px.
