@@ -80,6 +80,13 @@ void DetectorOptions::validate(const std::string& source) const {
   require(confirm_min_box_iou >= 0 && confirm_min_box_iou <= 1, "confirm_min_box_iou",
           "expected a number in [0, 1] (0: off)");
   require(confirm_below_px >= 0, "confirm_below_px", "expected an integer >= 0 px (0: every object waits)");
+  require(confirm_near_min_disparity_px >= 0 && confirm_near_min_disparity_px <= 1024, "confirm_near_min_disparity_px",
+          "expected a number in [0, 1024] px");
+  require(confirm_near_min_offset_px >= 0 && confirm_near_min_offset_px <= 1000, "confirm_near_min_offset_px",
+          "expected a number in [0, 1000] px");
+  require(confirm_near_min_px >= 0, "confirm_near_min_px", "expected an integer >= 0 px (0: off)");
+  require(confirm_near_min_roi_fill >= 0 && confirm_near_min_roi_fill <= 1, "confirm_near_min_roi_fill",
+          "expected a number in [0, 1]");
   require(half_scale_min_area_px >= 0, "half_scale_min_area_px", "expected an integer >= 0 px");
   require(half_scale_erode_px >= 0 && half_scale_erode_px <= 10, "half_scale_erode_px", "expected an integer in [0, 10] px");
   require(extend_to_height_m >= 0 && extend_to_height_m <= 20, "extend_to_height_m", "expected a number in [0, 20] m");
@@ -126,13 +133,16 @@ std::string DetectorOptions::describe() const {
                 "%d px, 0 = never, eroded %d px more), speckle filter %s, left border padded %s, ROIs "
                 "extended to the floor %s and %.2f m above it, widened %s, side-by-side pieces split %s, stacked regions merged "
                 "%s, mask dilation %d px, densification %s, objects over frames %s, reported when their box overlaps "
-                "one of the previous frame by IoU >= %.2f (0: always) or they hold >= %d px (0: none)",
+                "one of the previous frame by IoU >= %.2f (0: always) or they hold >= %d px (0: none) or, near "
+                "(points' disparity >= %.1f px), >= %d px (0: none) with their tracks' median offset >= %.2f px, "
+                "their box filling >= %.2f of the ROI and not half inside another object's",
                 use_epipolar_test ? "on" : "off", use_depth_test ? "on" : "off",
                 full_frame_disparity ? "whole frame (debug)" : "points + ROIs", max_rois, roi_disparity_margin_px,
                 roi_scale, roi_row_step, roi_row_step_min_area_px, half_scale_min_area_px, half_scale_erode_px,
                 roi_speckle_filter ? "on" : "off", pad_left_border ? "on" : "off", extend_to_floor ? "on" : "off",
                 extend_to_height_m, widen_text, split_side_by_side ? "on" : "off", merge_stacked_regions ? "on" : "off",
-                mask_dilation_px, densify_text, objects_text, confirm_min_box_iou, confirm_below_px);
+                mask_dilation_px, densify_text, objects_text, confirm_min_box_iou, confirm_below_px,
+                confirm_near_min_disparity_px, confirm_near_min_px, confirm_near_min_offset_px, confirm_near_min_roi_fill);
   return buf;
 }
 
@@ -476,6 +486,7 @@ void DynamicDetector::detect(const StereoFrame& frame, DetectorResult& result) {
     result.rois.resize(groups.size());
     int next_instance = 1;
     instance_object_.assign(1, -1);
+    instance_near_moving_.assign(1, 0);
     kept_regions_.clear();
     auto process_group = [&](std::size_t g) {
       RoiSegmentation& seg = result.rois[g];
@@ -774,7 +785,18 @@ void DynamicDetector::confirm_objects(DetectorResult& result) {
     for (int k = 1; k <= max_instance; ++k) {
       const cv::Rect& b = object_boxes_[static_cast<std::size_t>(k)];
       if (b.empty()) continue;
-      bool confirmed = opt.confirm_below_px > 0 && object_pixels_[static_cast<std::size_t>(k)] >= opt.confirm_below_px;
+      const int pixels = object_pixels_[static_cast<std::size_t>(k)];
+      bool confirmed = opt.confirm_below_px > 0 && pixels >= opt.confirm_below_px;
+      // A near object whose tracks are far off the ego-motion is no flicker of noise: reported at once, unless its
+      // box lies half inside another object's (a fragment beside the object it belongs to).
+      if (!confirmed && opt.confirm_near_min_px > 0 && pixels >= opt.confirm_near_min_px &&
+          static_cast<std::size_t>(k) < instance_near_moving_.size() && instance_near_moving_[static_cast<std::size_t>(k)] != 0) {
+        bool fragment = false;
+        for (int j = 1; j <= max_instance && !fragment; ++j) {
+          if (j != k) fragment = 2 * (b & object_boxes_[static_cast<std::size_t>(j)]).area() >= b.area();
+        }
+        confirmed = !fragment;
+      }
       for (std::size_t i = 0; i < prev_object_boxes_.size() && !confirmed; ++i) {
         const double overlap = (b & prev_object_boxes_[i]).area();
         confirmed = overlap > 0 && overlap >= opt.confirm_min_box_iou * (b.area() + prev_object_boxes_[i].area() - overlap);
@@ -1014,6 +1036,15 @@ void DynamicDetector::outline_region(const StereoFrame& frame, DetectorResult& r
   seg.region.rectangle = cv::Rect(local.tl() + seg.roi.tl(), local.size());
   seg.region.started_points = st.object_seeds;
   const cv::Rect rect = seg.region.rectangle & cv::Rect(cv::Point(0, 0), frame.left.size());
+  // detector.confirm_near_*: a near outline whose tracks are far off the ego-motion.
+  const bool near_moving = dopt.confirm_near_min_px > 0 && seg.mean_disparity_px >= dopt.confirm_near_min_disparity_px &&
+                           st.median_offset_px >= dopt.confirm_near_min_offset_px &&
+                           static_cast<double>(local.area()) >= dopt.confirm_near_min_roi_fill * seg.roi.area();
+  const auto mark_near_moving = [&](int first, int end) {
+    const std::size_t size = static_cast<std::size_t>(std::clamp(end, 1, 256));
+    if (instance_near_moving_.size() < size) instance_near_moving_.resize(size, 0);
+    for (int k = first; k < end && k < 256; ++k) instance_near_moving_[static_cast<std::size_t>(k)] |= near_moving ? 1 : 0;
+  };
   // A region stacked on an earlier one of this frame at agreeing depth is a part of that object.
   if (config_.detector.merge_stacked_regions && st.median_disparity_px > 0) {
     const RoiGroupingConfig& gc = config_.grouping;
@@ -1035,6 +1066,7 @@ void DynamicDetector::outline_region(const StereoFrame& frame, DetectorResult& r
                                         seg.outline(cv::Rect(rect.tl() - seg.roi.tl(), rect.size())));
       k.rect |= rect;
       result.mask.regions[k.region_index] = k.rect;
+      mark_near_moving(k.instance, k.instance + 1);
       seg.object_id = k.instance < static_cast<int>(instance_object_.size())
                           ? instance_object_[static_cast<std::size_t>(k.instance)]
                           : seg.object_id;
@@ -1048,6 +1080,7 @@ void DynamicDetector::outline_region(const StereoFrame& frame, DetectorResult& r
                                        config_.detector.split_side_by_side, next_instance, result.mask.instances(rect));
   instance_object_.resize(static_cast<std::size_t>(std::min(next_instance, 256)), -1);
   for (int k = first_instance; k < next_instance && k < 256; ++k) instance_object_[static_cast<std::size_t>(k)] = seg.object_id;
+  mark_near_moving(first_instance, next_instance);
 }
 
 int cut_to_moved_pixels(cv::Mat& outline, cv::Point outline_origin, const cv::Mat& last_pixels, cv::Point last_origin,

@@ -225,7 +225,7 @@ DynamicDetectorConfig load_dynamic_config(const std::string& path) {
                              "densify_radius_disparity_factor", "densify_max_points", "densify_min_distance_px",
                              "densify_min_seeds", "densify_depth_seed_factor", "densify_extra_tracks", "densify_keep_static", "densify_multiframe_levels", "densify_multiframe_agreement", "densify_multiframe_factor",
                              "track_objects", "continue_min_points", "coast_max_frames", "coast_min_detections",
-                             "coast_min_tracks", "coast_min_area_ratio", "band_carry_max_frames", "band_carry_min_tracks", "band_carry_min_dynamic", "growth_max_ratio", "growth_margin", "carve_min_tracks", "carve_max_offset_px", "carve_max_multiframe_px", "carve_min_distance_px", "confirm_min_box_iou", "confirm_below_px",
+                             "coast_min_tracks", "coast_min_area_ratio", "band_carry_max_frames", "band_carry_min_tracks", "band_carry_min_dynamic", "growth_max_ratio", "growth_margin", "carve_min_tracks", "carve_max_offset_px", "carve_max_multiframe_px", "carve_min_distance_px", "confirm_min_box_iou", "confirm_below_px", "confirm_near_min_disparity_px", "confirm_near_min_offset_px", "confirm_near_min_px", "confirm_near_min_roi_fill",
                              "pad_left_border", "roi_speckle_filter", "merge_stacked_regions"});
   in.read("detector", "use_epipolar_test", c.detector.use_epipolar_test, flag);
   in.read("detector", "use_depth_test", c.detector.use_depth_test, flag);
@@ -274,6 +274,10 @@ DynamicDetectorConfig load_dynamic_config(const std::string& path) {
   in.read("detector", "band_carry_min_dynamic", c.detector.band_carry_min_dynamic, "an integer");
   in.read("detector", "confirm_min_box_iou", c.detector.confirm_min_box_iou, num);
   in.read("detector", "confirm_below_px", c.detector.confirm_below_px, "an integer (px)");
+  in.read("detector", "confirm_near_min_disparity_px", c.detector.confirm_near_min_disparity_px, num);
+  in.read("detector", "confirm_near_min_offset_px", c.detector.confirm_near_min_offset_px, num);
+  in.read("detector", "confirm_near_min_px", c.detector.confirm_near_min_px, "an integer (px)");
+  in.read("detector", "confirm_near_min_roi_fill", c.detector.confirm_near_min_roi_fill, num);
   in.read("detector", "pad_left_border", c.detector.pad_left_border, flag);
   in.read("detector", "roi_speckle_filter", c.detector.roi_speckle_filter, flag);
   in.read("detector", "merge_stacked_regions", c.detector.merge_stacked_regions, flag);

@@ -339,10 +339,12 @@ TEST(DynamicDetector, DensifiedPointsAroundASlowMoverAreTestedAgainstTheMultiFra
 
 TEST(DynamicDetector, AnObjectIsReportedOnceTheNextFrameConfirmsIt) {
   // detector.confirm_min_box_iou: the crossing box (~37500 px) is found in frame 1 and, when every object must
-  // wait for confirmation (confirm_below_px 0), reported from frame 2 on, when its box overlaps frame 1's.
+  // wait for confirmation (confirm_below_px 0, confirm_near_min_px 0), reported from frame 2 on, when its box
+  // overlaps frame 1's.
   DynamicDetectorConfig confirming;
   ASSERT_GT(confirming.detector.confirm_min_box_iou, 0);
   confirming.detector.confirm_below_px = 0;
+  confirming.detector.confirm_near_min_px = 0;
   std::vector<cv::Mat> gt;
   const std::vector<DetectorResult> r = box_crossing_then_stopping(confirming, 5, 5, &gt);
   EXPECT_EQ(r[1].mask.pixel_count(), 0) << summary(r[1]);
@@ -366,9 +368,48 @@ TEST(DynamicDetector, AnObjectIsReportedOnceTheNextFrameConfirmsIt) {
   }
   DynamicDetectorConfig larger = defaults;
   larger.detector.confirm_below_px = cv::countNonZero(gt[1]) * 2;
+  larger.detector.confirm_near_min_px = 0;
   const std::vector<DetectorResult> waits = box_crossing_then_stopping(larger, 3, 3);
   EXPECT_EQ(waits[1].mask.pixel_count(), 0) << summary(waits[1]);
   EXPECT_GE(iou(waits[2].mask.image, gt[2]), 0.7) << summary(waits[2]);
+}
+
+TEST(DynamicDetector, ANearObjectFarOffTheEgoMotionIsReportedAtOnce) {
+  // detector.confirm_near_*: the crossing box, 3 m away (d ~ 18 px), moves ~7 px per frame across the view. With
+  // the size rule off (confirm_below_px 0) it is still reported in the frame it is found: its ROI's points are near
+  // and the tracks inside its outline are far off the ego-motion. With the offset needed above theirs, or the rule
+  // off, it waits for the next frame.
+  DynamicDetectorConfig near_rule;
+  near_rule.detector.confirm_below_px = 0;
+  ASSERT_GT(near_rule.detector.confirm_near_min_px, 0);
+  std::vector<cv::Mat> gt;
+  const std::vector<DetectorResult> r = box_crossing_then_stopping(near_rule, 3, 3, &gt);
+  double offset_px = -1, disparity_px = 0;
+  for (const RoiSegmentation& roi : r[1].rois) {
+    if (roi.outline_verdict != OutlineVerdict::kKept) continue;
+    offset_px = std::max(offset_px, roi.outline_stats.median_offset_px);
+    disparity_px = std::max(disparity_px, roi.mean_disparity_px);
+  }
+  std::printf("box in frame 1: points' disparity %.1f px, tracks' median offset %.2f px\n", disparity_px, offset_px);
+  EXPECT_GE(disparity_px, near_rule.detector.confirm_near_min_disparity_px);
+  EXPECT_GE(offset_px, near_rule.detector.confirm_near_min_offset_px);
+  EXPECT_EQ(r[1].unconfirmed_objects, 0) << summary(r[1]);
+  EXPECT_GE(iou(r[1].mask.image, gt[1]), 0.7) << summary(r[1]);
+
+  DynamicDetectorConfig too_slow = near_rule;
+  too_slow.detector.confirm_near_min_offset_px = offset_px + 1;
+  DynamicDetectorConfig too_far = near_rule;
+  too_far.detector.confirm_near_min_disparity_px = disparity_px + 1;
+  DynamicDetectorConfig partial = near_rule;
+  partial.detector.confirm_near_min_roi_fill = 1.0;  // no outline's box fills its whole ROI (the margins)
+  DynamicDetectorConfig off = near_rule;
+  off.detector.confirm_near_min_px = 0;
+  for (const DynamicDetectorConfig& c : {too_slow, too_far, partial, off}) {
+    const std::vector<DetectorResult> waits = box_crossing_then_stopping(c, 3, 3);
+    EXPECT_EQ(waits[1].mask.pixel_count(), 0) << summary(waits[1]);
+    EXPECT_GE(waits[1].unconfirmed_objects, 1);
+    EXPECT_GE(iou(waits[2].mask.image, gt[2]), 0.7) << summary(waits[2]);
+  }
 }
 
 TEST(DynamicDetector, ACoastedObjectMustShowItsMotion) {

@@ -92,6 +92,10 @@ TEST(DynamicConfig, BadValuesNameFileAndField) {
   expect_error("detector:\n  roi_row_step: 3\n", "detector.roi_row_step");
   expect_error("detector:\n  confirm_min_box_iou: 1.5\n", "detector.confirm_min_box_iou");
   expect_error("detector:\n  confirm_below_px: -1\n", "detector.confirm_below_px");
+  expect_error("detector:\n  confirm_near_min_disparity_px: -2\n", "detector.confirm_near_min_disparity_px");
+  expect_error("detector:\n  confirm_near_min_offset_px: fast\n", "detector.confirm_near_min_offset_px");
+  expect_error("detector:\n  confirm_near_min_px: -1\n", "detector.confirm_near_min_px");
+  expect_error("detector:\n  confirm_near_min_roi_fill: 1.5\n", "detector.confirm_near_min_roi_fill");
   expect_error("detector:\n  growth_max_ratio: 0.5\n", "detector.growth_max_ratio");
   expect_error("detector:\n  growth_margin: -0.1\n", "detector.growth_margin");
   expect_error("detector:\n  carve_min_tracks: -1\n", "detector.carve_min_tracks");

@@ -190,6 +190,15 @@ struct DetectorOptions {
   // (0 = off: every object is reported in the frame it is found).
   double confirm_min_box_iou = 0.3;
   int confirm_below_px = 30000;  // ... objects of this many px or more (near ones) are reported at once (0: all wait)
+  // ... and so are near objects whose tracks are far off the ego-motion: a ROI's points at a mean disparity of at
+  // least confirm_near_min_disparity_px whose outline's tracks have a median depth-test offset of at least
+  // confirm_near_min_offset_px, the object holding at least confirm_near_min_px (0 = off). The outline's box must
+  // fill at least confirm_near_min_roi_fill of its ROI (a partial outline, such as a torso whose legs took the floor's
+  // disparity, is no object yet), and lie less than half inside another object's box of the frame (a fragment).
+  double confirm_near_min_disparity_px = 12;
+  double confirm_near_min_offset_px = 3.0;
+  int confirm_near_min_px = 1000;
+  double confirm_near_min_roi_fill = 0.35;
 
   void validate(const std::string& source) const;
   std::string describe() const;
@@ -426,6 +435,8 @@ class DynamicDetector {
   std::vector<int> track_object_;           // per track (row of prev_pts_): object of the previous frame, -1 none
   std::vector<int> group_object_;           // per group: the previous frame's object it continues, -1 none
   std::vector<int> instance_object_;        // per instance id of this frame's mask: object id
+  std::vector<uint8_t> instance_near_moving_;  // per instance id: a near outline far off the ego-motion
+                                               // (detector.confirm_near_*: reported without confirmation)
   int next_object_id_ = 0;
   // The objects of the last frame that had regions (detector.track_objects), for coasting.
   struct ObjectTrack {
