@@ -126,7 +126,7 @@ std::string DetectorOptions::describe() const {
                   carry_text, growth_max_ratio, growth_margin, carve_min_tracks, carve_max_offset_px,
                   carve_max_multiframe_px, carve_min_distance_px);
   }
-  char buf[1600];
+  char buf[2400];  // the echo runs to ~1500 characters
   std::snprintf(buf, sizeof(buf),
                 "detector: epipolar test %s, depth test %s, disparity %s, <= %d ROIs searched up to max point "
                 "disparity + %.1f px at scale %.1f, %d row(s) per matched row for ROIs >= %d px (half scale above "

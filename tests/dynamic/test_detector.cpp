@@ -377,8 +377,8 @@ TEST(DynamicDetector, AnObjectIsReportedOnceTheNextFrameConfirmsIt) {
 TEST(DynamicDetector, ANearObjectFarOffTheEgoMotionIsReportedAtOnce) {
   // detector.confirm_near_*: the crossing box, 3 m away (d ~ 18 px), moves ~7 px per frame across the view. With
   // the size rule off (confirm_below_px 0) it is still reported in the frame it is found: its ROI's points are near
-  // and the tracks inside its outline are far off the ego-motion. With the offset needed above theirs, or the rule
-  // off, it waits for the next frame.
+  // and the tracks inside its outline are far off the ego-motion. With the offset or the disparity needed above
+  // theirs, a box fill it cannot reach, or the rule off, it waits for the next frame.
   DynamicDetectorConfig near_rule;
   near_rule.detector.confirm_below_px = 0;
   ASSERT_GT(near_rule.detector.confirm_near_min_px, 0);
