@@ -789,13 +789,9 @@ void DynamicDetector::confirm_objects(DetectorResult& result) {
       bool confirmed = opt.confirm_below_px > 0 && pixels >= opt.confirm_below_px;
       // A near object whose tracks are far off the ego-motion is no flicker of noise: reported at once, unless its
       // box lies half inside another object's (a fragment beside the object it belongs to).
-      if (!confirmed && opt.confirm_near_min_px > 0 && pixels >= opt.confirm_near_min_px &&
-          static_cast<std::size_t>(k) < instance_near_moving_.size() && instance_near_moving_[static_cast<std::size_t>(k)] != 0) {
-        bool fragment = false;
-        for (int j = 1; j <= max_instance && !fragment; ++j) {
-          if (j != k) fragment = 2 * (b & object_boxes_[static_cast<std::size_t>(j)]).area() >= b.area();
-        }
-        confirmed = !fragment;
+      if (!confirmed && pixels >= opt.confirm_near_min_px && static_cast<std::size_t>(k) < instance_near_moving_.size() &&
+          instance_near_moving_[static_cast<std::size_t>(k)] != 0) {
+        confirmed = !lies_half_inside_another(object_boxes_, static_cast<std::size_t>(k));
       }
       for (std::size_t i = 0; i < prev_object_boxes_.size() && !confirmed; ++i) {
         const double overlap = (b & prev_object_boxes_[i]).area();
@@ -1081,6 +1077,14 @@ void DynamicDetector::outline_region(const StereoFrame& frame, DetectorResult& r
   instance_object_.resize(static_cast<std::size_t>(std::min(next_instance, 256)), -1);
   for (int k = first_instance; k < next_instance && k < 256; ++k) instance_object_[static_cast<std::size_t>(k)] = seg.object_id;
   mark_near_moving(first_instance, next_instance);
+}
+
+bool lies_half_inside_another(const std::vector<cv::Rect>& boxes, std::size_t k) {
+  const cv::Rect& b = boxes.at(k);
+  for (std::size_t j = 0; j < boxes.size(); ++j) {
+    if (j != k && !boxes[j].empty() && 2 * (b & boxes[j]).area() >= b.area()) return true;
+  }
+  return false;
 }
 
 int cut_to_moved_pixels(cv::Mat& outline, cv::Point outline_origin, const cv::Mat& last_pixels, cv::Point last_origin,

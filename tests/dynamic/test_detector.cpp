@@ -412,6 +412,22 @@ TEST(DynamicDetector, ANearObjectFarOffTheEgoMotionIsReportedAtOnce) {
   }
 }
 
+TEST(DynamicDetector, AFragmentLiesHalfInsideAnotherObjectsBox) {
+  // detector.confirm_near_*: an arm outlined apart from its person is not reported at once.
+  const std::vector<cv::Rect> boxes = {cv::Rect(),                   // instance 0: none
+                                       cv::Rect(0, 0, 276, 428),     // a person
+                                       cv::Rect(101, 282, 52, 99),   // an arm inside its box
+                                       cv::Rect(250, 100, 52, 100),  // half of it inside (26 of 52 columns)
+                                       cv::Rect(251, 0, 52, 90),     // just under half inside (25 columns)
+                                       cv::Rect(400, 0, 100, 300)};  // a person apart
+  EXPECT_FALSE(lies_half_inside_another(boxes, 1));  // the arm inside it does not make the person a fragment
+  EXPECT_TRUE(lies_half_inside_another(boxes, 2));
+  EXPECT_TRUE(lies_half_inside_another(boxes, 3));
+  EXPECT_FALSE(lies_half_inside_another(boxes, 4));
+  EXPECT_FALSE(lies_half_inside_another(boxes, 5));
+  EXPECT_FALSE(lies_half_inside_another({cv::Rect(0, 0, 10, 10)}, 0));
+}
+
 TEST(DynamicDetector, ACoastedObjectMustShowItsMotion) {
   // The box is found while it crosses; when it stops, no test flags its points any more (the multi-frame test is
   // off here), so the detector tries to coast it on its tracks, and the photometric check finds its content where a

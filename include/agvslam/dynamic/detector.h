@@ -315,6 +315,10 @@ struct DetectorResult {
   int dynamic_point_count() const;
 };
 
+// detector.confirm_near_*: whether boxes[k] lies at least half inside another non-empty box of `boxes` (a fragment
+// beside the object it belongs to, such as an arm outlined apart from its person).
+bool lies_half_inside_another(const std::vector<cv::Rect>& boxes, std::size_t k);
+
 // detector.growth_max_ratio: cuts `outline` (CV_8UC1, its top-left pixel at `outline_origin` in the image) to the
 // pixels of `last_pixels` (CV_8UC1, non-zero = the object's pixels in the previous frame, its top-left at
 // `last_origin`) moved by `shift_px` and grown by `grow_px` on each side (a rectangle). Returns the pixels kept.
