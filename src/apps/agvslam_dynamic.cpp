@@ -111,6 +111,16 @@ cv::Mat points_panel(const cv::Mat& left, const dyn::DetectorResult& r) {
     cv::line(panel, p.prev_px, p.cur_px, colour, 1, cv::LINE_AA);
     cv::circle(panel, p.cur_px, p.dynamic ? 3 : 2, colour, p.dynamic ? cv::FILLED : 1, cv::LINE_AA);
   }
+  // The left band's seeds (cyan, band_segmenter.h) and the outlines of its regions (magenta).
+  for (const auto& region : r.band.regions) {
+    std::vector<std::vector<cv::Point>> contours;
+    cv::findContours(region.mask.clone(), contours, cv::RETR_LIST, cv::CHAIN_APPROX_NONE, region.rect.tl());
+    cv::drawContours(panel, contours, -1, cv::Scalar(255, 0, 255), 1);
+  }
+  for (const auto& seed : r.band.seeds) {
+    cv::line(panel, seed.prev_px, seed.cur_px, cv::Scalar(255, 255, 0), 1, cv::LINE_AA);
+    cv::circle(panel, seed.cur_px, 3, cv::Scalar(255, 255, 0), cv::FILLED, cv::LINE_AA);
+  }
   return panel;
 }
 
@@ -246,7 +256,7 @@ std::vector<std::pair<std::string, double>> stage_values(const dyn::StageTimings
           {"epipolar", t.epipolar_ms},     {"depth_test", t.depth_test_ms}, {"multiframe", t.multiframe_ms}, {"densify", t.densify_ms},
           {"grouping", t.grouping_ms},     {"roi_disparity", t.roi_disparity_ms}, {"slic", t.slic_ms},
           {"planes", t.planes_ms},         {"boundaries", t.boundaries_ms}, {"regions", t.regions_ms},
-          {"features", t.features_ms},     {"total", t.total_ms}};
+          {"band", t.band_ms},             {"features", t.features_ms},     {"total", t.total_ms}};
 }
 
 // Per ground-truth object of a frame (moving or not): its visible moving pixels, the tracked and dynamic points on
@@ -595,6 +605,11 @@ int run(const Options& o) {
       regions_total += n_regions;
       frames_with_regions += n_regions > 0 ? 1 : 0;
       jf["regions"] = n_regions;
+      if (result.band.ran) {
+        jf["band"] = {{"static_segment_px", result.band.static_segment_px}, {"tracks", result.band.tracks}, {"corners", result.band.corners},
+                      {"seeds", result.band.seeds.size()}, {"regions", result.band.regions.size()},
+                      {"joined", result.band_joined}, {"objects", result.band_objects}, {"ms", result.timings.band_ms}};
+      }
       jf["unconfirmed_objects"] = result.unconfirmed_objects;  // found, not reported (detector.confirm_min_box_iou)
       unconfirmed_total += result.unconfirmed_objects;
       jf["dynamic_points"] = result.dynamic_point_count();

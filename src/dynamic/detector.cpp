@@ -160,13 +160,15 @@ void DynamicDetectorConfig::validate(const std::string& source) const {
   outline.validate(source);
   edge_refine.validate(source);
   photometric.validate(source);
+  band.validate(source);
   detector.validate(source);
 }
 
 std::vector<std::string> DynamicDetectorConfig::describe() const {
   return {features.describe(), tracking.describe(),   epipolar.describe(), depth_test.describe(), multiframe.describe(),
           grouping.describe(), slic.describe(),       planes.describe(),   boundaries.describe(),
-          regions.describe(),  outline.describe(),     edge_refine.describe(), photometric.describe(), detector.describe()};
+          regions.describe(),  outline.describe(),     edge_refine.describe(), photometric.describe(), band.describe(),
+          detector.describe()};
 }
 
 std::string StageTimings::describe() const {
@@ -174,9 +176,9 @@ std::string StageTimings::describe() const {
   std::snprintf(buf, sizeof(buf),
                 "total %.2f ms: pyramid %.2f, tracking %.2f, point disparity %.2f, epipolar %.2f, depth test %.2f, "
                 "multi-frame %.2f, densify %.2f, grouping %.2f, ROI disparity %.2f, SLIC %.2f, planes %.2f, boundaries %.2f, regions %.2f, "
-                "features %.2f",
+                "band %.2f, features %.2f",
                 total_ms, pyramid_ms, tracking_ms, point_disparity_ms, epipolar_ms, depth_test_ms, multiframe_ms, densify_ms, grouping_ms,
-                roi_disparity_ms, slic_ms, planes_ms, boundaries_ms, regions_ms, features_ms);
+                roi_disparity_ms, slic_ms, planes_ms, boundaries_ms, regions_ms, band_ms, features_ms);
   return buf;
 }
 
@@ -228,7 +230,8 @@ DynamicDetector::DynamicDetector(const StereoCalibration& calibration, const Dyn
         return c;
       }()),
       outliner_(config.outline),
-      edge_refiner_(config.edge_refine) {
+      edge_refiner_(config.edge_refine),
+      band_(config.band) {
   config_.validate("DynamicDetectorConfig");
   stereo_config_.validate("StereoConfig");
   if (config_.detector.use_depth_test && !(calibration_.bf() > 0)) {
@@ -297,6 +300,8 @@ void DynamicDetector::detect(const StereoFrame& frame, DetectorResult& result) {
   result.multiframe.valid = false;
   result.multiframe.frames_back = 0;
   result.multiframe.test.dynamic.clear();
+  result.band = BandResult{};
+  result.band_joined = result.band_objects = 0;
   result.timings = StageTimings{};
   StageTimings& tm = result.timings;
   static_offset_median_px_ = -1;
@@ -626,6 +631,20 @@ void DynamicDetector::detect(const StereoFrame& frame, DetectorResult& result) {
     }
     carried_.clear();
     if (objects && opt.band_carry_max_frames > 0 && !objects_.empty()) carry_band_masks(result, next_instance);
+    if (config_.band.enabled && result.depth.valid && !prev_left_.empty()) {
+      t = Clock::now();
+      band_prev_.clear();
+      band_cur_.clear();
+      for (const TrackedPoint& p : result.points) {
+        if (!p.tracked || p.cur_px.x >= config_.band.strip_px) continue;
+        band_prev_.push_back(p.prev_px);
+        band_cur_.push_back(p.cur_px);
+      }
+      band_.segment(frame.left, prev_left_, cur_pyramid_, prev_pyramid_, tracker_, result.lk_levels, calibration_.left,
+                    calibration_.bf(), result.depth.T_cur_prev, result.mask.instances, band_prev_, band_cur_, result.band);
+      add_band_regions(result, next_instance);
+      tm.band_ms = ms_since(t);
+    }
     if (opt.mask_dilation_px > 0 && !result.mask.regions.empty()) {
       const int k = 2 * opt.mask_dilation_px + 1;
       cv::dilate(result.mask.instances, dilated_, cv::getStructuringElement(cv::MORPH_ELLIPSE, cv::Size(k, k)));
@@ -734,7 +753,7 @@ void DynamicDetector::detect(const StereoFrame& frame, DetectorResult& result) {
   confirm_objects(result);
 
   std::swap(prev_pyramid_, cur_pyramid_);
-  if (opt.densify || config_.photometric.enabled) {
+  if (opt.densify || config_.photometric.enabled || config_.band.enabled) {
     frame.left.copyTo(prev_left_);
     frame.right.copyTo(prev_right_);
   }
@@ -1439,6 +1458,108 @@ void DynamicDetector::carry_band_masks(DetectorResult& result, int& next_instanc
       result.mask.regions[holder->region_index] = holder->rect;
     }
     carried_.push_back({carry_id, instance, band_only, painted, candidates});
+  }
+}
+
+void DynamicDetector::add_band_regions(DetectorResult& result, int& next_instance) {
+  const BandSegmenterConfig& bc = config_.band;
+  cv::Mat& inst = result.mask.instances;
+  const cv::Rect image(0, 0, inst.cols, inst.rows);
+  const int reach = bc.merge_distance_px;
+  const cv::Mat kernel = cv::getStructuringElement(cv::MORPH_RECT, cv::Size(2 * reach + 1, 2 * reach + 1));
+  // Largest first: a person's torso and legs may be two regions (a smooth belt between them), the legs joining the
+  // torso's object.
+  band_order_.resize(result.band.regions.size());
+  for (std::size_t i = 0; i < band_order_.size(); ++i) band_order_[i] = static_cast<int>(i);
+  std::sort(band_order_.begin(), band_order_.end(), [&](int a, int b) {
+    return result.band.regions[static_cast<std::size_t>(a)].pixels > result.band.regions[static_cast<std::size_t>(b)].pixels;
+  });
+  for (int index : band_order_) {
+    const BandRegion& region = result.band.regions[static_cast<std::size_t>(index)];
+    // The object of the mask it touches most (within merge_distance_px) ...
+    const cv::Rect around = cv::Rect(region.rect.x - reach, region.rect.y - reach, region.rect.width + 2 * reach,
+                                     region.rect.height + 2 * reach) & image;
+    cv::Mat reach_mask = cv::Mat::zeros(around.size(), CV_8UC1);
+    region.mask.copyTo(reach_mask(region.rect - around.tl()));
+    if (reach > 0) cv::dilate(reach_mask, reach_mask, kernel);
+    overlap_count_.assign(256, 0);
+    for (int y = 0; y < around.height; ++y) {
+      const uint8_t* m = reach_mask.ptr<uint8_t>(y);
+      const uint8_t* k = inst.ptr<uint8_t>(y + around.y) + around.x;
+      for (int x = 0; x < around.width; ++x) {
+        if (m[x] && k[x]) ++overlap_count_[k[x]];
+      }
+    }
+    int instance = 0, best_count = 0;
+    for (int k = 1; k < 256; ++k) {
+      if (overlap_count_[static_cast<std::size_t>(k)] > best_count) {
+        instance = k;
+        best_count = overlap_count_[static_cast<std::size_t>(k)];
+      }
+    }
+    // ... or the one it is stacked on (above or below within stack_gap_px, over at least half of its columns).
+    if (instance == 0 && bc.stack_gap_px > 0) {
+      const cv::Rect window = cv::Rect(region.rect.x, region.rect.y - bc.stack_gap_px, region.rect.width,
+                                       region.rect.height + 2 * bc.stack_gap_px) & image;
+      overlap_count_.assign(256, 0);
+      column_seen_.assign(256, -1);
+      for (int x = window.x; x < window.br().x; ++x) {
+        for (int y = window.y; y < window.br().y; ++y) {
+          const int k = inst.at<uint8_t>(y, x);
+          if (k == 0 || column_seen_[static_cast<std::size_t>(k)] == x) continue;
+          column_seen_[static_cast<std::size_t>(k)] = x;
+          ++overlap_count_[static_cast<std::size_t>(k)];
+        }
+      }
+      for (int k = 1; k < 256; ++k) {
+        if (2 * overlap_count_[static_cast<std::size_t>(k)] >= region.rect.width && overlap_count_[static_cast<std::size_t>(k)] > best_count) {
+          instance = k;
+          best_count = overlap_count_[static_cast<std::size_t>(k)];
+        }
+      }
+    }
+    const bool alone = instance == 0;
+    if (alone) {
+      // An object of its own: upright (a person stepping into view, not a shadow on the floor) and large enough.
+      if (region.pixels < bc.min_pixels || region.rect.height < bc.min_height_px ||
+          region.rect.height < region.rect.width || next_instance > 255) {
+        continue;
+      }
+      instance = next_instance++;
+      instance_object_.resize(static_cast<std::size_t>(std::min(next_instance, 256)), -1);
+    }
+    // Joined to an object, the region adds in each row where the object has pixels only those left of them (its
+    // outline ends where stereo does, at x ~ d; right of it the region would add background the object uncovers).
+    int x0 = region.rect.br().x, y0 = region.rect.br().y, x1 = -1, y1 = -1;
+    for (int y = 0; y < region.rect.height; ++y) {
+      const uint8_t* m = region.mask.ptr<uint8_t>(y);
+      uint8_t* k = inst.ptr<uint8_t>(y + region.rect.y);
+      int limit = region.rect.br().x;
+      if (!alone) {
+        int first = 0;
+        while (first < inst.cols && k[first] != instance) ++first;
+        if (first < inst.cols) limit = std::min(limit, first);
+      }
+      for (int x = region.rect.x; x < limit; ++x) {
+        if (!m[x - region.rect.x] || k[x]) continue;
+        k[x] = static_cast<uint8_t>(instance);
+        x0 = std::min(x0, x);
+        x1 = std::max(x1, x);
+        y0 = std::min(y0, y + region.rect.y);
+        y1 = std::max(y1, y + region.rect.y);
+      }
+    }
+    if (x1 < 0) continue;
+    const cv::Rect painted(x0, y0, x1 - x0 + 1, y1 - y0 + 1);
+    // A new region, or the band part of the region that holds the instance (as carry_band_masks does).
+    auto holder = std::find_if(kept_regions_.rbegin(), kept_regions_.rend(), [&](const KeptRegion& k) { return k.instance <= instance; });
+    if (alone || holder == kept_regions_.rend()) {
+      result.mask.regions.push_back(painted);
+    } else {
+      holder->rect |= painted;
+      result.mask.regions[holder->region_index] = holder->rect;
+    }
+    (alone ? result.band_objects : result.band_joined) += 1;
   }
 }
 

@@ -8,7 +8,7 @@ namespace agvslam::dynamic {
 DynamicDetectorConfig load_dynamic_config(const std::string& path) {
   const stereo::ParamsReader in(path);
   in.check_sections({"features", "tracking", "epipolar", "depth_test", "multiframe", "grouping", "slic", "planes", "boundaries",
-                     "regions", "outline", "edge_refine", "photometric", "detector"});
+                     "regions", "outline", "edge_refine", "photometric", "band", "detector"});
   DynamicDetectorConfig c;
   const char* px = "a number (px)";
   const char* num = "a number";
@@ -217,6 +217,33 @@ DynamicDetectorConfig load_dynamic_config(const std::string& path) {
   in.read("photometric", "multiframe_max_motion_px", c.photometric.multiframe_max_motion_px, px);
   in.read("photometric", "multiframe_min_disparity_px", c.photometric.multiframe_min_disparity_px, px);
   in.read("photometric", "region_inset_px", c.photometric.region_inset_px, "an integer (px)");
+
+  in.check_keys("band", {"enabled", "strip_px", "max_disparity_px", "max_static_segment_px", "segment_step_px",
+                         "border_px", "fast_threshold", "cell_px", "seed_offset_px", "min_seeds", "max_seeds",
+                         "nearest_seeds", "evidence_dn", "max_object_error_dn", "edge_fill_px", "reach_px", "close_px", "min_pixels", "min_height_px",
+                         "merge_distance_px", "stack_gap_px"});
+  BandSegmenterConfig& b = c.band;
+  in.read("band", "enabled", b.enabled, flag);
+  in.read("band", "strip_px", b.strip_px, "an integer (px)");
+  in.read("band", "max_disparity_px", b.max_disparity_px, px);
+  in.read("band", "max_static_segment_px", b.max_static_segment_px, px);
+  in.read("band", "segment_step_px", b.segment_step_px, px);
+  in.read("band", "border_px", b.border_px, "an integer (px)");
+  in.read("band", "fast_threshold", b.fast_threshold, "an integer (grey levels)");
+  in.read("band", "cell_px", b.cell_px, "an integer (px)");
+  in.read("band", "seed_offset_px", b.seed_offset_px, px);
+  in.read("band", "min_seeds", b.min_seeds, integer);
+  in.read("band", "max_seeds", b.max_seeds, integer);
+  in.read("band", "nearest_seeds", b.nearest_seeds, integer);
+  in.read("band", "evidence_dn", b.evidence_dn, "a number (grey levels)");
+  in.read("band", "max_object_error_dn", b.max_object_error_dn, "a number (grey levels)");
+  in.read("band", "edge_fill_px", b.edge_fill_px, "an integer (px)");
+  in.read("band", "reach_px", b.reach_px, "an integer (px)");
+  in.read("band", "close_px", b.close_px, "an integer (px)");
+  in.read("band", "min_pixels", b.min_pixels, "an integer (px)");
+  in.read("band", "min_height_px", b.min_height_px, "an integer (px)");
+  in.read("band", "merge_distance_px", b.merge_distance_px, "an integer (px)");
+  in.read("band", "stack_gap_px", b.stack_gap_px, "an integer (px)");
 
   in.check_keys("detector", {"use_epipolar_test", "use_depth_test", "full_frame_disparity", "max_rois",
                              "roi_disparity_margin_px", "roi_scale", "roi_row_step", "roi_row_step_min_area_px",

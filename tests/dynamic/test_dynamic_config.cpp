@@ -51,7 +51,8 @@ TEST(DynamicConfig, ShippedParamsFileEqualsTheDefaults) {
   EXPECT_EQ(c.slic.incremental, d.slic.incremental);
   EXPECT_EQ(c.regions.mask_mode, d.regions.mask_mode);
   EXPECT_EQ(c.planes.seed, d.planes.seed);
-  EXPECT_EQ(c.describe().size(), 14u);
+  EXPECT_EQ(c.describe().size(), 15u);
+  EXPECT_EQ(c.band.close_px, d.band.close_px);
 }
 
 TEST(DynamicConfig, OverridesOnlyTheGivenKeys) {
@@ -114,6 +115,15 @@ TEST(DynamicConfig, BadValuesNameFileAndField) {
   expect_error("detector:\n  coast_min_detections: 0\n", "detector.coast_min_detections");
   expect_error("photometric:\n  multiframe_min_disparity_px: -2\n", "photometric.multiframe_min_disparity_px");
   expect_error("slic:\n  superpixel_size: 12\n", "slic.superpixel_size");  // unknown key
+  expect_error("band:\n  strip_px: 4\n", "band.strip_px");
+  expect_error("band:\n  enabled: maybe\n", "band.enabled");
+  expect_error("band:\n  max_static_segment_px: 0\n", "band.max_static_segment_px");
+  expect_error("band:\n  max_seeds: 1\n", "band.max_seeds");  // below min_seeds (2)
+  expect_error("band:\n  evidence_dn: -1\n", "band.evidence_dn");
+  expect_error("band:\n  max_object_error_dn: 0\n", "band.max_object_error_dn");
+  expect_error("band:\n  close_px: 0\n", "band.close_px");
+  expect_error("band:\n  stack_gap_px: -1\n", "band.stack_gap_px");
+  expect_error("band:\n  width_px: 64\n", "band.width_px");  // unknown key
   // The per-frame depth test takes no motion prior: the key is the multi-frame test's only.
   expect_error("depth_test:\n  prior_min_inlier_fraction: 0.5\n", "depth_test.prior_min_inlier_fraction");
   expect_error("multiframe:\n  prior_min_inlier_fraction: 1.5\n", "multiframe.prior_min_inlier_fraction");

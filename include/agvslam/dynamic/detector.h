@@ -19,6 +19,8 @@
 //                      superpixels / rectangle (the paper): SLIC, disparity planes, boundary types, search to the
 //                        occlusion boundaries (+ disparity band, static veto) -> rectangle or superpixel outline
 //                   -> objects of the last frame that no region continues coast on their own tracks (detector.coast_*)
+//                   -> the left band without stereo, where the camera has hardly translated: what moved there by the
+//                      left image alone (band_segmenter.h), joined to the objects it touches or an object of its own
 //                   -> DynamicMask; then the tracks that held continue, and quadtree FAST corners of the current
 //                      frame fill the places no track covers.
 //
@@ -33,6 +35,7 @@
 
 #include "agvslam/core/camera.h"
 #include "agvslam/core/stereo_frame.h"
+#include "agvslam/dynamic/band_segmenter.h"
 #include "agvslam/dynamic/boundary.h"
 #include "agvslam/dynamic/depth_test.h"
 #include "agvslam/dynamic/disparity_plane.h"
@@ -219,6 +222,7 @@ struct DynamicDetectorConfig {
   OutlineConfig outline;
   EdgeRefineConfig edge_refine;
   PhotometricCheckConfig photometric;
+  BandSegmenterConfig band;
   DetectorOptions detector;
 
   void validate(const std::string& source) const;
@@ -291,7 +295,7 @@ struct DynamicMask {
 struct StageTimings {
   double pyramid_ms = 0, tracking_ms = 0, point_disparity_ms = 0, epipolar_ms = 0, depth_test_ms = 0, multiframe_ms = 0,
          densify_ms = 0, grouping_ms = 0, roi_disparity_ms = 0, slic_ms = 0, planes_ms = 0, boundaries_ms = 0, regions_ms = 0,
-         features_ms = 0, total_ms = 0;
+         band_ms = 0, features_ms = 0, total_ms = 0;
   std::string describe() const;
 };
 
@@ -305,6 +309,8 @@ struct DetectorResult {
   EpipolarResult epipolar;
   DepthTestResult depth;
   MultiFrameResult multiframe;
+  BandResult band;               // the left band without stereo (band_segmenter.h)
+  int band_joined = 0, band_objects = 0;  // its regions joined to an object of the mask / reported as objects of their own
   DisparityPlane ground_plane;   // d = a x + b y + c of the floor from the static points (ground veto); may be invalid
   cv::Mat full_disparity_px;     // only with detector.full_frame_disparity
   StageTimings timings;
@@ -365,6 +371,9 @@ class DynamicDetector {
   void add_coasting_groups(const DetectorResult& result, cv::Size image_size, std::vector<DynamicGroup>& groups);
   // Objects of the last frame near the left border: their pixels carried into the band x < d (band_carry_*).
   void carry_band_masks(DetectorResult& result, int& next_instance);
+  // The band segmenter's regions of this frame: each joins the object of the mask it touches (band.merge_distance_px),
+  // or is an object of its own when upright and large enough.
+  void add_band_regions(DetectorResult& result, int& next_instance);
   void clamp_growth(const DetectorResult& result, RoiSegmentation& seg);
   void carve_static(const DetectorResult& result, RoiSegmentation& seg);
   // The objects with regions in this frame become objects_.
@@ -391,6 +400,7 @@ class DynamicDetector {
   SuperpixelGraph graph_;
   ObjectOutliner outliner_;
   EdgeRefiner edge_refiner_;
+  BandSegmenter band_;
 
   bool has_previous_ = false;
   std::vector<cv::Mat> prev_pyramid_, cur_pyramid_;
@@ -467,7 +477,9 @@ class DynamicDetector {
     int pixels;
   };
   std::vector<CarriedObject> carried_;
-  std::vector<int> overlap_count_;  // per instance: carried pixels on it
+  std::vector<int> overlap_count_;  // per instance: carried pixels on it (band regions: pixels, columns near it)
+  std::vector<int> band_order_, column_seen_;  // scratch of add_band_regions
+  std::vector<cv::Point2f> band_prev_, band_cur_;  // this frame's tracks in the band strip
   cv::Mat carry_lut_;               // instance -> 255 (the object's) / 0
   std::vector<uint8_t> band_only_;  // per entry of next_objects_: only carried in the band this frame
   std::vector<float> inside_offsets_, static_offsets_;

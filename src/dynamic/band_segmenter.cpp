@@ -1,0 +1,412 @@
+#include "agvslam/dynamic/band_segmenter.h"
+
+#include <algorithm>
+#include <cmath>
+#include <cstdio>
+#include <limits>
+#include <opencv2/features2d.hpp>
+#include <opencv2/imgproc.hpp>
+
+#include "agvslam/core/error.h"
+
+namespace agvslam::dynamic {
+
+void BandSegmenterConfig::validate(const std::string& source) const {
+  auto require = [&](bool ok, const char* field, const char* expected) {
+    if (!ok) throw InputError(source, std::string("band.") + field, expected);
+  };
+  require(strip_px >= 8 && strip_px <= 512, "strip_px", "expected an integer in [8, 512] px");
+  require(max_disparity_px > 0 && max_disparity_px <= 1024, "max_disparity_px", "expected a number in (0, 1024] px");
+  require(max_static_segment_px > 0 && max_static_segment_px <= 64, "max_static_segment_px",
+          "expected a number in (0, 64] px");
+  require(segment_step_px >= 0.05 && segment_step_px <= 8, "segment_step_px", "expected a number in [0.05, 8] px");
+  require(border_px >= 2 && border_px <= 64, "border_px", "expected an integer in [2, 64] px");
+  require(fast_threshold >= 1 && fast_threshold <= 255, "fast_threshold", "expected an integer in [1, 255] grey levels");
+  require(cell_px >= 2 && cell_px <= 128, "cell_px", "expected an integer in [2, 128] px");
+  require(seed_offset_px > 0 && seed_offset_px <= 50, "seed_offset_px", "expected a number in (0, 50] px");
+  require(min_seeds >= 1 && min_seeds <= 1000, "min_seeds", "expected an integer in [1, 1000]");
+  require(max_seeds >= min_seeds && max_seeds <= 1000, "max_seeds", "expected an integer in [min_seeds, 1000]");
+  require(nearest_seeds >= 1 && nearest_seeds <= 16, "nearest_seeds", "expected an integer in [1, 16]");
+  require(evidence_dn > 0 && evidence_dn <= 255, "evidence_dn", "expected a number in (0, 255] grey levels");
+  require(max_object_error_dn > 0 && max_object_error_dn <= 255, "max_object_error_dn",
+          "expected a number in (0, 255] grey levels");
+  require(edge_fill_px >= 0 && edge_fill_px <= 64, "edge_fill_px", "expected an integer in [0, 64] px");
+  require(close_px >= 1 && close_px <= 63, "close_px", "expected an integer in [1, 63] px");
+  require(reach_px >= 1 && reach_px <= 1000, "reach_px", "expected an integer in [1, 1000] px");
+  require(min_pixels >= 1 && min_pixels <= 10000000, "min_pixels", "expected an integer in [1, 10000000] px");
+  require(min_height_px >= 1 && min_height_px <= 10000, "min_height_px", "expected an integer in [1, 10000] px");
+  require(stack_gap_px >= 0 && stack_gap_px <= 1000, "stack_gap_px", "expected an integer in [0, 1000] px");
+  require(merge_distance_px >= 0 && merge_distance_px <= 64, "merge_distance_px", "expected an integer in [0, 64] px");
+}
+
+std::string BandSegmenterConfig::describe() const {
+  char buf[700];
+  std::snprintf(buf, sizeof(buf),
+                "band: %s, strip x < %d px, run when the static segments (d 0..%.0f px) are <= %.1f px (sampled every "
+                "%.2f px); FAST %d, one corner per %d px cell, >= %d px from the edges; seeds >= %.2f px off their "
+                "segment, %d..%d, each pixel's %d nearest; evidence > %.2f grey levels where a seed's error <= %.1f, "
+                "within %d px of its seeds, closed over %d px, filled to the edge from %d px; "
+                "a region alone >= %d px, >= %d px tall and taller than wide; joins an object within %d px or stacked within %d px",
+                enabled ? "on" : "off", strip_px, max_disparity_px, max_static_segment_px, segment_step_px,
+                fast_threshold, cell_px, border_px, seed_offset_px, min_seeds, max_seeds, nearest_seeds, evidence_dn,
+                max_object_error_dn, reach_px, close_px, edge_fill_px, min_pixels, min_height_px, merge_distance_px, stack_gap_px);
+  return buf;
+}
+
+namespace {
+
+constexpr float kInvalid = 1e6f;  // a hypothesis that leaves the previous image (its 5x5 mean stays >= 4e4)
+constexpr float kInvalidMean = 1e3f;
+
+// Static positions in the previous image of the point seen at (u, v): p(d) = pi(R ray + (d / bf) t) with
+// T_prev_cur = (R, t) and ray = ((u - cx) / fx, (v - cy) / fy, 1); d = 0 is the point at infinity.
+struct StaticWarp {
+  Eigen::Matrix3d R;
+  Eigen::Vector3d t_over_bf;
+  const PinholeCamera* camera;
+
+  StaticWarp(const PinholeCamera& cam, double bf_px_m, const SE3d& T_cur_prev) : camera(&cam) {
+    const SE3d T_prev_cur = T_cur_prev.inverse();
+    R = T_prev_cur.linear();
+    t_over_bf = T_prev_cur.translation() / bf_px_m;
+  }
+  // Returns false when the point lies behind the previous camera.
+  bool at(double u, double v, double d, double& pu, double& pv) const {
+    const Eigen::Vector3d ray((u - camera->cx) / camera->fx, (v - camera->cy) / camera->fy, 1.0);
+    const Eigen::Vector3d q = R * ray + d * t_over_bf;
+    if (q.z() <= 1e-6) return false;
+    pu = camera->fx * q.x() / q.z() + camera->cx;
+    pv = camera->fy * q.y() / q.z() + camera->cy;
+    return true;
+  }
+};
+
+double point_segment_distance(double px, double py, double ax, double ay, double bx, double by) {
+  const double sx = bx - ax, sy = by - ay;
+  const double len2 = sx * sx + sy * sy;
+  double s = len2 > 0 ? ((px - ax) * sx + (py - ay) * sy) / len2 : 0.0;
+  s = std::clamp(s, 0.0, 1.0);
+  return std::hypot(px - (ax + s * sx), py - (ay + s * sy));
+}
+
+float bilinear(const cv::Mat& image, float x, float y) {
+  const int x0 = static_cast<int>(x), y0 = static_cast<int>(y);
+  const float ax = x - static_cast<float>(x0), ay = y - static_cast<float>(y0);
+  const float* r0 = image.ptr<float>(y0);
+  const float* r1 = image.ptr<float>(y0 + 1);
+  return (1 - ay) * ((1 - ax) * r0[x0] + ax * r0[x0 + 1]) + ay * ((1 - ax) * r1[x0] + ax * r1[x0 + 1]);
+}
+
+}  // namespace
+
+BandSegmenter::BandSegmenter(const BandSegmenterConfig& config) : config_(config) {
+  config_.validate("BandSegmenterConfig");
+}
+
+double BandSegmenter::static_segment_length(const PinholeCamera& camera, double bf_px_m, const SE3d& T_cur_prev,
+                                            double u, double v) const {
+  const StaticWarp warp(camera, bf_px_m, T_cur_prev);
+  double u0, v0, um, vm, u1, v1;
+  if (!warp.at(u, v, 0.0, u0, v0) || !warp.at(u, v, 0.5 * config_.max_disparity_px, um, vm) ||
+      !warp.at(u, v, config_.max_disparity_px, u1, v1)) {
+    return std::numeric_limits<double>::infinity();
+  }
+  return std::hypot(um - u0, vm - v0) + std::hypot(u1 - um, v1 - vm);
+}
+
+double BandSegmenter::static_segment_distance(const PinholeCamera& camera, double bf_px_m, const SE3d& T_cur_prev,
+                                              const cv::Point2f& cur_px, const cv::Point2f& prev_px) const {
+  const StaticWarp warp(camera, bf_px_m, T_cur_prev);
+  constexpr int kPieces = 8;
+  double best = std::numeric_limits<double>::infinity();
+  double au = 0, av = 0;
+  bool have_a = false;
+  for (int k = 0; k <= kPieces; ++k) {
+    double bu, bv;
+    if (!warp.at(cur_px.x, cur_px.y, config_.max_disparity_px * k / kPieces, bu, bv)) {
+      have_a = false;
+      continue;
+    }
+    if (have_a) best = std::min(best, point_segment_distance(prev_px.x, prev_px.y, au, av, bu, bv));
+    else if (k == kPieces) best = std::min(best, std::hypot(prev_px.x - bu, prev_px.y - bv));
+    au = bu;
+    av = bv;
+    have_a = true;
+  }
+  return best;
+}
+
+void BandSegmenter::segment(const cv::Mat& cur_left, const cv::Mat& prev_left, const std::vector<cv::Mat>& cur_pyramid,
+                            const std::vector<cv::Mat>& prev_pyramid, LkTracker& tracker, int lk_levels,
+                            const PinholeCamera& camera, double bf_px_m, const SE3d& T_cur_prev,
+                            const cv::Mat& masked, const std::vector<cv::Point2f>& track_prev,
+                            const std::vector<cv::Point2f>& track_cur, BandResult& out) {
+  CV_Assert(track_prev.size() == track_cur.size());
+  out = BandResult{};
+  const BandSegmenterConfig& c = config_;
+  if (!c.enabled || cur_left.empty() || prev_left.empty()) return;
+  CV_Assert(cur_left.type() == CV_8UC1 && prev_left.type() == CV_8UC1 && cur_left.size() == prev_left.size());
+  CV_Assert(masked.empty() || (masked.type() == CV_8UC1 && masked.size() == cur_left.size()));
+  const int w = cur_left.cols, h = cur_left.rows;
+  const int strip = std::min(c.strip_px, w);
+  if (strip <= 2 * c.border_px || h <= 2 * c.border_px) return;
+
+  // The test is sharp only where a static point's previous position hardly depends on its depth.
+  double longest = 0;
+  for (double u : {0.0, 0.5 * (strip - 1), static_cast<double>(strip - 1)}) {
+    for (double v : {0.0, 0.5 * (h - 1), static_cast<double>(h - 1)}) {
+      longest = std::max(longest, static_segment_length(camera, bf_px_m, T_cur_prev, u, v));
+    }
+  }
+  out.static_segment_px = longest;
+  if (!(longest <= c.max_static_segment_px)) return;
+  out.ran = true;
+
+  // The caller's tracks in the strip are tested as they are; FAST corners (the strongest per cell, none on masked
+  // pixels) of the cells that hold no track are tracked back into the previous image and tested.
+  auto masked_at = [&](const cv::Point2f& p) {
+    return !masked.empty() &&
+           masked.at<uint8_t>(std::clamp(cvRound(p.y), 0, h - 1), std::clamp(cvRound(p.x), 0, w - 1)) != 0;
+  };
+  auto test = [&](const cv::Point2f& cur, const cv::Point2f& prev) {
+    const double offset = static_segment_distance(camera, bf_px_m, T_cur_prev, cur, prev);
+    if (offset > c.seed_offset_px) out.seeds.push_back({cur, prev, offset});
+  };
+  const int cells_x = (strip + c.cell_px - 1) / c.cell_px, cells_y = (h + c.cell_px - 1) / c.cell_px;
+  auto cell_of = [&](const cv::Point2f& p) {
+    return std::clamp(static_cast<int>(p.y) / c.cell_px, 0, cells_y - 1) * cells_x +
+           std::clamp(static_cast<int>(p.x) / c.cell_px, 0, cells_x - 1);
+  };
+  tracked_cell_.assign(static_cast<std::size_t>(cells_x * cells_y), 0);
+  for (std::size_t i = 0; i < track_cur.size(); ++i) {
+    const cv::Point2f& p = track_cur[i];
+    if (!(p.x >= 0 && p.x < strip && p.y >= 0 && p.y < h)) continue;
+    tracked_cell_[static_cast<std::size_t>(cell_of(p))] = 1;
+    ++out.tracks;
+    if (!masked_at(p)) test(p, track_prev[i]);
+  }
+  keypoints_.clear();
+  const cv::Rect strip_rect(0, 0, strip, h);
+  cv::FAST(cur_left(strip_rect), keypoints_, c.fast_threshold, true);
+  std::vector<int> best(static_cast<std::size_t>(cells_x * cells_y), -1);
+  for (std::size_t k = 0; k < keypoints_.size(); ++k) {
+    const cv::Point2f& p = keypoints_[k].pt;
+    if (p.x < c.border_px || p.y < c.border_px || p.y >= h - c.border_px) continue;
+    const int cell = cell_of(p);
+    if (tracked_cell_[static_cast<std::size_t>(cell)] || masked_at(p)) continue;
+    int& b = best[static_cast<std::size_t>(cell)];
+    if (b < 0 || keypoints_[k].response > keypoints_[static_cast<std::size_t>(b)].response) b = static_cast<int>(k);
+  }
+  corners_.clear();
+  for (int b : best) {
+    if (b >= 0) corners_.push_back(keypoints_[static_cast<std::size_t>(b)].pt);
+  }
+  out.corners = static_cast<int>(corners_.size());
+  if (!corners_.empty()) {
+    tracker.track(cur_pyramid, prev_pyramid, corners_, back_, ok_, lk_levels);
+    for (std::size_t i = 0; i < corners_.size(); ++i) {
+      if (ok_[i]) test(corners_[i], back_[i]);
+    }
+  }
+  if (static_cast<int>(out.seeds.size()) < c.min_seeds) return;
+  if (static_cast<int>(out.seeds.size()) > c.max_seeds) {
+    std::nth_element(out.seeds.begin(), out.seeds.begin() + c.max_seeds, out.seeds.end(),
+                     [](const BandSeed& a, const BandSeed& b) { return a.offset_px > b.offset_px; });
+    out.seeds.resize(static_cast<std::size_t>(c.max_seeds));
+  }
+
+  // The area searched: the strip (and the closing's reach beyond it) over the rows the seeds' motions reach.
+  float seed_y0 = static_cast<float>(h), seed_y1 = 0;
+  for (const BandSeed& s : out.seeds) {
+    seed_y0 = std::min(seed_y0, s.cur_px.y);
+    seed_y1 = std::max(seed_y1, s.cur_px.y);
+  }
+  const int margin = c.reach_px + c.close_px;
+  const int y0 = std::max(0, static_cast<int>(seed_y0) - margin);
+  const int y1 = std::min(h, static_cast<int>(seed_y1) + 1 + margin);
+  const cv::Rect area(0, y0, std::min(w, strip + c.close_px), y1 - y0);
+  cur_left(area).convertTo(cur_f_, CV_32F);
+  // The seeds' motions, and the part of the previous image any hypothesis can reach (converted to float once).
+  const std::size_t n_seeds = out.seeds.size();
+  std::vector<cv::Point2f> flows;
+  std::vector<int> flow_of(n_seeds, -1);
+  for (std::size_t j = 0; j < n_seeds; ++j) {
+    const cv::Point2f f = out.seeds[j].prev_px - out.seeds[j].cur_px;
+    const cv::Point2f q(std::round(4.0f * f.x) / 4.0f, std::round(4.0f * f.y) / 4.0f);
+    auto it = std::find(flows.begin(), flows.end(), q);
+    flow_of[j] = static_cast<int>(it - flows.begin());
+    if (it == flows.end()) flows.push_back(q);
+  }
+  const StaticWarp warp(camera, bf_px_m, T_cur_prev);
+  double reach_x0 = area.x, reach_y0 = area.y, reach_x1 = area.br().x, reach_y1 = area.br().y;
+  for (const cv::Point2f& f : flows) {
+    reach_x0 = std::min<double>(reach_x0, area.x + f.x);
+    reach_y0 = std::min<double>(reach_y0, area.y + f.y);
+    reach_x1 = std::max<double>(reach_x1, area.br().x + f.x);
+    reach_y1 = std::max<double>(reach_y1, area.br().y + f.y);
+  }
+  for (double u : {static_cast<double>(area.x), static_cast<double>(area.br().x)}) {
+    for (double v : {static_cast<double>(area.y), static_cast<double>(area.br().y)}) {
+      for (double d : {0.0, c.max_disparity_px}) {
+        double pu, pv;
+        if (!warp.at(u, v, d, pu, pv)) continue;
+        reach_x0 = std::min(reach_x0, pu);
+        reach_y0 = std::min(reach_y0, pv);
+        reach_x1 = std::max(reach_x1, pu);
+        reach_y1 = std::max(reach_y1, pv);
+      }
+    }
+  }
+  const cv::Rect prev_rect = cv::Rect(cv::Point(static_cast<int>(std::floor(reach_x0)) - 2, static_cast<int>(std::floor(reach_y0)) - 2),
+                                      cv::Point(static_cast<int>(std::ceil(reach_x1)) + 3, static_cast<int>(std::ceil(reach_y1)) + 3)) &
+                             cv::Rect(0, 0, w, h);
+  if (prev_rect.empty()) return;
+  prev_left(prev_rect).convertTo(prev_f_, CV_32F);
+  const float ox = static_cast<float>(prev_rect.x), oy = static_cast<float>(prev_rect.y);
+  const float max_x = static_cast<float>(prev_rect.br().x - 1) - 1e-3f, max_y = static_cast<float>(prev_rect.br().y - 1) - 1e-3f;
+  auto sample = [&](float x, float y) {
+    return (x >= ox && y >= oy && x < max_x && y < max_y) ? bilinear(prev_f_, x - ox, y - oy) : -1.0f;
+  };
+  diff_.create(area.size(), CV_32F);
+
+  // The static hypothesis: the least error over the segment's samples.
+  // (A segment shorter than a step is one sample: the camera stood or turned on the spot.)
+  const int samples = longest < c.segment_step_px ? 1 : std::clamp(static_cast<int>(std::ceil(longest / c.segment_step_px)) + 1, 2, 64);
+  static_error_.create(area.size(), CV_32F);
+  static_error_.setTo(kInvalid);
+  cv::Mat blurred;
+  for (int k = 0; k < samples; ++k) {
+    const double d = samples == 1 ? 0.5 * c.max_disparity_px : c.max_disparity_px * k / (samples - 1);
+    for (int y = 0; y < area.height; ++y) {
+      const float* cur = cur_f_.ptr<float>(y);
+      float* dst = diff_.ptr<float>(y);
+      for (int x = 0; x < area.width; ++x) {
+        double pu, pv;
+        float v = kInvalid;
+        if (warp.at(x + area.x, y + area.y, d, pu, pv)) {
+          const float prev = sample(static_cast<float>(pu), static_cast<float>(pv));
+          if (prev >= 0) v = std::abs(cur[x] - prev);
+        }
+        dst[x] = v;
+      }
+    }
+    cv::blur(diff_, blurred, cv::Size(5, 5), cv::Point(-1, -1), cv::BORDER_REPLICATE);
+    cv::min(static_error_, blurred, static_error_);
+  }
+
+  // The object hypotheses: the seeds' own image motions (seeds of one mover share theirs: each distinct motion, to
+  // a quarter pixel, is one error image), each within reach_px of its seeds.
+  seed_error_.resize(flows.size());
+  for (std::size_t j = 0; j < flows.size(); ++j) {
+    const cv::Point2f f = flows[j];
+    float fx0 = static_cast<float>(w), fy0 = static_cast<float>(h), fx1 = 0, fy1 = 0;
+    for (std::size_t k = 0; k < n_seeds; ++k) {
+      if (flow_of[k] != static_cast<int>(j)) continue;
+      fx0 = std::min(fx0, out.seeds[k].cur_px.x);
+      fy0 = std::min(fy0, out.seeds[k].cur_px.y);
+      fx1 = std::max(fx1, out.seeds[k].cur_px.x);
+      fy1 = std::max(fy1, out.seeds[k].cur_px.y);
+    }
+    const cv::Rect box = cv::Rect(cv::Point(static_cast<int>(fx0) - c.reach_px, static_cast<int>(fy0) - c.reach_px),
+                                  cv::Point(static_cast<int>(fx1) + c.reach_px + 1, static_cast<int>(fy1) + c.reach_px + 1)) & area;
+    seed_error_[j].create(area.size(), CV_32F);
+    seed_error_[j].setTo(kInvalid);
+    if (box.empty()) continue;
+    const cv::Rect local = box - area.tl();
+    for (int y = local.y; y < local.br().y; ++y) {
+      const float* cur = cur_f_.ptr<float>(y);
+      float* dst = diff_.ptr<float>(y);
+      for (int x = local.x; x < local.br().x; ++x) {
+        const float prev = sample(static_cast<float>(x + area.x) + f.x, static_cast<float>(y + area.y) + f.y);
+        dst[x] = prev >= 0 ? std::abs(cur[x] - prev) : kInvalid;
+      }
+    }
+    cv::blur(diff_(local), seed_error_[j](local), cv::Size(5, 5), cv::Point(-1, -1), cv::BORDER_REPLICATE);
+  }
+  // Each pixel's object error: the least over the motions of its nearest seeds (found per 4x4 block, at its
+  // centre); the evidence: static minus object error.
+  constexpr int kBlock = 4;
+  const int nearest = std::min<int>(c.nearest_seeds, static_cast<int>(n_seeds));
+  const float max_object_error = static_cast<float>(c.max_object_error_dn);
+  std::vector<std::pair<float, int>> by_distance(n_seeds);
+  std::vector<int> block_flows;
+  evidence_.create(area.size(), CV_32F);
+  for (int by = 0; by < area.height; by += kBlock) {
+    for (int bx = 0; bx < area.width; bx += kBlock) {
+      const float cx_px = static_cast<float>(area.x + bx) + 0.5f * kBlock, cy_px = static_cast<float>(area.y + by) + 0.5f * kBlock;
+      for (std::size_t j = 0; j < n_seeds; ++j) {
+        const float dx = out.seeds[j].cur_px.x - cx_px, dy = out.seeds[j].cur_px.y - cy_px;
+        by_distance[j] = {dx * dx + dy * dy, flow_of[j]};
+      }
+      std::partial_sort(by_distance.begin(), by_distance.begin() + nearest, by_distance.end());
+      block_flows.clear();
+      for (int q = 0; q < nearest; ++q) {
+        const int f = by_distance[static_cast<std::size_t>(q)].second;
+        if (std::find(block_flows.begin(), block_flows.end(), f) == block_flows.end()) block_flows.push_back(f);
+      }
+      for (int y = by; y < std::min(by + kBlock, area.height); ++y) {
+        const float* se = static_error_.ptr<float>(y);
+        float* ev = evidence_.ptr<float>(y);
+        for (int x = bx; x < std::min(bx + kBlock, area.width); ++x) {
+          float oe = kInvalid;
+          for (int f : block_flows) oe = std::min(oe, seed_error_[static_cast<std::size_t>(f)].ptr<float>(y)[x]);
+          // A pixel no seed's motion explains (uncovered background, or another surface) gets no evidence for it.
+          ev[x] = (se[x] >= kInvalidMean || oe >= kInvalidMean) ? 0.0f
+                  : oe > max_object_error ? std::min(0.0f, se[x] - oe) : se[x] - oe;
+        }
+      }
+    }
+  }
+  cv::blur(evidence_, blurred, cv::Size(5, 5), cv::Point(-1, -1), cv::BORDER_REPLICATE);
+  cv::compare(blurred, c.evidence_dn, binary_, cv::CMP_GT);
+  // Closing with a disc of diameter close_px by two distance transforms (linear in the area, where a morphological
+  // closing with a 21 px ellipse costs its area times the kernel's): dilate, then erode what lies within the radius
+  // of the dilation's outside (the image's own edges are no outside: a sliver at the border keeps its width).
+  const float radius = 0.5f * static_cast<float>(c.close_px);
+  cv::compare(binary_, 0, outside_, cv::CMP_EQ);
+  cv::distanceTransform(outside_, distance_, cv::DIST_L2, cv::DIST_MASK_3);
+  cv::compare(distance_, radius, binary_, cv::CMP_LE);
+  cv::distanceTransform(binary_, distance_, cv::DIST_L2, cv::DIST_MASK_3);
+  cv::compare(distance_, radius, binary_, cv::CMP_GT);
+  // Inside the strip, off what is masked already.
+  if (area.width > strip) binary_.colRange(strip, area.width).setTo(0);
+  if (!masked.empty()) binary_.setTo(0, masked(area));
+  // Rows reaching the last columns, where no 5x5 window fits, continue to the edge.
+  for (int y = 0; y < area.height && c.edge_fill_px > 0; ++y) {
+    uint8_t* row = binary_.ptr<uint8_t>(y);
+    const uint8_t* free = masked.empty() ? nullptr : masked.ptr<uint8_t>(y + area.y);
+    int first = -1;
+    for (int x = 0; x <= std::min(c.edge_fill_px, area.width - 1); ++x) {
+      if (row[x]) {
+        first = x;
+        break;
+      }
+    }
+    for (int x = 0; x < first; ++x) {
+      if (!free || !free[x]) row[x] = 255;
+    }
+  }
+
+  // The connected parts that hold a seed.
+  cv::Mat stats, centroids;
+  const int n = cv::connectedComponentsWithStats(binary_, labels_, stats, centroids, 8, CV_32S);
+  std::vector<int> region_of(static_cast<std::size_t>(n), -1);
+  for (std::size_t j = 0; j < n_seeds; ++j) {
+    const cv::Point q(cvRound(out.seeds[j].cur_px.x) - area.x, cvRound(out.seeds[j].cur_px.y) - area.y);
+    if (q.x < 0 || q.y < 0 || q.x >= area.width || q.y >= area.height) continue;
+    const int l = labels_.at<int32_t>(q);
+    if (l <= 0) continue;
+    if (region_of[static_cast<std::size_t>(l)] < 0) {
+      region_of[static_cast<std::size_t>(l)] = static_cast<int>(out.regions.size());
+      BandRegion r;
+      r.rect = cv::Rect(stats.at<int>(l, cv::CC_STAT_LEFT) + area.x, stats.at<int>(l, cv::CC_STAT_TOP) + area.y,
+                        stats.at<int>(l, cv::CC_STAT_WIDTH), stats.at<int>(l, cv::CC_STAT_HEIGHT));
+      r.pixels = stats.at<int>(l, cv::CC_STAT_AREA);
+      cv::compare(labels_(r.rect - area.tl()), l, r.mask, cv::CMP_EQ);
+      out.regions.push_back(std::move(r));
+    }
+    out.regions[static_cast<std::size_t>(region_of[static_cast<std::size_t>(l)])].seeds.push_back(static_cast<int>(j));
+  }
+}
+
+}  // namespace agvslam::dynamic
