@@ -62,6 +62,7 @@ struct Options {
   int min_object_pixels = 400;
   double min_iou = 0.5;
   bool json_points = false;
+  bool dump_rois = false;
 };
 
 std::string frame_name(std::size_t i) {
@@ -561,6 +562,10 @@ int run(const Options& o) {
   fs::create_directories(out / "mask", ec);
   if (ec) throw InputError("--out", o.out_dir, "a folder that can be created (" + ec.message() + ")");
   if (o.overlay_every > 0) fs::create_directories(out / "overlay", ec);
+  if (o.dump_rois) {
+    fs::create_directories(out / "rois", ec);
+    fs::create_directories(out / "instances", ec);
+  }
 
   cv::setNumThreads(o.opencv_threads);
   dyn::DynamicDetector detector(dataset->calibration(), dynamic_config, stereo_config);
@@ -584,6 +589,7 @@ int run(const Options& o) {
     detector.detect(frame, result);
     const double detect_cpu_ms = thread_cpu_ms() - cpu_before_ms;
     write_png((out / "mask" / frame_name(i)).string(), result.mask.image);
+    if (o.dump_rois) write_png((out / "instances" / frame_name(i)).string(), result.mask.instances);
     cv::Mat gt_mask, gt_instances, gt_disparity;
     if (has_gt_masks) {
       gt_mask = dataset->ground_truth_mask(i);
@@ -651,7 +657,8 @@ int run(const Options& o) {
       }
       {
         nlohmann::json jr = nlohmann::json::array();
-        for (const auto& roi : result.rois) {
+        for (std::size_t k = 0; k < result.rois.size(); ++k) {
+          const auto& roi = result.rois[k];
           if (roi.outline.empty()) continue;
           const int px = cv::countNonZero(roi.outline);
           const int on_gt = gt_mask.empty() ? -1 : cv::countNonZero(roi.outline & gt_mask(roi.roi));
@@ -664,6 +671,20 @@ int run(const Options& o) {
                         {"motion_multiframe", roi.outline_motion_multiframe.apparent_motion_px},
                         {"verdict", dyn::to_string(roi.outline_verdict)}, {"coasted", roi.coasted}, {"median_offset", roi.outline_stats.median_offset_px},
                         {"object", roi.object_id}});
+          if (o.dump_rois) {
+            // Debugging (--dump-rois): the outline as drawn, whatever its verdict, and the ROI's own dynamic
+            // points with their positions in both frames.
+            char name[48];
+            std::snprintf(name, sizeof(name), "%06zu_%02zu.png", i, k);
+            write_png((out / "rois" / name).string(), roi.outline);
+            nlohmann::json tracks = nlohmann::json::array();
+            for (int idx : roi.points) {
+              const auto& p = result.points[static_cast<std::size_t>(idx)];
+              tracks.push_back({p.prev_px.x, p.prev_px.y, p.cur_px.x, p.cur_px.y, p.cur_disparity_px});
+            }
+            jr.back()["outline_png"] = std::string("rois/") + name;
+            jr.back()["tracks"] = tracks;
+          }
         }
         jf["rois"] = jr;
       }
@@ -792,6 +813,9 @@ int main(int argc, char** argv) {
   app.add_option("--params-dynamic", o.params_dynamic, "detector settings (params/dynamic.yaml; default: built-in)");
   app.add_option("--params-stereo", o.params_stereo, "stereo settings (params/stereo.yaml; default: built-in)");
   app.add_option("--calib", o.calib, "calibration file overriding the dataset's");
+  app.add_flag("--dump-rois", o.dump_rois,
+               "debugging: write every ROI's outline (kept or dropped) to rois/, the reported objects to instances/ (8-bit ids) "
+               "and the ROIs' dynamic points to the --json output");
   app.add_flag("--json-points", o.json_points, "add every tracked point (position, disparity, age, tests, residuals) "
                "of every frame to the --json output (large)");
   app.add_option("--opencv-threads", o.opencv_threads,

@@ -231,6 +231,51 @@ TEST(DynamicTool, WritesMasksOverlaysScoresAndJson) {
   EXPECT_GT(motion["lt4m"]["2_4px"].second + motion["lt4m"]["ge4px"].second, 0);
 }
 
+TEST(DynamicTool, DumpRoisWritesOutlinesInstancesAndTheBandStage) {
+  // --dump-rois (debugging): every ROI's outline as a PNG of the ROI's size, named in the JSON with the ROI's
+  // dynamic points (previous x, y, current x, y, disparity); the reported objects as 8-bit ids, non-zero exactly
+  // where the mask is. On scene1 the AGV stands, so the left-band stage runs on every frame and is reported.
+  const std::string data = scene1_sequence();
+  const std::string out = fs::path(data).parent_path().string() + "/dump";
+  const std::string json_path = out + "/result.json";
+  std::string stdout_text;
+  const int rc = test::run_command("(" + test::tool_path("agvslam-dynamic") + " --dataset " + data + " --out " + out +
+                                       " --overlay-every 0 --dump-rois --json " + json_path + " 2>/dev/null)",
+                                   &stdout_text);
+  ASSERT_EQ(rc, 0) << stdout_text;
+  std::ifstream f(json_path);
+  const nlohmann::json j = nlohmann::json::parse(f);
+  int outlines = 0, band_frames = 0;
+  for (const auto& jf : j["per_frame"]) {
+    char name[32];
+    std::snprintf(name, sizeof(name), "%06d.png", jf["frame"].get<int>());
+    const cv::Mat mask = cv::imread(out + "/mask/" + name, cv::IMREAD_UNCHANGED);
+    const cv::Mat instances = cv::imread(out + "/instances/" + name, cv::IMREAD_UNCHANGED);
+    ASSERT_FALSE(mask.empty() || instances.empty()) << name;
+    ASSERT_EQ(instances.type(), CV_8UC1);
+    EXPECT_EQ(cv::countNonZero((instances > 0) != (mask > 0)), 0) << name;
+    if (jf.contains("band")) {
+      ++band_frames;
+      EXPECT_LE(jf["band"]["static_segment_px"].get<double>(), 4.0) << name;
+      EXPECT_GE(jf["band"]["tracks"].get<int>() + jf["band"]["corners"].get<int>(), 10) << name;
+    }
+    if (!jf.contains("rois")) continue;
+    for (const auto& r : jf["rois"]) {
+      ASSERT_TRUE(r.contains("outline_png") && r.contains("tracks")) << name;
+      const cv::Mat outline = cv::imread(out + "/" + r["outline_png"].get<std::string>(), cv::IMREAD_UNCHANGED);
+      ASSERT_FALSE(outline.empty()) << r["outline_png"];
+      EXPECT_EQ(outline.cols, r["roi"][2].get<int>());
+      EXPECT_EQ(outline.rows, r["roi"][3].get<int>());
+      EXPECT_EQ(r["tracks"].size(), r["points"].get<std::size_t>());
+      for (const auto& t : r["tracks"]) EXPECT_EQ(t.size(), 5u);
+      ++outlines;
+    }
+  }
+  EXPECT_GT(outlines, 0) << "the person crossing gets ROIs";
+  EXPECT_EQ(band_frames, 39);
+  EXPECT_TRUE(j["timings"].contains("band"));
+}
+
 TEST(DynamicTool, BadInputNamesTheOptionOrFolder) {
   const std::string data = scene1_sequence();
   const std::string out = test::make_temp_dir("agvslam-dynamic-bad");
