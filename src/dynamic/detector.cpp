@@ -1365,6 +1365,18 @@ void DynamicDetector::add_coasting_groups(const DetectorResult& result, cv::Size
   }
 }
 
+void DynamicDetector::add_band_rect(DetectorResult& result, const cv::Rect& painted, int instance, bool new_region) {
+  // A new region, or the band part of the region that holds the instance (regions number their instances in the
+  // order they were kept: the last one starting at or below it).
+  auto holder = std::find_if(kept_regions_.rbegin(), kept_regions_.rend(), [&](const KeptRegion& k) { return k.instance <= instance; });
+  if (new_region || holder == kept_regions_.rend()) {
+    result.mask.regions.push_back(painted);
+  } else {
+    holder->rect |= painted;
+    result.mask.regions[holder->region_index] = holder->rect;
+  }
+}
+
 void DynamicDetector::carry_band_masks(DetectorResult& result, int& next_instance) {
   const DetectorOptions& opt = config_.detector;
   cv::Mat& inst = result.mask.instances;
@@ -1448,15 +1460,7 @@ void DynamicDetector::carry_band_masks(DetectorResult& result, int& next_instanc
       }
     }
     const cv::Rect painted(x0, y0, x1 - x0 + 1, y1 - y0 + 1);
-    // A new region, or the band part of the region that holds the instance (regions number their instances in
-    // the order they were kept: the last one starting at or below it).
-    auto holder = std::find_if(kept_regions_.rbegin(), kept_regions_.rend(), [&](const KeptRegion& k) { return k.instance <= instance; });
-    if (band_only || holder == kept_regions_.rend()) {
-      result.mask.regions.push_back(painted);
-    } else {
-      holder->rect |= painted;
-      result.mask.regions[holder->region_index] = holder->rect;
-    }
+    add_band_rect(result, painted, instance, band_only);
     carried_.push_back({carry_id, instance, band_only, painted, candidates});
   }
 }
@@ -1550,15 +1554,7 @@ void DynamicDetector::add_band_regions(DetectorResult& result, int& next_instanc
       }
     }
     if (x1 < 0) continue;
-    const cv::Rect painted(x0, y0, x1 - x0 + 1, y1 - y0 + 1);
-    // A new region, or the band part of the region that holds the instance (as carry_band_masks does).
-    auto holder = std::find_if(kept_regions_.rbegin(), kept_regions_.rend(), [&](const KeptRegion& k) { return k.instance <= instance; });
-    if (alone || holder == kept_regions_.rend()) {
-      result.mask.regions.push_back(painted);
-    } else {
-      holder->rect |= painted;
-      result.mask.regions[holder->region_index] = holder->rect;
-    }
+    add_band_rect(result, cv::Rect(x0, y0, x1 - x0 + 1, y1 - y0 + 1), instance, alone);
     (alone ? result.band_objects : result.band_joined) += 1;
   }
 }

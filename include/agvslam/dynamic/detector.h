@@ -374,6 +374,9 @@ class DynamicDetector {
   // The band segmenter's regions of this frame: each joins the object of the mask it touches (band.merge_distance_px),
   // or is an object of its own when upright and large enough.
   void add_band_regions(DetectorResult& result, int& next_instance);
+  // Pixels `painted` into the band (carried or segmented) for `instance`: a region of their own (new_region), or a part
+  // of the region that holds the instance.
+  void add_band_rect(DetectorResult& result, const cv::Rect& painted, int instance, bool new_region);
   void clamp_growth(const DetectorResult& result, RoiSegmentation& seg);
   void carve_static(const DetectorResult& result, RoiSegmentation& seg);
   // The objects with regions in this frame become objects_.
