@@ -8,6 +8,7 @@
 #include <opencv2/imgproc.hpp>
 
 #include "agvslam/core/error.h"
+#include "agvslam/dynamic/bilinear.h"
 
 namespace agvslam::dynamic {
 
@@ -87,14 +88,6 @@ double point_segment_distance(double px, double py, double ax, double ay, double
   double s = len2 > 0 ? ((px - ax) * sx + (py - ay) * sy) / len2 : 0.0;
   s = std::clamp(s, 0.0, 1.0);
   return std::hypot(px - (ax + s * sx), py - (ay + s * sy));
-}
-
-float bilinear(const cv::Mat& image, float x, float y) {
-  const int x0 = static_cast<int>(x), y0 = static_cast<int>(y);
-  const float ax = x - static_cast<float>(x0), ay = y - static_cast<float>(y0);
-  const float* r0 = image.ptr<float>(y0);
-  const float* r1 = image.ptr<float>(y0 + 1);
-  return (1 - ay) * ((1 - ax) * r0[x0] + ax * r0[x0 + 1]) + ay * ((1 - ax) * r1[x0] + ax * r1[x0 + 1]);
 }
 
 }  // namespace
@@ -188,17 +181,17 @@ void BandSegmenter::segment(const cv::Mat& cur_left, const cv::Mat& prev_left, c
   keypoints_.clear();
   const cv::Rect strip_rect(0, 0, strip, h);
   cv::FAST(cur_left(strip_rect), keypoints_, c.fast_threshold, true);
-  std::vector<int> best(static_cast<std::size_t>(cells_x * cells_y), -1);
+  best_corner_.assign(static_cast<std::size_t>(cells_x * cells_y), -1);
   for (std::size_t k = 0; k < keypoints_.size(); ++k) {
     const cv::Point2f& p = keypoints_[k].pt;
     if (p.x < c.border_px || p.y < c.border_px || p.y >= h - c.border_px) continue;
     const int cell = cell_of(p);
     if (tracked_cell_[static_cast<std::size_t>(cell)] || masked_at(p)) continue;
-    int& b = best[static_cast<std::size_t>(cell)];
+    int& b = best_corner_[static_cast<std::size_t>(cell)];
     if (b < 0 || keypoints_[k].response > keypoints_[static_cast<std::size_t>(b)].response) b = static_cast<int>(k);
   }
   corners_.clear();
-  for (int b : best) {
+  for (int b : best_corner_) {
     if (b >= 0) corners_.push_back(keypoints_[static_cast<std::size_t>(b)].pt);
   }
   out.corners = static_cast<int>(corners_.size());
@@ -225,8 +218,7 @@ void BandSegmenter::segment(const cv::Mat& cur_left, const cv::Mat& prev_left, c
   const int y0 = std::max(0, static_cast<int>(seed_y0) - margin);
   const int y1 = std::min(h, static_cast<int>(seed_y1) + 1 + margin);
   const cv::Rect area(0, y0, std::min(w, strip + c.close_px), y1 - y0);
-  cur_left(area).convertTo(cur_f_, CV_32F);
-  // The seeds' motions, and the part of the previous image any hypothesis can reach (converted to float once).
+  // The seeds' motions.
   const std::size_t n_seeds = out.seeds.size();
   std::vector<cv::Point2f> flows;
   std::vector<int> flow_of(n_seeds, -1);
@@ -238,34 +230,9 @@ void BandSegmenter::segment(const cv::Mat& cur_left, const cv::Mat& prev_left, c
     if (it == flows.end()) flows.push_back(q);
   }
   const StaticWarp warp(camera, bf_px_m, T_cur_prev);
-  double reach_x0 = area.x, reach_y0 = area.y, reach_x1 = area.br().x, reach_y1 = area.br().y;
-  for (const cv::Point2f& f : flows) {
-    reach_x0 = std::min<double>(reach_x0, area.x + f.x);
-    reach_y0 = std::min<double>(reach_y0, area.y + f.y);
-    reach_x1 = std::max<double>(reach_x1, area.br().x + f.x);
-    reach_y1 = std::max<double>(reach_y1, area.br().y + f.y);
-  }
-  for (double u : {static_cast<double>(area.x), static_cast<double>(area.br().x)}) {
-    for (double v : {static_cast<double>(area.y), static_cast<double>(area.br().y)}) {
-      for (double d : {0.0, c.max_disparity_px}) {
-        double pu, pv;
-        if (!warp.at(u, v, d, pu, pv)) continue;
-        reach_x0 = std::min(reach_x0, pu);
-        reach_y0 = std::min(reach_y0, pv);
-        reach_x1 = std::max(reach_x1, pu);
-        reach_y1 = std::max(reach_y1, pv);
-      }
-    }
-  }
-  const cv::Rect prev_rect = cv::Rect(cv::Point(static_cast<int>(std::floor(reach_x0)) - 2, static_cast<int>(std::floor(reach_y0)) - 2),
-                                      cv::Point(static_cast<int>(std::ceil(reach_x1)) + 3, static_cast<int>(std::ceil(reach_y1)) + 3)) &
-                             cv::Rect(0, 0, w, h);
-  if (prev_rect.empty()) return;
-  prev_left(prev_rect).convertTo(prev_f_, CV_32F);
-  const float ox = static_cast<float>(prev_rect.x), oy = static_cast<float>(prev_rect.y);
-  const float max_x = static_cast<float>(prev_rect.br().x - 1) - 1e-3f, max_y = static_cast<float>(prev_rect.br().y - 1) - 1e-3f;
-  auto sample = [&](float x, float y) {
-    return (x >= ox && y >= oy && x < max_x && y < max_y) ? bilinear(prev_f_, x - ox, y - oy) : -1.0f;
+  const double max_x = w - 1, max_y = h - 1;
+  auto sample = [&](double x, double y) {
+    return (x >= 0 && y >= 0 && x < max_x && y < max_y) ? static_cast<float>(bilinear_u8(prev_left, x, y)) : -1.0f;
   };
   diff_.create(area.size(), CV_32F);
 
@@ -274,24 +241,23 @@ void BandSegmenter::segment(const cv::Mat& cur_left, const cv::Mat& prev_left, c
   const int samples = longest < c.segment_step_px ? 1 : std::clamp(static_cast<int>(std::ceil(longest / c.segment_step_px)) + 1, 2, 64);
   static_error_.create(area.size(), CV_32F);
   static_error_.setTo(kInvalid);
-  cv::Mat blurred;
   for (int k = 0; k < samples; ++k) {
     const double d = samples == 1 ? 0.5 * c.max_disparity_px : c.max_disparity_px * k / (samples - 1);
     for (int y = 0; y < area.height; ++y) {
-      const float* cur = cur_f_.ptr<float>(y);
+      const uint8_t* cur = cur_left.ptr<uint8_t>(y + area.y) + area.x;
       float* dst = diff_.ptr<float>(y);
       for (int x = 0; x < area.width; ++x) {
         double pu, pv;
         float v = kInvalid;
         if (warp.at(x + area.x, y + area.y, d, pu, pv)) {
-          const float prev = sample(static_cast<float>(pu), static_cast<float>(pv));
-          if (prev >= 0) v = std::abs(cur[x] - prev);
+          const float prev = sample(pu, pv);
+          if (prev >= 0) v = std::abs(static_cast<float>(cur[x]) - prev);
         }
         dst[x] = v;
       }
     }
-    cv::blur(diff_, blurred, cv::Size(5, 5), cv::Point(-1, -1), cv::BORDER_REPLICATE);
-    cv::min(static_error_, blurred, static_error_);
+    cv::blur(diff_, blurred_, cv::Size(5, 5), cv::Point(-1, -1), cv::BORDER_REPLICATE);
+    cv::min(static_error_, blurred_, static_error_);
   }
 
   // The object hypotheses: the seeds' own image motions (seeds of one mover share theirs: each distinct motion, to
@@ -314,11 +280,11 @@ void BandSegmenter::segment(const cv::Mat& cur_left, const cv::Mat& prev_left, c
     if (box.empty()) continue;
     const cv::Rect local = box - area.tl();
     for (int y = local.y; y < local.br().y; ++y) {
-      const float* cur = cur_f_.ptr<float>(y);
+      const uint8_t* cur = cur_left.ptr<uint8_t>(y + area.y) + area.x;
       float* dst = diff_.ptr<float>(y);
       for (int x = local.x; x < local.br().x; ++x) {
-        const float prev = sample(static_cast<float>(x + area.x) + f.x, static_cast<float>(y + area.y) + f.y);
-        dst[x] = prev >= 0 ? std::abs(cur[x] - prev) : kInvalid;
+        const float prev = sample(x + area.x + f.x, y + area.y + f.y);
+        dst[x] = prev >= 0 ? std::abs(static_cast<float>(cur[x]) - prev) : kInvalid;
       }
     }
     cv::blur(diff_(local), seed_error_[j](local), cv::Size(5, 5), cv::Point(-1, -1), cv::BORDER_REPLICATE);
@@ -357,8 +323,8 @@ void BandSegmenter::segment(const cv::Mat& cur_left, const cv::Mat& prev_left, c
       }
     }
   }
-  cv::blur(evidence_, blurred, cv::Size(5, 5), cv::Point(-1, -1), cv::BORDER_REPLICATE);
-  cv::compare(blurred, c.evidence_dn, binary_, cv::CMP_GT);
+  cv::blur(evidence_, blurred_, cv::Size(5, 5), cv::Point(-1, -1), cv::BORDER_REPLICATE);
+  cv::compare(blurred_, c.evidence_dn, binary_, cv::CMP_GT);
   // Closing with a disc of diameter close_px by two distance transforms (linear in the area, where a morphological
   // closing with a 21 px ellipse costs its area times the kernel's): dilate, then erode what lies within the radius
   // of the dilation's outside (the image's own edges are no outside: a sliver at the border keeps its width).

@@ -4,6 +4,7 @@
 #include <cstdio>
 
 #include "agvslam/core/error.h"
+#include "agvslam/dynamic/bilinear.h"
 
 namespace agvslam::dynamic {
 
@@ -31,16 +32,6 @@ std::string PhotometricCheckConfig::describe() const {
                 min_samples, region_inset_px);
   return buf;
 }
-
-namespace {
-double bilinear(const cv::Mat& image, double x, double y) {
-  const int x0 = static_cast<int>(x), y0 = static_cast<int>(y);
-  const double fx = x - x0, fy = y - y0;
-  const uint8_t* r0 = image.ptr<uint8_t>(y0);
-  const uint8_t* r1 = image.ptr<uint8_t>(y0 + 1);
-  return (1 - fy) * ((1 - fx) * r0[x0] + fx * r0[x0 + 1]) + fy * ((1 - fx) * r1[x0] + fx * r1[x0 + 1]);
-}
-}  // namespace
 
 void check_superpixel_motion(const cv::Mat& cur_left, const cv::Mat& prev_left, const PinholeCamera& camera,
                              double bf_px_m, const SE3d& T_cur_prev, const cv::Mat& labels, cv::Point origin,
@@ -79,7 +70,7 @@ void check_superpixel_motion(const cv::Mat& cur_left, const cv::Mat& prev_left, 
       const double u = camera.fx * X_prev.x() / X_prev.z() + camera.cx;
       const double v = camera.fy * X_prev.y() / X_prev.z() + camera.cy;
       if (!(u >= 0 && v >= 0 && u < w - 1 && v < h - 1)) continue;
-      const double diff = c0[x] - bilinear(prev_left, u, v);
+      const double diff = c0[x] - bilinear_u8(prev_left, u, v);
       const double gx = 0.5 * (c0[x + 1] - c0[x - 1]), gy = 0.5 * (cp[x] - cm[x]);
       const auto u_k = static_cast<std::size_t>(k);
       sum[u_k] += diff;
@@ -136,7 +127,7 @@ SuperpixelMotion region_motion(const cv::Mat& cur_left, const cv::Mat& ref_left,
       const double u = camera.fx * X_ref.x() / X_ref.z() + camera.cx;
       const double v = camera.fy * X_ref.y() / X_ref.z() + camera.cy;
       if (!(u >= 0 && v >= 0 && u < w - 1 && v < h - 1)) continue;
-      const double diff = c0[x] - bilinear(ref_left, u, v);
+      const double diff = c0[x] - bilinear_u8(ref_left, u, v);
       sum += diff;
       sum_sq += diff * diff;
       sum_grad += grad;

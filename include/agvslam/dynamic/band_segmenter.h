@@ -116,8 +116,9 @@ class BandSegmenter {
   std::vector<cv::KeyPoint> keypoints_;
   std::vector<cv::Point2f> corners_, back_;
   std::vector<uint8_t> ok_, tracked_cell_;
+  std::vector<int> best_corner_;
   std::vector<cv::Mat> seed_error_;
-  cv::Mat cur_f_, prev_f_, diff_, static_error_, evidence_, binary_, outside_, distance_, labels_;
+  cv::Mat diff_, blurred_, static_error_, evidence_, binary_, outside_, distance_, labels_;
 };
 
 }  // namespace agvslam::dynamic
