@@ -31,16 +31,22 @@ const std::string& scene1_sequence() {
   return dir;
 }
 
+// agvslam-dynamic on the scene1 sequence into <its folder>/<name>, with `options` and --json <out>/result.json; logs go
+// to stderr and are dropped, so the first line of stdout_text is stdout's first line. Returns the exit status.
+int run_on_scene1(const std::string& name, const std::string& options, std::string& out, std::string& json_path,
+                  std::string& stdout_text) {
+  const std::string data = scene1_sequence();
+  out = fs::path(data).parent_path().string() + "/" + name;
+  json_path = out + "/result.json";
+  return test::run_command("(" + test::tool_path("agvslam-dynamic") + " --dataset " + data + " --out " + out + " " +
+                               options + " --json " + json_path + " 2>/dev/null)",
+                           &stdout_text);
+}
+
 TEST(DynamicTool, WritesMasksOverlaysScoresAndJson) {
   const std::string data = scene1_sequence();
-  const std::string out = fs::path(data).parent_path().string() + "/run";
-  const std::string json_path = out + "/result.json";
-  std::string stdout_text;
-  // Logs go to stderr: dropped here, so the first line seen is stdout's first line.
-  const int rc = test::run_command("(" + test::tool_path("agvslam-dynamic") + " --dataset " + data + " --out " + out +
-                                       " --overlay-every 10 --json " + json_path + " 2>/dev/null)",
-                                   &stdout_text);
-  ASSERT_EQ(rc, 0) << stdout_text;
+  std::string out, json_path, stdout_text;
+  ASSERT_EQ(run_on_scene1("run", "--overlay-every 10", out, json_path, stdout_text), 0) << stdout_text;
   std::smatch m;
   const std::regex score_line(R"(^PRECISION ([0-9.]+) RECALL ([0-9.]+) IOU ([0-9.]+)\n)");
   ASSERT_TRUE(std::regex_search(stdout_text, m, score_line)) << stdout_text;
@@ -235,14 +241,8 @@ TEST(DynamicTool, DumpRoisWritesOutlinesInstancesAndTheBandStage) {
   // --dump-rois (debugging): every ROI's outline as a PNG of the ROI's size, named in the JSON with the ROI's
   // dynamic points (previous x, y, current x, y, disparity); the reported objects as 8-bit ids, non-zero exactly
   // where the mask is. On scene1 the AGV stands, so the left-band stage runs on every frame and is reported.
-  const std::string data = scene1_sequence();
-  const std::string out = fs::path(data).parent_path().string() + "/dump";
-  const std::string json_path = out + "/result.json";
-  std::string stdout_text;
-  const int rc = test::run_command("(" + test::tool_path("agvslam-dynamic") + " --dataset " + data + " --out " + out +
-                                       " --overlay-every 0 --dump-rois --json " + json_path + " 2>/dev/null)",
-                                   &stdout_text);
-  ASSERT_EQ(rc, 0) << stdout_text;
+  std::string out, json_path, stdout_text;
+  ASSERT_EQ(run_on_scene1("dump", "--overlay-every 0 --dump-rois", out, json_path, stdout_text), 0) << stdout_text;
   std::ifstream f(json_path);
   const nlohmann::json j = nlohmann::json::parse(f);
   int outlines = 0, band_frames = 0;
