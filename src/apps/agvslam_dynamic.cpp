@@ -257,7 +257,7 @@ std::vector<std::pair<std::string, double>> stage_values(const dyn::StageTimings
           {"epipolar", t.epipolar_ms},     {"depth_test", t.depth_test_ms}, {"multiframe", t.multiframe_ms}, {"densify", t.densify_ms},
           {"grouping", t.grouping_ms},     {"roi_disparity", t.roi_disparity_ms}, {"slic", t.slic_ms},
           {"planes", t.planes_ms},         {"boundaries", t.boundaries_ms}, {"regions", t.regions_ms},
-          {"band", t.band_ms},             {"features", t.features_ms},     {"total", t.total_ms}};
+          {"motion_carve", t.motion_carve_ms}, {"band", t.band_ms},             {"features", t.features_ms},     {"total", t.total_ms}};
 }
 
 // Per ground-truth object of a frame (moving or not): its visible moving pixels, the tracked and dynamic points on
@@ -670,7 +670,10 @@ int run(const Options& o) {
                         {"motion", roi.outline_motion.apparent_motion_px},
                         {"motion_multiframe", roi.outline_motion_multiframe.apparent_motion_px},
                         {"verdict", dyn::to_string(roi.outline_verdict)}, {"coasted", roi.coasted}, {"median_offset", roi.outline_stats.median_offset_px},
-                        {"object", roi.object_id}});
+                        {"object", roi.object_id},
+                        {"motion_carve", {{"ran", roi.motion_carve.ran}, {"blocks_tested", roi.motion_carve.blocks_tested},
+                                          {"blocks_static", roi.motion_carve.blocks_static},
+                                          {"pixels_removed", roi.motion_carve.pixels_removed}}}});
           if (o.dump_rois) {
             // Debugging (--dump-rois): the outline as drawn, whatever its verdict, and the ROI's own dynamic
             // points with their positions in both frames.

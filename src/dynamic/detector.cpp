@@ -160,6 +160,7 @@ void DynamicDetectorConfig::validate(const std::string& source) const {
   outline.validate(source);
   edge_refine.validate(source);
   photometric.validate(source);
+  motion_carve.validate(source);
   band.validate(source);
   detector.validate(source);
 }
@@ -167,18 +168,18 @@ void DynamicDetectorConfig::validate(const std::string& source) const {
 std::vector<std::string> DynamicDetectorConfig::describe() const {
   return {features.describe(), tracking.describe(),   epipolar.describe(), depth_test.describe(), multiframe.describe(),
           grouping.describe(), slic.describe(),       planes.describe(),   boundaries.describe(),
-          regions.describe(),  outline.describe(),     edge_refine.describe(), photometric.describe(), band.describe(),
+          regions.describe(),  outline.describe(),     edge_refine.describe(), photometric.describe(), motion_carve.describe(), band.describe(),
           detector.describe()};
 }
 
 std::string StageTimings::describe() const {
-  char buf[400];
+  char buf[440];
   std::snprintf(buf, sizeof(buf),
                 "total %.2f ms: pyramid %.2f, tracking %.2f, point disparity %.2f, epipolar %.2f, depth test %.2f, "
                 "multi-frame %.2f, densify %.2f, grouping %.2f, ROI disparity %.2f, SLIC %.2f, planes %.2f, boundaries %.2f, regions %.2f, "
-                "band %.2f, features %.2f",
+                "motion carve %.2f, band %.2f, features %.2f",
                 total_ms, pyramid_ms, tracking_ms, point_disparity_ms, epipolar_ms, depth_test_ms, multiframe_ms, densify_ms, grouping_ms,
-                roi_disparity_ms, slic_ms, planes_ms, boundaries_ms, regions_ms, band_ms, features_ms);
+                roi_disparity_ms, slic_ms, planes_ms, boundaries_ms, regions_ms, motion_carve_ms, band_ms, features_ms);
   return buf;
 }
 
@@ -560,8 +561,10 @@ void DynamicDetector::detect(const StereoFrame& frame, DetectorResult& result) {
         // The outline from the ROI's disparity (no SLIC, planes or boundaries).
         t = Clock::now();
         widen_ms_ = 0;
+        carve_ms_ = 0;
         outline_region(frame, result, seg, next_instance);
-        tm.regions_ms += ms_since(t) - widen_ms_;
+        tm.regions_ms += ms_since(t) - widen_ms_ - carve_ms_;
+        tm.motion_carve_ms += carve_ms_;
         tm.roi_disparity_ms += widen_ms_;
         return;
       }
@@ -753,7 +756,7 @@ void DynamicDetector::detect(const StereoFrame& frame, DetectorResult& result) {
   confirm_objects(result);
 
   std::swap(prev_pyramid_, cur_pyramid_);
-  if (opt.densify || config_.photometric.enabled || config_.band.enabled) {
+  if (opt.densify || config_.photometric.enabled || config_.band.enabled || config_.motion_carve.enabled) {
     frame.left.copyTo(prev_left_);
     frame.right.copyTo(prev_right_);
   }
@@ -1018,6 +1021,7 @@ void DynamicDetector::outline_region(const StereoFrame& frame, DetectorResult& r
   // A kept outline that flooded a static surface (its clearly static tracks away from the object's points) loses it.
   if (seg.outline_verdict == OutlineVerdict::kKept) {
     carve_static(result, seg);
+    carve_motion(frame, result, seg);
     if (seg.outline_stats.object_pixels < oc.min_pixels) seg.outline_verdict = OutlineVerdict::kTooSmall;
   }
   // Photometric confirmation: an outline whose content moved as a static surface would, frame to frame and against
@@ -1264,6 +1268,30 @@ void DynamicDetector::carve_static(const DetectorResult& result, RoiSegmentation
   }
   if (static_cast<int>(carve_static_px_.size()) < opt.carve_min_tracks) return;
   seg.outline_stats.object_pixels = carve_static_cells(seg.outline, seg.roi.tl(), group_pts_, carve_static_px_);
+}
+
+void DynamicDetector::carve_motion(const StereoFrame& frame, const DetectorResult& result, RoiSegmentation& seg) {
+  seg.motion_carve = MotionCarveStats{};
+  if (!config_.motion_carve.enabled || !result.depth.valid || prev_left_.empty() || seg.outline_stats.object_pixels == 0) return;
+  // The object's image motion and its offset from the ego-motion: the medians over its points.
+  motion_dx_.clear();
+  motion_dy_.clear();
+  carve_offsets_.clear();
+  for (int idx : seg.points) {
+    const TrackedPoint& p = result.points[static_cast<std::size_t>(idx)];
+    if (!p.tracked) continue;
+    motion_dx_.push_back(p.cur_px.x - p.prev_px.x);
+    motion_dy_.push_back(p.cur_px.y - p.prev_px.y);
+    if (p.reprojection_px >= 0) carve_offsets_.push_back(static_cast<float>(p.reprojection_px));
+  }
+  if (motion_dx_.empty() || carve_offsets_.empty()) return;
+  const auto t0 = Clock::now();
+  const cv::Point2f motion(static_cast<float>(median_of(motion_dx_)), static_cast<float>(median_of(motion_dy_)));
+  seg.motion_carve = carve_by_motion(frame.left, prev_left_, calibration_.left, calibration_.bf(), result.depth.T_cur_prev,
+                                     motion, median_of(carve_offsets_), group_pts_, seg.disparity_px, seg.roi.tl(),
+                                     config_.motion_carve, seg.outline);
+  if (seg.motion_carve.pixels_removed > 0) seg.outline_stats.object_pixels = cv::countNonZero(seg.outline);
+  carve_ms_ += ms_since(t0);
 }
 
 void DynamicDetector::clamp_growth(const DetectorResult& result, RoiSegmentation& seg) {

@@ -8,7 +8,7 @@ namespace agvslam::dynamic {
 DynamicDetectorConfig load_dynamic_config(const std::string& path) {
   const stereo::ParamsReader in(path);
   in.check_sections({"features", "tracking", "epipolar", "depth_test", "multiframe", "grouping", "slic", "planes", "boundaries",
-                     "regions", "outline", "edge_refine", "photometric", "band", "detector"});
+                     "regions", "outline", "edge_refine", "photometric", "motion_carve", "band", "detector"});
   DynamicDetectorConfig c;
   const char* px = "a number (px)";
   const char* num = "a number";
@@ -217,6 +217,22 @@ DynamicDetectorConfig load_dynamic_config(const std::string& path) {
   in.read("photometric", "multiframe_max_motion_px", c.photometric.multiframe_max_motion_px, px);
   in.read("photometric", "multiframe_min_disparity_px", c.photometric.multiframe_min_disparity_px, px);
   in.read("photometric", "region_inset_px", c.photometric.region_inset_px, "an integer (px)");
+
+  in.check_keys("motion_carve", {"enabled", "block_px", "sample_step_px", "search_px", "min_gradient", "min_samples",
+                                 "max_static_ratio", "min_object_error_dn", "max_static_error_dn", "min_separation_px",
+                                 "seed_radius_px"});
+  MotionCarveConfig& mc = c.motion_carve;
+  in.read("motion_carve", "enabled", mc.enabled, flag);
+  in.read("motion_carve", "block_px", mc.block_px, "an integer (px)");
+  in.read("motion_carve", "sample_step_px", mc.sample_step_px, "an integer (px)");
+  in.read("motion_carve", "search_px", mc.search_px, "an integer (px)");
+  in.read("motion_carve", "min_gradient", mc.min_gradient, "a number (grey levels per px)");
+  in.read("motion_carve", "min_samples", mc.min_samples, integer);
+  in.read("motion_carve", "max_static_ratio", mc.max_static_ratio, num);
+  in.read("motion_carve", "min_object_error_dn", mc.min_object_error_dn, "a number (grey levels)");
+  in.read("motion_carve", "max_static_error_dn", mc.max_static_error_dn, "a number (grey levels)");
+  in.read("motion_carve", "min_separation_px", mc.min_separation_px, px);
+  in.read("motion_carve", "seed_radius_px", mc.seed_radius_px, "an integer (px)");
 
   in.check_keys("band", {"enabled", "strip_px", "max_disparity_px", "max_static_segment_px", "segment_step_px",
                          "border_px", "fast_threshold", "cell_px", "seed_offset_px", "min_seeds", "max_seeds",

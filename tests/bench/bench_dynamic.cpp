@@ -373,6 +373,7 @@ void run_detector(benchmark::State& state, const std::vector<agvslam::StereoFram
     sum.planes_ms += t.planes_ms;
     sum.boundaries_ms += t.boundaries_ms;
     sum.regions_ms += t.regions_ms;
+    sum.motion_carve_ms += t.motion_carve_ms;
     sum.band_ms += t.band_ms;
     sum.features_ms += t.features_ms;
     sum.total_ms += t.total_ms;
@@ -396,6 +397,7 @@ void run_detector(benchmark::State& state, const std::vector<agvslam::StereoFram
   state.counters["planes_ms"] = sum.planes_ms / n;
   state.counters["boundaries_ms"] = sum.boundaries_ms / n;
   state.counters["regions_ms"] = sum.regions_ms / n;
+  state.counters["motion_carve_ms"] = sum.motion_carve_ms / n;
   state.counters["band_ms"] = sum.band_ms / n;
   state.counters["features_ms"] = sum.features_ms / n;
   state.counters["rois"] = rois / n;

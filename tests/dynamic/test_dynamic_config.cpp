@@ -51,8 +51,9 @@ TEST(DynamicConfig, ShippedParamsFileEqualsTheDefaults) {
   EXPECT_EQ(c.slic.incremental, d.slic.incremental);
   EXPECT_EQ(c.regions.mask_mode, d.regions.mask_mode);
   EXPECT_EQ(c.planes.seed, d.planes.seed);
-  EXPECT_EQ(c.describe().size(), 15u);
+  EXPECT_EQ(c.describe().size(), 16u);
   EXPECT_EQ(c.band.close_px, d.band.close_px);
+  EXPECT_EQ(c.motion_carve.block_px, d.motion_carve.block_px);
 }
 
 TEST(DynamicConfig, OverridesOnlyTheGivenKeys) {
@@ -115,6 +116,10 @@ TEST(DynamicConfig, BadValuesNameFileAndField) {
   expect_error("detector:\n  coast_min_detections: 0\n", "detector.coast_min_detections");
   expect_error("photometric:\n  multiframe_min_disparity_px: -2\n", "photometric.multiframe_min_disparity_px");
   expect_error("slic:\n  superpixel_size: 12\n", "slic.superpixel_size");  // unknown key
+  expect_error("motion_carve:\n  block_px: 1\n", "motion_carve.block_px");
+  expect_error("motion_carve:\n  enabled: sometimes\n", "motion_carve.enabled");
+  expect_error("motion_carve:\n  max_static_ratio: 1.5\n", "motion_carve.max_static_ratio");
+  expect_error("motion_carve:\n  blocks: 8\n", "motion_carve.blocks");
   expect_error("band:\n  strip_px: 4\n", "band.strip_px");
   expect_error("band:\n  enabled: maybe\n", "band.enabled");
   expect_error("band:\n  max_static_segment_px: 0\n", "band.max_static_segment_px");

@@ -43,6 +43,7 @@
 #include "agvslam/dynamic/epipolar.h"
 #include "agvslam/dynamic/multiframe_test.h"
 #include "agvslam/dynamic/object_outline.h"
+#include "agvslam/dynamic/motion_carve.h"
 #include "agvslam/dynamic/photometric_check.h"
 #include "agvslam/dynamic/quadtree_fast.h"
 #include "agvslam/dynamic/region_search.h"
@@ -222,6 +223,7 @@ struct DynamicDetectorConfig {
   OutlineConfig outline;
   EdgeRefineConfig edge_refine;
   PhotometricCheckConfig photometric;
+  MotionCarveConfig motion_carve;
   BandSegmenterConfig band;
   DetectorOptions detector;
 
@@ -278,6 +280,7 @@ struct RoiSegmentation {
   bool half_scale = false;                 // disparity_px came from half-resolution SGBM
   OutlineStats outline_stats;
   SuperpixelMotion outline_motion, outline_motion_multiframe;  // photometric check of the outline (when run)
+  MotionCarveStats motion_carve;           // two-motion carving of a kept outline (motion_carve)
   OutlineVerdict outline_verdict = OutlineVerdict::kNoSeed;   // kKept: the outline is a dynamic region
   int object_id = -1;                      // the object over frames (detector.track_objects): continued or new
   bool coasted = false;                    // outlined from the tracks of an object of earlier frames (coast_*)
@@ -295,7 +298,7 @@ struct DynamicMask {
 struct StageTimings {
   double pyramid_ms = 0, tracking_ms = 0, point_disparity_ms = 0, epipolar_ms = 0, depth_test_ms = 0, multiframe_ms = 0,
          densify_ms = 0, grouping_ms = 0, roi_disparity_ms = 0, slic_ms = 0, planes_ms = 0, boundaries_ms = 0, regions_ms = 0,
-         band_ms = 0, features_ms = 0, total_ms = 0;
+         motion_carve_ms = 0, band_ms = 0, features_ms = 0, total_ms = 0;
   std::string describe() const;
 };
 
@@ -379,6 +382,8 @@ class DynamicDetector {
   void add_band_rect(DetectorResult& result, const cv::Rect& painted, int instance, bool new_region);
   void clamp_growth(const DetectorResult& result, RoiSegmentation& seg);
   void carve_static(const DetectorResult& result, RoiSegmentation& seg);
+  // A kept outline's blocks that moved as a static surface, not with the object (motion_carve.h), are removed.
+  void carve_motion(const StereoFrame& frame, const DetectorResult& result, RoiSegmentation& seg);
   // The objects with regions in this frame become objects_.
   void update_objects(const DetectorResult& result);
   // SGBM of one ROI (detector.pad_left_border: in left-padded images near the left border).
@@ -470,6 +475,8 @@ class DynamicDetector {
   std::vector<std::pair<int, ObjectTrack>> next_objects_;
   std::vector<int> coast_tracks_;
   std::vector<float> motion_dx_, motion_dy_;  // scratch: tracks' image motion (coasting, band carry, growth cut)
+  double carve_ms_ = 0;                       // motion_carve time within one outline_region call
+  std::vector<float> carve_offsets_;          // scratch: an object's points' depth-test offsets (motion_carve)
   std::vector<cv::Point2f> carve_static_px_;  // scratch: clearly static tracks inside an outline (carve_min_tracks)
   std::vector<uint8_t> coast_own_;
   struct CarriedObject {
