@@ -4,19 +4,12 @@
 #include <opencv2/imgproc.hpp>
 
 #include "agvslam/dynamic/motion_carve.h"
+#include "noise_texture.h"
 
 namespace agvslam::dynamic {
 namespace {
 
-cv::Mat texture(int w, int h, uint32_t seed) {
-  cv::Mat noise(h, w, CV_8UC1);
-  cv::RNG rng(seed);
-  rng.fill(noise, cv::RNG::UNIFORM, 0, 256);
-  cv::Mat smooth;
-  cv::GaussianBlur(noise, smooth, cv::Size(0, 0), 1.2);
-  cv::normalize(smooth, smooth, 0, 255, cv::NORM_MINMAX);
-  return smooth;
-}
+using test::noise_texture;
 
 // 240x160 images; every surface fronto-parallel at d = 10 px (fx 100, baseline 0.1 m: 1 m away). The camera moves
 // 2 cm to the left, so the static background shifts 2 px: cur(x) = prev(x + 2). An object of 40x60 px at the same
@@ -37,7 +30,7 @@ struct Scene {
     camera.cx = 120;
     camera.cy = 80;
     T_cur_prev.translation() = Eigen::Vector3d(-0.02, 0, 0);
-    prev = texture(240, 160, seed);
+    prev = noise_texture(240, 160, seed);
     cv::warpAffine(prev, cur, cv::Matx23d(1, 0, 2, 0, 1, 0), prev.size(), cv::INTER_LINEAR | cv::WARP_INVERSE_MAP,
                    cv::BORDER_REFLECT);
     cv::Mat moved;

@@ -5,19 +5,12 @@
 #include <random>
 
 #include "agvslam/dynamic/photometric_check.h"
+#include "noise_texture.h"
 
 namespace agvslam::dynamic {
 namespace {
 
-cv::Mat texture(int w, int h, uint32_t seed) {
-  cv::Mat noise(h, w, CV_8UC1);
-  cv::RNG rng(seed);
-  rng.fill(noise, cv::RNG::UNIFORM, 0, 256);
-  cv::Mat smooth;
-  cv::GaussianBlur(noise, smooth, cv::Size(0, 0), 1.2);
-  cv::normalize(smooth, smooth, 0, 255, cv::NORM_MINMAX);
-  return smooth;
-}
+using test::noise_texture;
 
 // 200x120 image, 20x20 superpixels (label = row * 10 + col), every plane fronto-parallel at d = 10 px.
 struct Scene {
@@ -40,7 +33,7 @@ struct Scene {
 
 TEST(PhotometricCheck, StaticSurfaceUnderKnownEgoMotionMovesWithTheBackground) {
   const Scene s;
-  const cv::Mat prev = texture(200, 120, 3);
+  const cv::Mat prev = noise_texture(200, 120, 3);
   // The camera moves 2 cm to the left: a surface 1 m away shifts 2 px; cur(x) = prev(x + 2).
   cv::Mat cur;
   cv::warpAffine(prev, cur, cv::Matx23d(1, 0, 2, 0, 1, 0), prev.size(), cv::INTER_LINEAR | cv::WARP_INVERSE_MAP,
@@ -72,7 +65,7 @@ TEST(PhotometricCheck, StaticSurfaceUnderKnownEgoMotionMovesWithTheBackground) {
 
 TEST(PhotometricCheck, ExposureChangeAndWeakTextureAndMissingPlanes) {
   Scene s;
-  const cv::Mat prev = texture(200, 120, 5);
+  const cv::Mat prev = noise_texture(200, 120, 5);
   cv::Mat cur;
   prev.convertTo(cur, CV_8UC1, 1.0, 12.0);  // +12 grey levels, camera still
   s.planes[5].valid = false;
