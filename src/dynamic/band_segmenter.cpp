@@ -9,6 +9,7 @@
 
 #include "agvslam/core/error.h"
 #include "agvslam/dynamic/bilinear.h"
+#include "agvslam/dynamic/static_warp.h"
 
 namespace agvslam::dynamic {
 
@@ -58,29 +59,6 @@ namespace {
 
 constexpr float kInvalid = 1e6f;  // a hypothesis that leaves the previous image (its 5x5 mean stays >= 4e4)
 constexpr float kInvalidMean = 1e3f;
-
-// Static positions in the previous image of the point seen at (u, v): p(d) = pi(R ray + (d / bf) t) with
-// T_prev_cur = (R, t) and ray = ((u - cx) / fx, (v - cy) / fy, 1); d = 0 is the point at infinity.
-struct StaticWarp {
-  Eigen::Matrix3d R;
-  Eigen::Vector3d t_over_bf;
-  const PinholeCamera* camera;
-
-  StaticWarp(const PinholeCamera& cam, double bf_px_m, const SE3d& T_cur_prev) : camera(&cam) {
-    const SE3d T_prev_cur = T_cur_prev.inverse();
-    R = T_prev_cur.linear();
-    t_over_bf = T_prev_cur.translation() / bf_px_m;
-  }
-  // Returns false when the point lies behind the previous camera.
-  bool at(double u, double v, double d, double& pu, double& pv) const {
-    const Eigen::Vector3d ray((u - camera->cx) / camera->fx, (v - camera->cy) / camera->fy, 1.0);
-    const Eigen::Vector3d q = R * ray + d * t_over_bf;
-    if (q.z() <= 1e-6) return false;
-    pu = camera->fx * q.x() / q.z() + camera->cx;
-    pv = camera->fy * q.y() / q.z() + camera->cy;
-    return true;
-  }
-};
 
 double point_segment_distance(double px, double py, double ax, double ay, double bx, double by) {
   const double sx = bx - ax, sy = by - ay;

@@ -7,6 +7,7 @@
 
 #include "agvslam/core/error.h"
 #include "agvslam/dynamic/bilinear.h"
+#include "agvslam/dynamic/static_warp.h"
 
 namespace agvslam::dynamic {
 
@@ -41,6 +42,8 @@ std::string MotionCarveConfig::describe() const {
 
 namespace {
 
+constexpr double kMinDepthM = 0.1;  // a warped point nearer than this to the earlier camera is not sampled
+
 // Mean absolute deviation of the differences from their mean.
 double spread(const double* diff, int n) {
   double mean = 0;
@@ -65,9 +68,7 @@ MotionCarveStats carve_by_motion(const cv::Mat& cur_left, const cv::Mat& prev_le
     return stats;
   }
   stats.ran = true;
-  const SE3d T_prev_cur = T_cur_prev.inverse();
-  const Eigen::Matrix3d R = T_prev_cur.linear();
-  const Eigen::Vector3d t = T_prev_cur.translation();
+  const StaticWarp warp(camera, bf_px_m, T_cur_prev);
   const int w = cur_left.cols, h = cur_left.rows;
   const int B = config.block_px, step = config.sample_step_px, r = config.search_px;
   const int mx = static_cast<int>(std::lround(object_motion_px.x)), my = static_cast<int>(std::lround(object_motion_px.y));
@@ -101,12 +102,8 @@ MotionCarveStats carve_by_motion(const cv::Mat& cur_left, const cv::Mat& prev_le
           // The object hypothesis: every shift must stay inside the previous image.
           const int ox = x - mx, oy = y - my;
           if (ox - r < 0 || oy - r < 0 || ox + r >= w || oy + r >= h) continue;
-          const double z = bf_px_m / d;
-          const Eigen::Vector3d X_prev =
-              R * Eigen::Vector3d((x - camera.cx) / camera.fx * z, (y - camera.cy) / camera.fy * z, z) + t;
-          if (X_prev.z() < 0.1) continue;
-          const double u = camera.fx * X_prev.x() / X_prev.z() + camera.cx;
-          const double v = camera.fy * X_prev.y() / X_prev.z() + camera.cy;
+          double u, v;
+          if (!warp.at(x, y, d, u, v, kMinDepthM)) continue;
           if (!(u >= 0 && v >= 0 && u < w - 1 && v < h - 1)) continue;
           const auto k = static_cast<std::size_t>(n);
           value[k] = c0[x];

@@ -5,8 +5,14 @@
 
 #include "agvslam/core/error.h"
 #include "agvslam/dynamic/bilinear.h"
+#include "agvslam/dynamic/static_warp.h"
 
 namespace agvslam::dynamic {
+namespace {
+
+constexpr double kMinDepthM = 0.1;  // a warped point nearer than this to the earlier camera is not sampled
+
+}  // namespace
 
 void PhotometricCheckConfig::validate(const std::string& source) const {
   auto require = [&](bool ok, const char* field, const char* expected) {
@@ -42,9 +48,7 @@ void check_superpixel_motion(const cv::Mat& cur_left, const cv::Mat& prev_left, 
   const std::size_t n = planes.size();
   motion.assign(n, SuperpixelMotion{});
   std::vector<double> sum(n, 0), sum_sq(n, 0), sum_grad(n, 0);
-  const SE3d T_prev_cur = T_cur_prev.inverse();
-  const Eigen::Matrix3d R = T_prev_cur.linear();
-  const Eigen::Vector3d t = T_prev_cur.translation();
+  const StaticWarp warp(camera, bf_px_m, T_cur_prev);
   const int w = cur_left.cols, h = cur_left.rows;
   const int step = config.sample_step_px;
   for (int ly = 0; ly < labels.rows; ly += step) {
@@ -63,12 +67,8 @@ void check_superpixel_motion(const cv::Mat& cur_left, const cv::Mat& prev_left, 
       if (x < 1 || x >= w - 1) continue;
       const double d = plane.disparity_at(x, y);
       if (d < 0.5) continue;
-      const double z = bf_px_m / d;
-      const Eigen::Vector3d X_cur((x - camera.cx) / camera.fx * z, (y - camera.cy) / camera.fy * z, z);
-      const Eigen::Vector3d X_prev = R * X_cur + t;
-      if (X_prev.z() < 0.1) continue;
-      const double u = camera.fx * X_prev.x() / X_prev.z() + camera.cx;
-      const double v = camera.fy * X_prev.y() / X_prev.z() + camera.cy;
+      double u, v;
+      if (!warp.at(x, y, d, u, v, kMinDepthM)) continue;
       if (!(u >= 0 && v >= 0 && u < w - 1 && v < h - 1)) continue;
       const double diff = c0[x] - bilinear_u8(prev_left, u, v);
       const double gx = 0.5 * (c0[x + 1] - c0[x - 1]), gy = 0.5 * (cp[x] - cm[x]);
@@ -97,9 +97,7 @@ SuperpixelMotion region_motion(const cv::Mat& cur_left, const cv::Mat& ref_left,
   CV_Assert(cur_left.type() == CV_8UC1 && ref_left.type() == CV_8UC1 && cur_left.size() == ref_left.size());
   CV_Assert(mask.type() == CV_8UC1 && disparity_px.type() == CV_32FC1 && mask.size() == disparity_px.size());
   SuperpixelMotion m;
-  const SE3d T_ref_cur = T_cur_ref.inverse();
-  const Eigen::Matrix3d R = T_ref_cur.linear();
-  const Eigen::Vector3d t = T_ref_cur.translation();
+  const StaticWarp warp(camera, bf_px_m, T_cur_ref);
   const int w = cur_left.cols, h = cur_left.rows, step = config.sample_step_px, inset = config.region_inset_px;
   double sum = 0, sum_sq = 0, sum_grad = 0;
   for (int ly = inset; ly < mask.rows - inset; ly += step) {
@@ -121,11 +119,8 @@ SuperpixelMotion region_motion(const cv::Mat& cur_left, const cv::Mat& ref_left,
       const double gx = 0.5 * (c0[x + 1] - c0[x - 1]), gy = 0.5 * (cp[x] - cm[x]);
       const double grad = std::sqrt(gx * gx + gy * gy);
       if (grad < config.min_gradient) continue;
-      const double z = bf_px_m / d;
-      const Eigen::Vector3d X_ref = R * Eigen::Vector3d((x - camera.cx) / camera.fx * z, (y - camera.cy) / camera.fy * z, z) + t;
-      if (X_ref.z() < 0.1) continue;
-      const double u = camera.fx * X_ref.x() / X_ref.z() + camera.cx;
-      const double v = camera.fy * X_ref.y() / X_ref.z() + camera.cy;
+      double u, v;
+      if (!warp.at(x, y, d, u, v, kMinDepthM)) continue;
       if (!(u >= 0 && v >= 0 && u < w - 1 && v < h - 1)) continue;
       const double diff = c0[x] - bilinear_u8(ref_left, u, v);
       sum += diff;
