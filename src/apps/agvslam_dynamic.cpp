@@ -329,6 +329,12 @@ struct RecallBreakdown {
   // the vehicle must not lose, seen whole; objects that do not move have no ground-truth distance here).
   int full_view_found = 0, full_view_total = 0;
   int left_found = 0, left_total = 0, right_found = 0, right_total = 0;  // cut by the left / the right border
+  // By the detector's tracked points on the object's own pixels (0 / 1-2 / 3-4 / 5-9 / >= 10): a detector built on
+  // sparse tracks (paper 004) cannot find an object without them, so the first bins bound what it can reach.
+  static constexpr int kTrackBins = 5;
+  static constexpr int kTrackUpper[kTrackBins - 1] = {1, 3, 5, 10};
+  static constexpr const char* kTrackBinNames[kTrackBins] = {"0", "1_2", "3_4", "5_9", "ge10"};
+  int track_found[kTrackBins] = {}, track_total[kTrackBins] = {};
   // Where each missed object was lost, by distance (< 4 m, 4-12 m, >= 12 m, unknown): no tracked point on it; tracked
   // points but none dynamic; dynamic points but no ROI over it; ROIs over it (its own, rejected or withheld, or another
   // object's) but none of its pixels in the mask; or masked, with the matching IoU below the scoring's.
@@ -367,6 +373,10 @@ struct RecallBreakdown {
       left_found += cut_left && hit;
       right_total += cut_right;
       right_found += cut_right && hit;
+      int track_bin = 0;
+      while (track_bin < kTrackBins - 1 && d["tracked_points"].get<int>() >= kTrackUpper[track_bin]) ++track_bin;
+      ++track_total[track_bin];
+      track_found[track_bin] += hit;
       const double distance_m = d.value("distance_m", -1.0);
       const int band = !(distance_m > 0) ? 3 : distance_m < kNearM ? 0 : distance_m < kFarM ? 1 : 2;
       if (d.contains("gt_motion_px")) {
@@ -472,7 +482,9 @@ struct RecallBreakdown {
            ", 5000-20000 px " + ratio(found[2], total[2]) + ", >= 20000 px " + ratio(found[3], total[3]) +
            "; cut by the left/right image border " + ratio(border_found, border_total) + " (left " +
            ratio(left_found, left_total) + ", right " + ratio(right_found, right_total) + "), inside the image " +
-           ratio(inner_found, inner_total) +
+           ratio(inner_found, inner_total) + "; by tracked points on the object: 0 " + ratio(track_found[0], track_total[0]) +
+           ", 1-2 " + ratio(track_found[1], track_total[1]) + ", 3-4 " + ratio(track_found[2], track_total[2]) + ", 5-9 " +
+           ratio(track_found[3], track_total[3]) + ", >= 10 " + ratio(track_found[4], track_total[4]) +
            (distance_total[0] + distance_total[1] + distance_total[2] + distance_total[3] == 0
                 ? std::string()
                 : "; by distance: < 4 m " + ratio(distance_found[0], distance_total[0]) + ", 4-7 m " +
@@ -489,6 +501,9 @@ struct RecallBreakdown {
     j["border_right"] = {{"found", right_found}, {"objects", right_total}};
     j["inside"] = {{"found", inner_found}, {"objects", inner_total}};
     j["full_view_lt4m"] = {{"found", full_view_found}, {"objects", full_view_total}};
+    for (int b = 0; b < kTrackBins; ++b) {
+      j["tracks_" + std::string(kTrackBinNames[b])] = {{"found", track_found[b]}, {"objects", track_total[b]}};
+    }
     const char* distance_names[kDistanceBins] = {"lt4m", "4_7m", "7_12m", "ge12m"};
     for (int b = 0; b < kDistanceBins; ++b) {
       j["distance_" + std::string(distance_names[b])] = {{"found", distance_found[b]}, {"objects", distance_total[b]}};

@@ -141,6 +141,7 @@ TEST(DynamicTool, WritesMasksOverlaysScoresAndJson) {
   }
   int full_view = 0, full_view_found = 0;
   int left = 0, left_found = 0, right = 0, right_found = 0, missed = 0;
+  std::map<std::string, std::pair<int, int>> by_tracks;  // tracked-point bin -> (found, objects)
   std::map<std::string, std::map<std::string, int>> misses;  // distance band -> stage -> count
   for (const auto& jf : j["per_frame"]) {
     if (!jf.contains("objects")) continue;
@@ -153,6 +154,11 @@ TEST(DynamicTool, WritesMasksOverlaysScoresAndJson) {
         left_found += b.x <= 2 && hit;
         right += b.br().x >= 752 - 2;
         right_found += b.br().x >= 752 - 2 && hit;
+        const int tracks = o["tracked_points"].get<int>();
+        const std::string bin = tracks == 0 ? "tracks_0" : tracks <= 2 ? "tracks_1_2" : tracks <= 4 ? "tracks_3_4"
+                                : tracks <= 9 ? "tracks_5_9" : "tracks_ge10";
+        by_tracks[bin].first += hit;
+        ++by_tracks[bin].second;
         if (!hit) {
           const double miss_m = o["distance_m"].get<double>();
           const std::string band = !(miss_m > 0) ? "unknown" : miss_m < 4.0 ? "lt4m" : miss_m < 12.0 ? "4_12m" : "ge12m";
@@ -189,6 +195,14 @@ TEST(DynamicTool, WritesMasksOverlaysScoresAndJson) {
   EXPECT_EQ(rb["border_left"]["found"].get<int>(), left_found);
   EXPECT_EQ(rb["border_right"]["objects"].get<int>(), right);
   EXPECT_EQ(rb["border_right"]["found"].get<int>(), right_found);
+  // By the tracked points on each object, recounted from the per-object diagnostics.
+  int by_track_bins = 0;
+  for (const char* k : {"tracks_0", "tracks_1_2", "tracks_3_4", "tracks_5_9", "tracks_ge10"}) {
+    EXPECT_EQ(rb[k]["found"].get<int>(), by_tracks[k].first) << k;
+    EXPECT_EQ(rb[k]["objects"].get<int>(), by_tracks[k].second) << k;
+    by_track_bins += rb[k]["objects"].get<int>();
+  }
+  EXPECT_EQ(by_track_bins, by_size);
   int found = 0;
   for (const char* k : {"size_lt1500", "size_1500_5000", "size_5000_20000", "size_ge20000"}) found += rb[k]["found"].get<int>();
   EXPECT_EQ(missed, by_size - found);
