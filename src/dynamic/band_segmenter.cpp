@@ -39,19 +39,24 @@ void BandSegmenterConfig::validate(const std::string& source) const {
   require(min_height_px >= 1 && min_height_px <= 10000, "min_height_px", "expected an integer in [1, 10000] px");
   require(stack_gap_px >= 0 && stack_gap_px <= 1000, "stack_gap_px", "expected an integer in [0, 1000] px");
   require(merge_distance_px >= 0 && merge_distance_px <= 64, "merge_distance_px", "expected an integer in [0, 64] px");
+  require(driving_seed_offset_px >= 0 && driving_seed_offset_px <= 50, "driving_seed_offset_px",
+          "expected a number in [0, 50] px (0 = off)");
+  require(driving_cell_px >= 2 && driving_cell_px <= 128, "driving_cell_px", "expected an integer in [2, 128] px");
 }
 
 std::string BandSegmenterConfig::describe() const {
-  char buf[700];
+  char buf[800];
   std::snprintf(buf, sizeof(buf),
                 "band: %s, strip x < %d px, run when the static segments (d 0..%.0f px) are <= %.1f px (sampled every "
                 "%.2f px); FAST %d, one corner per %d px cell, >= %d px from the edges; seeds >= %.2f px off their "
                 "segment, %d..%d, each pixel's %d nearest; evidence > %.2f grey levels where a seed's error <= %.1f, "
                 "within %d px of its seeds, closed over %d px, filled to the edge from %d px; "
-                "a region alone >= %d px, >= %d px tall and taller than wide; joins an object within %d px or stacked within %d px",
+                "a region alone >= %d px, >= %d px tall and taller than wide; joins an object within %d px or stacked within %d px; "
+                "driving: the corners of %d px cells without a track > %.2f px off their segment are candidate movers%s",
                 enabled ? "on" : "off", strip_px, max_disparity_px, max_static_segment_px, segment_step_px,
                 fast_threshold, cell_px, border_px, seed_offset_px, min_seeds, max_seeds, nearest_seeds, evidence_dn,
-                max_object_error_dn, reach_px, close_px, edge_fill_px, min_pixels, min_height_px, merge_distance_px, stack_gap_px);
+                max_object_error_dn, reach_px, close_px, edge_fill_px, min_pixels, min_height_px, merge_distance_px, stack_gap_px,
+                driving_cell_px, driving_seed_offset_px, driving_seed_offset_px > 0 ? "" : " (off)");
   return buf;
 }
 
@@ -107,6 +112,71 @@ double BandSegmenter::static_segment_distance(const PinholeCamera& camera, doubl
   return best;
 }
 
+double BandSegmenter::longest_static_segment(const PinholeCamera& camera, double bf_px_m, const SE3d& T_cur_prev,
+                                             cv::Size image) const {
+  const int strip = std::min(config_.strip_px, image.width);
+  double longest = 0;
+  for (double u : {0.0, 0.5 * (strip - 1), static_cast<double>(strip - 1)}) {
+    for (double v : {0.0, 0.5 * (image.height - 1), static_cast<double>(image.height - 1)}) {
+      longest = std::max(longest, static_segment_length(camera, bf_px_m, T_cur_prev, u, v));
+    }
+  }
+  return longest;
+}
+
+void BandSegmenter::untracked_strip_corners(const cv::Mat& cur_left, const cv::Mat& masked,
+                                            const std::vector<cv::Point2f>& occupied_px, int cell_px) {
+  const BandSegmenterConfig& c = config_;
+  const int w = cur_left.cols, h = cur_left.rows;
+  const int strip = std::min(c.strip_px, w);
+  const int cells_x = (strip + cell_px - 1) / cell_px, cells_y = (h + cell_px - 1) / cell_px;
+  auto cell_of = [&](const cv::Point2f& p) {
+    return std::clamp(static_cast<int>(p.y) / cell_px, 0, cells_y - 1) * cells_x +
+           std::clamp(static_cast<int>(p.x) / cell_px, 0, cells_x - 1);
+  };
+  tracked_cell_.assign(static_cast<std::size_t>(cells_x * cells_y), 0);
+  for (const cv::Point2f& p : occupied_px) {
+    if (p.x >= 0 && p.x < strip && p.y >= 0 && p.y < h) tracked_cell_[static_cast<std::size_t>(cell_of(p))] = 1;
+  }
+  keypoints_.clear();
+  cv::FAST(cur_left(cv::Rect(0, 0, strip, h)), keypoints_, c.fast_threshold, true);
+  best_corner_.assign(static_cast<std::size_t>(cells_x * cells_y), -1);
+  for (std::size_t k = 0; k < keypoints_.size(); ++k) {
+    const cv::Point2f& p = keypoints_[k].pt;
+    if (p.x < c.border_px || p.y < c.border_px || p.y >= h - c.border_px) continue;
+    const int cell = cell_of(p);
+    if (tracked_cell_[static_cast<std::size_t>(cell)]) continue;
+    if (!masked.empty() && masked.at<uint8_t>(std::clamp(cvRound(p.y), 0, h - 1), std::clamp(cvRound(p.x), 0, w - 1))) continue;
+    int& b = best_corner_[static_cast<std::size_t>(cell)];
+    if (b < 0 || keypoints_[k].response > keypoints_[static_cast<std::size_t>(b)].response) b = static_cast<int>(k);
+  }
+  corners_.clear();
+  for (int b : best_corner_) {
+    if (b >= 0) corners_.push_back(keypoints_[static_cast<std::size_t>(b)].pt);
+  }
+}
+
+bool BandSegmenter::driving_seeds(const cv::Mat& cur_left, const std::vector<cv::Mat>& cur_pyramid,
+                                  const std::vector<cv::Mat>& prev_pyramid, LkTracker& tracker, int lk_levels,
+                                  const PinholeCamera& camera, double bf_px_m, const SE3d& T_cur_prev,
+                                  const std::vector<cv::Point2f>& track_cur, std::vector<BandSeed>& seeds) {
+  seeds.clear();
+  const BandSegmenterConfig& c = config_;
+  if (!c.enabled || !(c.driving_seed_offset_px > 0) || cur_left.empty()) return false;
+  CV_Assert(cur_left.type() == CV_8UC1);
+  if (std::min(c.strip_px, cur_left.cols) <= 2 * c.border_px || cur_left.rows <= 2 * c.border_px) return false;
+  if (longest_static_segment(camera, bf_px_m, T_cur_prev, cur_left.size()) <= c.max_static_segment_px) return false;
+  untracked_strip_corners(cur_left, cv::Mat(), track_cur, c.driving_cell_px);
+  if (corners_.empty()) return true;
+  tracker.track(cur_pyramid, prev_pyramid, corners_, back_, ok_, lk_levels);
+  for (std::size_t i = 0; i < corners_.size(); ++i) {
+    if (!ok_[i]) continue;
+    const double offset = static_segment_distance(camera, bf_px_m, T_cur_prev, corners_[i], back_[i]);
+    if (offset > c.driving_seed_offset_px) seeds.push_back({corners_[i], back_[i], offset});
+  }
+  return true;
+}
+
 void BandSegmenter::segment(const cv::Mat& cur_left, const cv::Mat& prev_left, const std::vector<cv::Mat>& cur_pyramid,
                             const std::vector<cv::Mat>& prev_pyramid, LkTracker& tracker, int lk_levels,
                             const PinholeCamera& camera, double bf_px_m, const SE3d& T_cur_prev,
@@ -123,12 +193,7 @@ void BandSegmenter::segment(const cv::Mat& cur_left, const cv::Mat& prev_left, c
   if (strip <= 2 * c.border_px || h <= 2 * c.border_px) return;
 
   // The test is sharp only where a static point's previous position hardly depends on its depth.
-  double longest = 0;
-  for (double u : {0.0, 0.5 * (strip - 1), static_cast<double>(strip - 1)}) {
-    for (double v : {0.0, 0.5 * (h - 1), static_cast<double>(h - 1)}) {
-      longest = std::max(longest, static_segment_length(camera, bf_px_m, T_cur_prev, u, v));
-    }
-  }
+  const double longest = longest_static_segment(camera, bf_px_m, T_cur_prev, cur_left.size());
   out.static_segment_px = longest;
   if (!(longest <= c.max_static_segment_px)) return;
   out.ran = true;
@@ -143,35 +208,13 @@ void BandSegmenter::segment(const cv::Mat& cur_left, const cv::Mat& prev_left, c
     const double offset = static_segment_distance(camera, bf_px_m, T_cur_prev, cur, prev);
     if (offset > c.seed_offset_px) out.seeds.push_back({cur, prev, offset});
   };
-  const int cells_x = (strip + c.cell_px - 1) / c.cell_px, cells_y = (h + c.cell_px - 1) / c.cell_px;
-  auto cell_of = [&](const cv::Point2f& p) {
-    return std::clamp(static_cast<int>(p.y) / c.cell_px, 0, cells_y - 1) * cells_x +
-           std::clamp(static_cast<int>(p.x) / c.cell_px, 0, cells_x - 1);
-  };
-  tracked_cell_.assign(static_cast<std::size_t>(cells_x * cells_y), 0);
   for (std::size_t i = 0; i < track_cur.size(); ++i) {
     const cv::Point2f& p = track_cur[i];
     if (!(p.x >= 0 && p.x < strip && p.y >= 0 && p.y < h)) continue;
-    tracked_cell_[static_cast<std::size_t>(cell_of(p))] = 1;
     ++out.tracks;
     if (!masked_at(p)) test(p, track_prev[i]);
   }
-  keypoints_.clear();
-  const cv::Rect strip_rect(0, 0, strip, h);
-  cv::FAST(cur_left(strip_rect), keypoints_, c.fast_threshold, true);
-  best_corner_.assign(static_cast<std::size_t>(cells_x * cells_y), -1);
-  for (std::size_t k = 0; k < keypoints_.size(); ++k) {
-    const cv::Point2f& p = keypoints_[k].pt;
-    if (p.x < c.border_px || p.y < c.border_px || p.y >= h - c.border_px) continue;
-    const int cell = cell_of(p);
-    if (tracked_cell_[static_cast<std::size_t>(cell)] || masked_at(p)) continue;
-    int& b = best_corner_[static_cast<std::size_t>(cell)];
-    if (b < 0 || keypoints_[k].response > keypoints_[static_cast<std::size_t>(b)].response) b = static_cast<int>(k);
-  }
-  corners_.clear();
-  for (int b : best_corner_) {
-    if (b >= 0) corners_.push_back(keypoints_[static_cast<std::size_t>(b)].pt);
-  }
+  untracked_strip_corners(cur_left, masked, track_cur, c.cell_px);
   out.corners = static_cast<int>(corners_.size());
   if (!corners_.empty()) {
     tracker.track(cur_pyramid, prev_pyramid, corners_, back_, ok_, lk_levels);

@@ -303,6 +303,7 @@ void DynamicDetector::detect(const StereoFrame& frame, DetectorResult& result) {
   result.multiframe.test.dynamic.clear();
   result.band = BandResult{};
   result.band_joined = result.band_objects = 0;
+  result.band_driving_seeds = result.band_driving_dynamic = 0;
   result.timings = StageTimings{};
   StageTimings& tm = result.timings;
   static_offset_median_px_ = -1;
@@ -424,6 +425,9 @@ void DynamicDetector::detect(const StereoFrame& frame, DetectorResult& result) {
       }
     }
 
+    t = Clock::now();
+    if (config_.band.enabled && result.depth.valid && !prev_left_.empty()) add_band_driving_seeds(frame, result);
+    tm.band_ms += ms_since(t);
     t = Clock::now();
     if (opt.densify && opt.densify_max_points > 0 && !prev_left_.empty()) densify(frame, result);
     tm.densify_ms = ms_since(t);
@@ -646,7 +650,7 @@ void DynamicDetector::detect(const StereoFrame& frame, DetectorResult& result) {
       band_.segment(frame.left, prev_left_, cur_pyramid_, prev_pyramid_, tracker_, result.lk_levels, calibration_.left,
                     calibration_.bf(), result.depth.T_cur_prev, result.mask.instances, band_prev_, band_cur_, result.band);
       add_band_regions(result, next_instance);
-      tm.band_ms = ms_since(t);
+      tm.band_ms += ms_since(t);
     }
     if (opt.mask_dilation_px > 0 && !result.mask.regions.empty()) {
       const int k = 2 * opt.mask_dilation_px + 1;
@@ -1672,6 +1676,46 @@ void DynamicDetector::roi_disparity(const StereoFrame& frame, const cv::Rect& ro
   cv::copyMakeBorder(frame.left(strip), padded_left_, 0, 0, pad, 0, cv::BORDER_REPLICATE);
   cv::copyMakeBorder(frame.right(strip), padded_right_, 0, 0, pad, 0, cv::BORDER_REPLICATE);
   sgbm_.compute_roi(padded_left_, padded_right_, r + cv::Point(pad, 0), out, max_disparity_px, scale, row_step);
+}
+
+void DynamicDetector::add_band_driving_seeds(const StereoFrame& frame, DetectorResult& result) {
+  band_track_cur_.clear();
+  for (const TrackedPoint& p : result.points) {
+    if (p.tracked && p.cur_px.x < config_.band.strip_px) band_track_cur_.push_back(p.cur_px);
+  }
+  if (!band_.driving_seeds(frame.left, cur_pyramid_, prev_pyramid_, tracker_, result.lk_levels, calibration_.left,
+                           calibration_.bf(), result.depth.T_cur_prev, band_track_cur_, driving_seeds_)) {
+    return;
+  }
+  result.band_driving_seeds = static_cast<int>(driving_seeds_.size());
+  for (const BandSeed& seed : driving_seeds_) {
+    // A corner seen now but not by the tracks: its own disparities and the frame's tests, as a densified point.
+    TrackedPoint p;
+    p.prev_px = seed.prev_px;
+    p.cur_px = seed.cur_px;
+    p.cur_disparity_px = sparse_.match(frame.left, frame.right, p.cur_px);
+    p.prev_disparity_px = sparse_.match(prev_left_, prev_right_, p.prev_px);
+    p.tracked = true;
+    p.densified = true;
+    p.age = 1;
+    p.dynamic_epipolar = result.epipolar.valid && epipolar_.test_track(result.epipolar, p.prev_px, p.cur_px,
+                                                                       p.cur_disparity_px, &p.d_epi_px, &p.t_epi_px);
+    DepthConsistencyTest::residuals(calibration_.left, calibration_.bf(), result.depth.T_cur_prev, p.prev_px,
+                                    p.prev_disparity_px, p.cur_px, p.cur_disparity_px, p.reprojection_px,
+                                    p.disparity_residual_px);
+    p.dynamic_depth = depth_test_.is_dynamic(result.depth, p.reprojection_px, p.disparity_residual_px,
+                                             p.cur_disparity_px > 0 ? p.cur_disparity_px : p.prev_disparity_px);
+    const DetectorOptions& opt = config_.detector;
+    p.dynamic = (opt.use_epipolar_test && p.dynamic_epipolar) || (opt.use_depth_test && p.dynamic_depth);
+    if (!p.dynamic) continue;  // the others are not kept as tracks: the quadtree decides where tracks start
+    ++result.band_driving_dynamic;
+    result.points.push_back(p);
+    history_.add(p.cur_px, p.cur_disparity_px);
+    history_.add_earlier(1, p.prev_px, p.prev_disparity_px);
+    dyn_pts_.push_back(p.cur_px);
+    dyn_disp_.push_back(p.cur_disparity_px);
+    dyn_index_.push_back(static_cast<int>(result.points.size() - 1));
+  }
 }
 
 void DynamicDetector::densify(const StereoFrame& frame, DetectorResult& result) {

@@ -237,7 +237,8 @@ DynamicDetectorConfig load_dynamic_config(const std::string& path) {
   in.check_keys("band", {"enabled", "strip_px", "max_disparity_px", "max_static_segment_px", "segment_step_px",
                          "border_px", "fast_threshold", "cell_px", "seed_offset_px", "min_seeds", "max_seeds",
                          "nearest_seeds", "evidence_dn", "max_object_error_dn", "edge_fill_px", "reach_px", "close_px", "min_pixels", "min_height_px",
-                         "merge_distance_px", "stack_gap_px"});
+                         "merge_distance_px", "stack_gap_px", "driving_seed_offset_px",
+                         "driving_cell_px"});
   BandSegmenterConfig& b = c.band;
   in.read("band", "enabled", b.enabled, flag);
   in.read("band", "strip_px", b.strip_px, "an integer (px)");
@@ -260,6 +261,8 @@ DynamicDetectorConfig load_dynamic_config(const std::string& path) {
   in.read("band", "min_height_px", b.min_height_px, "an integer (px)");
   in.read("band", "merge_distance_px", b.merge_distance_px, "an integer (px)");
   in.read("band", "stack_gap_px", b.stack_gap_px, "an integer (px)");
+  in.read("band", "driving_seed_offset_px", b.driving_seed_offset_px, "a number (px)");
+  in.read("band", "driving_cell_px", b.driving_cell_px, "an integer (px)");
 
   in.check_keys("detector", {"use_epipolar_test", "use_depth_test", "full_frame_disparity", "max_rois",
                              "roi_disparity_margin_px", "roi_scale", "roi_row_step", "roi_row_step_min_area_px",

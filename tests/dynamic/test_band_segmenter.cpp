@@ -171,11 +171,82 @@ TEST(BandSegmenter, SkipsFramesWhereTheCameraTranslates) {
   EXPECT_FALSE(run_band(26, 34, SE3d::Identity(), off).result.ran);
 }
 
+// BandSegmenter::driving_seeds between the two renders (T_w_c0 = identity); gt: the box's pixels in the current image.
+struct DrivingRun {
+  bool ran = false;
+  std::vector<BandSeed> seeds;
+  cv::Mat gt;
+  std::size_t on_box() const {
+    std::size_t n = 0;
+    for (const BandSeed& s : seeds) n += gt.at<uint8_t>(cvRound(s.cur_px.y), cvRound(s.cur_px.x)) > 0;
+    return n;
+  }
+};
+
+DrivingRun run_driving(double right0_px, double right1_px, const SE3d& T_w_c1, const BandSegmenterConfig& config = {},
+                       const std::vector<cv::Point2f>& track_cur = {}) {
+  DrivingRun run;
+  const cv::Mat prev = render_left(right0_px, SE3d::Identity(), 0);
+  const cv::Mat cur = render_left(right1_px, T_w_c1, 1, &run.gt);
+  LkTracker tracker;
+  std::vector<cv::Mat> prev_pyramid, cur_pyramid;
+  tracker.build_pyramid(prev, prev_pyramid);
+  tracker.build_pyramid(cur, cur_pyramid);
+  BandSegmenter band(config);
+  run.ran = band.driving_seeds(cur, cur_pyramid, prev_pyramid, tracker, -1, camera(), bf(), T_w_c1.inverse(), track_cur,
+                               run.seeds);
+  return run;
+}
+
+TEST(BandSegmenter, WhileDrivingABoxSteppingInAgainstTheFlowGivesSeeds) {
+  // Driving forward 5 cm: static points at the left border move left by up to ~20 px (the nearer, the more), along
+  // their segments; the box steps 8 px right, which no static point at any depth does.
+  const DrivingRun run = run_driving(26, 34, camera_pose(0, 0, 0.05));
+  ASSERT_TRUE(run.ran);
+  ASSERT_GE(run.seeds.size(), 3u);
+  EXPECT_GE(run.on_box() * 10, run.seeds.size() * 9) << run.on_box() << " of " << run.seeds.size() << " on the box";
+  for (const BandSeed& s : run.seeds) {
+    EXPECT_GT(s.offset_px, BandSegmenterConfig{}.driving_seed_offset_px);
+    EXPECT_LT(s.cur_px.x, BandSegmenterConfig{}.strip_px);
+  }
+  std::printf("driving, box stepping in: %zu seeds, %zu on the box\n", run.seeds.size(), run.on_box());
+}
+
+TEST(BandSegmenter, WhileDrivingStaticTextureGivesNoSeeds) {
+  const DrivingRun run = run_driving(34, 34, camera_pose(0, 0, 0.05));
+  ASSERT_TRUE(run.ran);
+  // The box stood: its corners moved as static points at its depth do, like the wall's.
+  EXPECT_LE(run.seeds.size(), 1u);
+}
+
+TEST(BandSegmenter, WhileDrivingCellsHoldingATrackAreNotSearched) {
+  // Tracks over the whole strip: no cell is left to search.
+  std::vector<cv::Point2f> tracks;
+  for (float y = 2; y < 480; y += 12)
+    for (float x = 2; x < 64; x += 12) tracks.push_back({x, y});
+  const DrivingRun run = run_driving(26, 34, camera_pose(0, 0, 0.05), {}, tracks);
+  EXPECT_TRUE(run.ran);
+  EXPECT_TRUE(run.seeds.empty());
+}
+
+TEST(BandSegmenter, DrivingSeedsLeaveStandingFramesToSegment) {
+  // Standing (segment() runs on such frames) or switched off: no driving seeds.
+  EXPECT_FALSE(run_driving(26, 34, SE3d::Identity()).ran);
+  BandSegmenterConfig off;
+  off.driving_seed_offset_px = 0;
+  const DrivingRun run = run_driving(26, 34, camera_pose(0, 0, 0.05), off);
+  EXPECT_FALSE(run.ran);
+  EXPECT_TRUE(run.seeds.empty());
+}
+
 TEST(BandSegmenter, RejectsAnInvalidConfiguration) {
   BandSegmenterConfig c;
   c.min_seeds = 5;
   c.max_seeds = 3;
   EXPECT_THROW(BandSegmenter{c}, InputError);
+  BandSegmenterConfig d;
+  d.driving_seed_offset_px = -1;
+  EXPECT_THROW(BandSegmenter{d}, InputError);
 }
 
 }  // namespace

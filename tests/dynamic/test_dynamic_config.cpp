@@ -128,6 +128,7 @@ TEST(DynamicConfig, BadValuesNameFileAndField) {
   expect_error("band:\n  max_object_error_dn: 0\n", "band.max_object_error_dn");
   expect_error("band:\n  close_px: 0\n", "band.close_px");
   expect_error("band:\n  stack_gap_px: -1\n", "band.stack_gap_px");
+  expect_error("band:\n  driving_seed_offset_px: -0.5\n", "band.driving_seed_offset_px");
   expect_error("band:\n  width_px: 64\n", "band.width_px");  // unknown key
   // The per-frame depth test takes no motion prior: the key is the multi-frame test's only.
   expect_error("depth_test:\n  prior_min_inlier_fraction: 0.5\n", "depth_test.prior_min_inlier_fraction");

@@ -61,6 +61,11 @@ struct BandSegmenterConfig {
   int merge_distance_px = 3;            // a region within this distance of an object of the mask joins it ...
   int stack_gap_px = 80;                // ... and so does one above or below it within this gap, over at least half
                                         // of the region's columns (a person's legs below its torso; 0 = only touching)
+  // While the camera translates (segments longer than max_static_segment_px: segment() skips the frame), the strip's
+  // corners in cells holding no track, tracked back, whose previous position lies more than driving_seed_offset_px
+  // off their segment are candidate movers for the caller's own tests (driving_seeds(); 0 = off).
+  double driving_seed_offset_px = 3.0;
+  int driving_cell_px = 12;             // ... one corner per cell of this size (a person stepping in spans 40-100 px)
 
   void validate(const std::string& source) const;
   std::string describe() const;
@@ -105,6 +110,20 @@ class BandSegmenter {
   // LK pyramids (LkTracker::build_pyramid), tracked back with `tracker` on `lk_levels` levels (< 0: its default);
   // masked: CV_8UC1 of the image size (non-zero = already dynamic: no seeds there, regions stop there);
   // track_prev / track_cur: correspondences the caller has already (its LK tracks, any part of the image).
+  // The longest static segment over the strip's corners and the middle of its sides (the strip is where the
+  // segments are longest: farthest from the focus of expansion of forward motion).
+  double longest_static_segment(const PinholeCamera& camera, double bf_px_m, const SE3d& T_cur_prev, cv::Size image) const;
+
+  // Candidate movers in the strip while the camera translates (a person stepping in from the left border while
+  // the AGV drives, whom no track has reached yet): the strongest FAST corner of each strip cell that holds none of
+  // the caller's current tracks (track_cur), tracked back into the previous image, whose previous position lies
+  // more than driving_seed_offset_px off its static segment (no static point at any depth explains it). Nothing
+  // (false) when disabled or when the segments are short enough for segment() to run on this frame.
+  bool driving_seeds(const cv::Mat& cur_left, const std::vector<cv::Mat>& cur_pyramid,
+                     const std::vector<cv::Mat>& prev_pyramid, LkTracker& tracker, int lk_levels,
+                     const PinholeCamera& camera, double bf_px_m, const SE3d& T_cur_prev,
+                     const std::vector<cv::Point2f>& track_cur, std::vector<BandSeed>& seeds);
+
   void segment(const cv::Mat& cur_left, const cv::Mat& prev_left, const std::vector<cv::Mat>& cur_pyramid,
                const std::vector<cv::Mat>& prev_pyramid, LkTracker& tracker, int lk_levels,
                const PinholeCamera& camera, double bf_px_m, const SE3d& T_cur_prev, const cv::Mat& masked,
@@ -112,6 +131,11 @@ class BandSegmenter {
                BandResult& out);
 
  private:
+  // The strongest FAST corner (config_.fast_threshold) of each strip cell (cell_px) that holds none of occupied_px, at least
+  // border_px from the image's edges and not on masked pixels (masked may be empty); into corners_.
+  void untracked_strip_corners(const cv::Mat& cur_left, const cv::Mat& masked, const std::vector<cv::Point2f>& occupied_px,
+                               int cell_px);
+
   BandSegmenterConfig config_;
   std::vector<cv::KeyPoint> keypoints_;
   std::vector<cv::Point2f> corners_, back_;

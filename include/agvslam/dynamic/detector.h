@@ -314,6 +314,9 @@ struct DetectorResult {
   MultiFrameResult multiframe;
   BandResult band;               // the left band without stereo (band_segmenter.h)
   int band_joined = 0, band_objects = 0;  // its regions joined to an object of the mask / reported as objects of their own
+  // While the AGV drives: the band's candidate movers (BandSegmenter::driving_seeds) / those the tests flagged, which
+  // joined the dynamic points.
+  int band_driving_seeds = 0, band_driving_dynamic = 0;
   DisparityPlane ground_plane;   // d = a x + b y + c of the floor from the static points (ground veto); may be invalid
   cv::Mat full_disparity_px;     // only with detector.full_frame_disparity
   StageTimings timings;
@@ -363,6 +366,9 @@ class DynamicDetector {
 
  private:
   void densify(const StereoFrame& frame, DetectorResult& result);
+  // While the AGV drives, the left strip's candidate movers (BandSegmenter::driving_seeds) that the epipolar or the
+  // depth test flags join this frame's dynamic points (band.driving_seed_offset_px).
+  void add_band_driving_seeds(const StereoFrame& frame, DetectorResult& result);
   // The multi-frame test of this frame's densified points (extra_*), into extra_mf_ / extra_mf_px_.
   void test_densified_multiframe(const StereoFrame& frame, const DetectorResult& result);
   // The multi-frame test's depth-edge and stereo checks of a point with this disparity (multiframe.edge_check_*,
@@ -409,6 +415,8 @@ class DynamicDetector {
   ObjectOutliner outliner_;
   EdgeRefiner edge_refiner_;
   BandSegmenter band_;
+  std::vector<BandSeed> driving_seeds_;
+  std::vector<cv::Point2f> band_track_cur_;
 
   bool has_previous_ = false;
   std::vector<cv::Mat> prev_pyramid_, cur_pyramid_;

@@ -81,7 +81,7 @@ struct OutlineConfig {
   // object entering or leaving at the left border has no disparity there (nor an outline). In each row where the
   // outline reaches within left_band_touch_px of that band (x < median d of the outline), the row is filled from
   // the image border to the outline. The detector applies it. -1 = off.
-  int left_band_touch_px = -1;
+  int left_band_touch_px = 3;
 
   void validate(const std::string& source) const;
   std::string describe() const;
