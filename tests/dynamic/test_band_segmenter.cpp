@@ -69,21 +69,29 @@ struct BandRun {
   cv::Mat gt, found;  // the box's pixels in the strip, the regions' pixels
 };
 
+// The two renders (the box's right side at right0_px, then at right1_px seen from T_w_c1; T_w_c0 = identity, so
+// T_w_c1.inverse() is the motion T_cur_prev mapping frame-0 points into frame 1) with their LK pyramids.
+struct TwoFrames {
+  cv::Mat gt, prev, cur;  // gt: the box's pixels in the current image (declared first: cur's render fills it)
+  LkTracker tracker;
+  std::vector<cv::Mat> prev_pyramid, cur_pyramid;
+  TwoFrames(double right0_px, double right1_px, const SE3d& T_w_c1)
+      : prev(render_left(right0_px, SE3d::Identity(), 0)), cur(render_left(right1_px, T_w_c1, 1, &gt)) {
+    tracker.build_pyramid(prev, prev_pyramid);
+    tracker.build_pyramid(cur, cur_pyramid);
+  }
+};
+
 BandRun run_band(double right0_px, double right1_px, const SE3d& T_w_c1, const BandSegmenterConfig& config = {},
                  const std::vector<cv::Point2f>& track_prev = {}, const std::vector<cv::Point2f>& track_cur = {}) {
   BandRun run;
-  const cv::Mat prev = render_left(right0_px, SE3d::Identity(), 0);
-  const cv::Mat cur = render_left(right1_px, T_w_c1, 1, &run.gt);
-  LkTracker tracker;
-  std::vector<cv::Mat> prev_pyramid, cur_pyramid;
-  tracker.build_pyramid(prev, prev_pyramid);
-  tracker.build_pyramid(cur, cur_pyramid);
+  TwoFrames f(right0_px, right1_px, T_w_c1);
+  run.gt = f.gt;
   BandSegmenter band(config);
-  // T_w_c0 = identity: the motion T_cur_prev maps frame-0 points into frame 1.
-  band.segment(cur, prev, cur_pyramid, prev_pyramid, tracker, -1, camera(), bf(), T_w_c1.inverse(),
-               cv::Mat::zeros(cur.size(), CV_8UC1), track_prev, track_cur, run.result);
+  band.segment(f.cur, f.prev, f.cur_pyramid, f.prev_pyramid, f.tracker, -1, camera(), bf(), T_w_c1.inverse(),
+               cv::Mat::zeros(f.cur.size(), CV_8UC1), track_prev, track_cur, run.result);
   run.gt.colRange(config.strip_px, run.gt.cols).setTo(0);
-  run.found = cv::Mat::zeros(cur.size(), CV_8UC1);
+  run.found = cv::Mat::zeros(f.cur.size(), CV_8UC1);
   for (const BandRegion& r : run.result.regions) run.found(r.rect).setTo(255, r.mask);
   return run;
 }
@@ -186,15 +194,11 @@ struct DrivingRun {
 DrivingRun run_driving(double right0_px, double right1_px, const SE3d& T_w_c1, const BandSegmenterConfig& config = {},
                        const std::vector<cv::Point2f>& track_cur = {}) {
   DrivingRun run;
-  const cv::Mat prev = render_left(right0_px, SE3d::Identity(), 0);
-  const cv::Mat cur = render_left(right1_px, T_w_c1, 1, &run.gt);
-  LkTracker tracker;
-  std::vector<cv::Mat> prev_pyramid, cur_pyramid;
-  tracker.build_pyramid(prev, prev_pyramid);
-  tracker.build_pyramid(cur, cur_pyramid);
+  TwoFrames f(right0_px, right1_px, T_w_c1);
+  run.gt = f.gt;
   BandSegmenter band(config);
-  run.ran = band.driving_seeds(cur, cur_pyramid, prev_pyramid, tracker, -1, camera(), bf(), T_w_c1.inverse(), track_cur,
-                               run.seeds);
+  run.ran = band.driving_seeds(f.cur, f.cur_pyramid, f.prev_pyramid, f.tracker, -1, camera(), bf(), T_w_c1.inverse(),
+                               track_cur, run.seeds);
   return run;
 }
 
