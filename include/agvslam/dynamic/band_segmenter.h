@@ -22,7 +22,8 @@
 //    seed, inside the strip; rows that reach within edge_fill_px of the image's left edge are filled to it.
 // Frames whose segments are longer than max_static_segment_px somewhere in the strip are skipped: there a static
 // point at some depth could explain a few pixels of motion, and textured surfaces next to depth edges would pass
-// for movers. The caller decides what a region becomes (DynamicDetector: the band part of an object of its mask
+// for movers; there driving_seeds() gives only candidate movers (corners off their segments) for the caller's own
+// motion tests. The caller decides what a region becomes (DynamicDetector: the band part of an object of its mask
 // that the region touches, or an upright object of its own).
 
 #include <opencv2/core.hpp>
@@ -106,10 +107,6 @@ class BandSegmenter {
   double static_segment_distance(const PinholeCamera& camera, double bf_px_m, const SE3d& T_cur_prev,
                                  const cv::Point2f& cur_px, const cv::Point2f& prev_px) const;
 
-  // cur_left / prev_left: CV_8UC1 images of the current and the previous frame; cur_pyramid / prev_pyramid their
-  // LK pyramids (LkTracker::build_pyramid), tracked back with `tracker` on `lk_levels` levels (< 0: its default);
-  // masked: CV_8UC1 of the image size (non-zero = already dynamic: no seeds there, regions stop there);
-  // track_prev / track_cur: correspondences the caller has already (its LK tracks, any part of the image).
   // The longest static segment over the strip's corners and the middle of its sides (the strip is where the
   // segments are longest: farthest from the focus of expansion of forward motion).
   double longest_static_segment(const PinholeCamera& camera, double bf_px_m, const SE3d& T_cur_prev, cv::Size image) const;
@@ -124,6 +121,10 @@ class BandSegmenter {
                      const PinholeCamera& camera, double bf_px_m, const SE3d& T_cur_prev,
                      const std::vector<cv::Point2f>& track_cur, std::vector<BandSeed>& seeds);
 
+  // cur_left / prev_left: CV_8UC1 images of the current and the previous frame; cur_pyramid / prev_pyramid their
+  // LK pyramids (LkTracker::build_pyramid), tracked back with `tracker` on `lk_levels` levels (< 0: its default);
+  // masked: CV_8UC1 of the image size (non-zero = already dynamic: no seeds there, regions stop there);
+  // track_prev / track_cur: correspondences the caller has already (its LK tracks, any part of the image).
   void segment(const cv::Mat& cur_left, const cv::Mat& prev_left, const std::vector<cv::Mat>& cur_pyramid,
                const std::vector<cv::Mat>& prev_pyramid, LkTracker& tracker, int lk_levels,
                const PinholeCamera& camera, double bf_px_m, const SE3d& T_cur_prev, const cv::Mat& masked,
