@@ -1690,31 +1690,12 @@ void DynamicDetector::add_band_driving_seeds(const StereoFrame& frame, DetectorR
   result.band_driving_seeds = static_cast<int>(driving_seeds_.size());
   for (const BandSeed& seed : driving_seeds_) {
     // A corner seen now but not by the tracks: its own disparities and the frame's tests, as a densified point.
-    TrackedPoint p;
-    p.prev_px = seed.prev_px;
-    p.cur_px = seed.cur_px;
-    p.cur_disparity_px = sparse_.match(frame.left, frame.right, p.cur_px);
-    p.prev_disparity_px = sparse_.match(prev_left_, prev_right_, p.prev_px);
-    p.tracked = true;
-    p.densified = true;
-    p.age = 1;
-    p.dynamic_epipolar = result.epipolar.valid && epipolar_.test_track(result.epipolar, p.prev_px, p.cur_px,
-                                                                       p.cur_disparity_px, &p.d_epi_px, &p.t_epi_px);
-    DepthConsistencyTest::residuals(calibration_.left, calibration_.bf(), result.depth.T_cur_prev, p.prev_px,
-                                    p.prev_disparity_px, p.cur_px, p.cur_disparity_px, p.reprojection_px,
-                                    p.disparity_residual_px);
-    p.dynamic_depth = depth_test_.is_dynamic(result.depth, p.reprojection_px, p.disparity_residual_px,
-                                             p.cur_disparity_px > 0 ? p.cur_disparity_px : p.prev_disparity_px);
-    const DetectorOptions& opt = config_.detector;
-    p.dynamic = (opt.use_epipolar_test && p.dynamic_epipolar) || (opt.use_depth_test && p.dynamic_depth);
+    const TrackedPoint p = tested_new_point(result, seed.prev_px, seed.cur_px,
+                                            sparse_.match(prev_left_, prev_right_, seed.prev_px),
+                                            sparse_.match(frame.left, frame.right, seed.cur_px), -1, false);
     if (!p.dynamic) continue;  // the others are not kept as tracks: the quadtree decides where tracks start
     ++result.band_driving_dynamic;
-    result.points.push_back(p);
-    history_.add(p.cur_px, p.cur_disparity_px);
-    history_.add_earlier(1, p.prev_px, p.prev_disparity_px);
-    dyn_pts_.push_back(p.cur_px);
-    dyn_disp_.push_back(p.cur_disparity_px);
-    dyn_index_.push_back(static_cast<int>(result.points.size() - 1));
+    append_new_point(result, p);
   }
 }
 
@@ -1849,34 +1830,46 @@ void DynamicDetector::densify(const StereoFrame& frame, DetectorResult& result) 
   test_densified_multiframe(frame, result);
   for (std::size_t i = 0; i < extra_prev_.size(); ++i) {
     if (!extra_ok_[i]) continue;
-    TrackedPoint p;
-    p.prev_px = extra_prev_[i];
-    p.cur_px = extra_cur_[i];
-    p.prev_disparity_px = extra_prev_disp_[i];
-    p.cur_disparity_px = extra_cur_disp_[i];
-    p.tracked = true;
-    p.densified = true;
-    p.age = 1;
-    p.dynamic_epipolar = epipolar_.test_track(result.epipolar, p.prev_px, p.cur_px, p.cur_disparity_px, &p.d_epi_px, &p.t_epi_px);
-    if (opt.use_depth_test && result.depth.valid) {
-      DepthConsistencyTest::residuals(calibration_.left, calibration_.bf(), result.depth.T_cur_prev, p.prev_px,
-                                      p.prev_disparity_px, p.cur_px, p.cur_disparity_px, p.reprojection_px,
-                                      p.disparity_residual_px);
-      p.dynamic_depth = depth_test_.is_dynamic(result.depth, p.reprojection_px, p.disparity_residual_px,
-                                               p.cur_disparity_px > 0 ? p.cur_disparity_px : p.prev_disparity_px);
-    }
-    p.multiframe_px = extra_mf_px_[i];
-    p.dynamic_multiframe = extra_mf_[i] != 0;
-    p.dynamic = (opt.use_epipolar_test && p.dynamic_epipolar) ||
-                (opt.use_depth_test && (p.dynamic_depth || p.dynamic_multiframe));
-    result.points.push_back(p);
-    history_.add(p.cur_px, p.cur_disparity_px);
-    history_.add_earlier(1, p.prev_px, p.prev_disparity_px);
-    if (p.dynamic) {
-      dyn_pts_.push_back(p.cur_px);
-      dyn_disp_.push_back(p.cur_disparity_px);
-      dyn_index_.push_back(static_cast<int>(result.points.size() - 1));
-    }
+    append_new_point(result, tested_new_point(result, extra_prev_[i], extra_cur_[i], extra_prev_disp_[i],
+                                              extra_cur_disp_[i], extra_mf_px_[i], extra_mf_[i] != 0));
+  }
+}
+
+TrackedPoint DynamicDetector::tested_new_point(const DetectorResult& result, const cv::Point2f& prev_px,
+                                               const cv::Point2f& cur_px, float prev_disparity_px, float cur_disparity_px,
+                                               double multiframe_px, bool dynamic_multiframe) const {
+  const DetectorOptions& opt = config_.detector;
+  TrackedPoint p;
+  p.prev_px = prev_px;
+  p.cur_px = cur_px;
+  p.prev_disparity_px = prev_disparity_px;
+  p.cur_disparity_px = cur_disparity_px;
+  p.tracked = true;
+  p.densified = true;
+  p.age = 1;
+  p.dynamic_epipolar = epipolar_.test_track(result.epipolar, p.prev_px, p.cur_px, p.cur_disparity_px, &p.d_epi_px, &p.t_epi_px);
+  if (opt.use_depth_test && result.depth.valid) {
+    DepthConsistencyTest::residuals(calibration_.left, calibration_.bf(), result.depth.T_cur_prev, p.prev_px,
+                                    p.prev_disparity_px, p.cur_px, p.cur_disparity_px, p.reprojection_px,
+                                    p.disparity_residual_px);
+    p.dynamic_depth = depth_test_.is_dynamic(result.depth, p.reprojection_px, p.disparity_residual_px,
+                                             p.cur_disparity_px > 0 ? p.cur_disparity_px : p.prev_disparity_px);
+  }
+  p.multiframe_px = multiframe_px;
+  p.dynamic_multiframe = dynamic_multiframe;
+  p.dynamic = (opt.use_epipolar_test && p.dynamic_epipolar) ||
+              (opt.use_depth_test && (p.dynamic_depth || p.dynamic_multiframe));
+  return p;
+}
+
+void DynamicDetector::append_new_point(DetectorResult& result, const TrackedPoint& p) {
+  result.points.push_back(p);
+  history_.add(p.cur_px, p.cur_disparity_px);
+  history_.add_earlier(1, p.prev_px, p.prev_disparity_px);
+  if (p.dynamic) {
+    dyn_pts_.push_back(p.cur_px);
+    dyn_disp_.push_back(p.cur_disparity_px);
+    dyn_index_.push_back(static_cast<int>(result.points.size() - 1));
   }
 }
 

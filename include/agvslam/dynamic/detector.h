@@ -369,6 +369,13 @@ class DynamicDetector {
   // While the AGV drives, the left strip's candidate movers (BandSegmenter::driving_seeds) that the epipolar or the
   // depth test flags join this frame's dynamic points (band.driving_seed_offset_px).
   void add_band_driving_seeds(const StereoFrame& frame, DetectorResult& result);
+  // A point this frame adds beside the tracks (densification, the band's driving seeds), tracked from prev_px to
+  // cur_px: the frame's epipolar and depth tests on it; its multi-frame result comes from the caller.
+  TrackedPoint tested_new_point(const DetectorResult& result, const cv::Point2f& prev_px, const cv::Point2f& cur_px,
+                                float prev_disparity_px, float cur_disparity_px, double multiframe_px,
+                                bool dynamic_multiframe) const;
+  // Appends such a point to the frame's points and to the track history (and, when dynamic, to dyn_pts_ & co.).
+  void append_new_point(DetectorResult& result, const TrackedPoint& p);
   // The multi-frame test of this frame's densified points (extra_*), into extra_mf_ / extra_mf_px_.
   void test_densified_multiframe(const StereoFrame& frame, const DetectorResult& result);
   // The multi-frame test's depth-edge and stereo checks of a point with this disparity (multiframe.edge_check_*,
