@@ -280,9 +280,55 @@ void DynamicDetector::measure_point_disparities(const StereoFrame& frame, const 
 void DynamicDetector::detect(const StereoFrame& frame, DetectorResult& result) {
   const auto t_start = Clock::now();
   CV_Assert(frame.left.type() == CV_8UC1 && frame.right.type() == CV_8UC1 && frame.left.size() == frame.right.size());
-  const cv::Size size = frame.left.size();
   const DetectorOptions& opt = config_.detector;
+  begin_frame(frame, result);
+  StageTimings& tm = result.timings;
 
+  auto t = Clock::now();
+  if (opt.full_frame_disparity) {
+    sgbm_.compute(frame.left, frame.right, result.full_disparity_px);
+  } else {
+    result.full_disparity_px.release();
+  }
+  tm.point_disparity_ms += ms_since(t);
+
+  t = Clock::now();
+  tracker_.build_pyramid(frame.left, cur_pyramid_);
+  tm.pyramid_ms = ms_since(t);
+
+  if (result.has_previous) {
+    track_and_test(frame, result);
+    collect_points(result);
+    t = Clock::now();
+    if (config_.band.enabled && result.depth.valid && !prev_left_.empty()) add_band_driving_seeds(frame, result);
+    tm.band_ms += ms_since(t);
+    t = Clock::now();
+    if (opt.densify && opt.densify_max_points > 0 && !prev_left_.empty()) densify(frame, result);
+    tm.densify_ms = ms_since(t);
+    std::vector<DynamicGroup> groups;
+    group_dynamic(result, groups);
+    int next_instance = 1;
+    outline_groups(frame, result, groups, next_instance);
+    finish_mask(frame, result, next_instance);
+  }
+  replenish_tracks(frame, result);
+  confirm_objects(result);
+
+  std::swap(prev_pyramid_, cur_pyramid_);
+  if (opt.densify || config_.photometric.enabled || config_.band.enabled || config_.motion_carve.enabled) {
+    frame.left.copyTo(prev_left_);
+    frame.right.copyTo(prev_right_);
+  }
+  has_previous_ = true;
+  tm.total_ms = ms_since(t_start);
+}
+
+bool DynamicDetector::tracks_objects() const {
+  return config_.detector.track_objects && config_.regions.mask_mode == MaskMode::kDisparity;
+}
+
+void DynamicDetector::begin_frame(const StereoFrame& frame, DetectorResult& result) {
+  const cv::Size size = frame.left.size();
   result.frame_index = frame.index;
   result.t_ns = frame.t_ns;
   // A frame of another size than the previous one (a new camera mode) starts over.
@@ -305,372 +351,382 @@ void DynamicDetector::detect(const StereoFrame& frame, DetectorResult& result) {
   result.band_joined = result.band_objects = 0;
   result.band_driving_seeds = result.band_driving_dynamic = 0;
   result.timings = StageTimings{};
-  StageTimings& tm = result.timings;
   static_offset_median_px_ = -1;
+}
 
+void DynamicDetector::track_and_test(const StereoFrame& frame, DetectorResult& result) {
+  const DetectorOptions& opt = config_.detector;
+  StageTimings& tm = result.timings;
+  // Tracks and their disparity in the current frame.
   auto t = Clock::now();
-  if (opt.full_frame_disparity) {
-    sgbm_.compute(frame.left, frame.right, result.full_disparity_px);
-  } else {
-    result.full_disparity_px.release();
+  result.lk_levels = tracker_.levels_for_motion(last_max_motion_px_);
+  tracker_.track(prev_pyramid_, cur_pyramid_, prev_pts_, cur_pts_, tracked_, result.lk_levels);
+  // The largest motion among this frame's tracks chooses the next frame's levels (unknown without tracks).
+  float max_motion2 = -1;
+  for (std::size_t i = 0; i < tracked_.size(); ++i) {
+    if (!tracked_[i]) continue;
+    const cv::Point2f m = cur_pts_[i] - prev_pts_[i];
+    max_motion2 = std::max(max_motion2, m.dot(m));
   }
+  last_max_motion_px_ = max_motion2 < 0 ? -1.0 : std::sqrt(static_cast<double>(max_motion2));
+  tm.tracking_ms = ms_since(t);
+  t = Clock::now();
+  usable_ = tracked_;
+  measure_point_disparities(frame, cur_pts_, cur_disparity_px_, result.full_disparity_px);
+  usable_.clear();
   tm.point_disparity_ms += ms_since(t);
 
+  // The two motion tests.
   t = Clock::now();
-  tracker_.build_pyramid(frame.left, cur_pyramid_);
-  tm.pyramid_ms = ms_since(t);
-
-  if (result.has_previous) {
-    // Tracks and their disparity in the current frame.
-    t = Clock::now();
-    result.lk_levels = tracker_.levels_for_motion(last_max_motion_px_);
-    tracker_.track(prev_pyramid_, cur_pyramid_, prev_pts_, cur_pts_, tracked_, result.lk_levels);
-    // The largest motion among this frame's tracks chooses the next frame's levels (unknown without tracks).
-    float max_motion2 = -1;
-    for (std::size_t i = 0; i < tracked_.size(); ++i) {
-      if (!tracked_[i]) continue;
-      const cv::Point2f m = cur_pts_[i] - prev_pts_[i];
-      max_motion2 = std::max(max_motion2, m.dot(m));
-    }
-    last_max_motion_px_ = max_motion2 < 0 ? -1.0 : std::sqrt(static_cast<double>(max_motion2));
-    tm.tracking_ms = ms_since(t);
-    t = Clock::now();
-    usable_ = tracked_;
-    measure_point_disparities(frame, cur_pts_, cur_disparity_px_, result.full_disparity_px);
-    usable_.clear();
-    tm.point_disparity_ms += ms_since(t);
-
-    // The two motion tests.
-    t = Clock::now();
-    epipolar_.run(prev_pts_, cur_pts_, tracked_, cur_disparity_px_, result.epipolar);
-    tm.epipolar_ms = ms_since(t);
-    t = Clock::now();
-    if (opt.use_depth_test) {
-      depth_test_.run(calibration_.left, calibration_.bf(), prev_pts_, prev_disparity_px_, cur_pts_, cur_disparity_px_,
-                      tracked_, result.depth);
-    }
-    tm.depth_test_ms = ms_since(t);
-    // The tracks' histories move to this frame; the multi-frame test compares them with an earlier frame.
-    t = Clock::now();
-    consistent_.assign(prev_pts_.size(), 0);
-    if (result.depth.valid) {
-      for (std::size_t i = 0; i < consistent_.size(); ++i) {
-        const double r_disp = result.depth.disparity_residual_px[i];
-        const bool measured = tracked_[i] && result.depth.reprojection_px[i] >= 0 && r_disp >= 0;
-        if (!measured) continue;
-        if (!result.depth.dynamic[i]) {
-          consistent_[i] = TrackHistory::kStepConsistent;
-        } else if (!depth_test_.disparity_off(result.depth, r_disp, cur_disparity_px_[i])) {
-          consistent_[i] = TrackHistory::kStepStereoOnly;
-        }
+  epipolar_.run(prev_pts_, cur_pts_, tracked_, cur_disparity_px_, result.epipolar);
+  tm.epipolar_ms = ms_since(t);
+  t = Clock::now();
+  if (opt.use_depth_test) {
+    depth_test_.run(calibration_.left, calibration_.bf(), prev_pts_, prev_disparity_px_, cur_pts_, cur_disparity_px_,
+                    tracked_, result.depth);
+  }
+  tm.depth_test_ms = ms_since(t);
+  // The tracks' histories move to this frame; the multi-frame test compares them with an earlier frame.
+  t = Clock::now();
+  consistent_.assign(prev_pts_.size(), 0);
+  if (result.depth.valid) {
+    for (std::size_t i = 0; i < consistent_.size(); ++i) {
+      const double r_disp = result.depth.disparity_residual_px[i];
+      const bool measured = tracked_[i] && result.depth.reprojection_px[i] >= 0 && r_disp >= 0;
+      if (!measured) continue;
+      if (!result.depth.dynamic[i]) {
+        consistent_[i] = TrackHistory::kStepConsistent;
+      } else if (!depth_test_.disparity_off(result.depth, r_disp, cur_disparity_px_[i])) {
+        consistent_[i] = TrackHistory::kStepStereoOnly;
       }
-    }
-    history_.next_frame(cur_pts_, cur_disparity_px_, consistent_);
-    multiframe_.add_frame(result.depth.T_cur_prev, opt.use_depth_test && result.depth.valid, frame.left);
-    if (opt.use_depth_test) {
-      multiframe_.run(calibration_.left, calibration_.bf(), history_, tracked_, cur_pyramid_, config_.tracking,
-                      result.multiframe);
-    } else {
-      result.multiframe = MultiFrameResult{};
-    }
-    // Depth-edge check of the tracks only the multi-frame test flags.
-    const MultiFrameTestConfig& mf = config_.multiframe;
-    if (result.multiframe.valid && mf.edge_check_px > 0) {
-      for (std::size_t i = 0; i < result.multiframe.test.dynamic.size(); ++i) {
-        if (!result.multiframe.test.dynamic[i] || result.depth.dynamic.empty() || result.depth.dynamic[i] ||
-            (!result.epipolar.dynamic.empty() && result.epipolar.dynamic[i])) {
-          continue;
-        }
-        if (on_depth_edge_or_ambiguous(frame, cur_pts_[i], cur_disparity_px_[i])) result.multiframe.test.dynamic[i] = 0;
-      }
-    }
-    tm.multiframe_ms = ms_since(t);
-
-    const std::size_t n = prev_pts_.size();
-    result.points.resize(n);
-    dyn_pts_.clear();
-    dyn_disp_.clear();
-    dyn_index_.clear();
-    for (std::size_t i = 0; i < n; ++i) {
-      TrackedPoint& p = result.points[i];
-      p = TrackedPoint{};
-      p.prev_px = prev_pts_[i];
-      p.cur_px = cur_pts_[i];
-      p.prev_disparity_px = prev_disparity_px_[i];
-      p.cur_disparity_px = cur_disparity_px_[i];
-      p.tracked = tracked_[i] != 0;
-      p.age = history_.age(i);
-      if (!p.tracked) continue;
-      if (result.epipolar.valid) {
-        p.d_epi_px = result.epipolar.d_epi_px[i];
-        p.t_epi_px = result.epipolar.t_epi_px[i];
-        p.dynamic_epipolar = result.epipolar.dynamic[i] != 0;
-      }
-      if (result.depth.valid) {
-        p.reprojection_px = result.depth.reprojection_px[i];
-        p.disparity_residual_px = result.depth.disparity_residual_px[i];
-        p.dynamic_depth = result.depth.dynamic[i] != 0;
-      }
-      if (result.multiframe.valid) {
-        p.multiframe_px = result.multiframe.test.reprojection_px[i];
-        p.multiframe_disparity_residual_px = result.multiframe.test.disparity_residual_px[i];
-        p.dynamic_multiframe = result.multiframe.test.dynamic[i] != 0;
-      }
-      p.dynamic = (opt.use_epipolar_test && p.dynamic_epipolar) ||
-                  (opt.use_depth_test && (p.dynamic_depth || p.dynamic_multiframe));
-      if (p.dynamic) {
-        dyn_pts_.push_back(p.cur_px);
-        dyn_disp_.push_back(p.cur_disparity_px);
-        dyn_index_.push_back(static_cast<int>(i));
-      }
-    }
-
-    t = Clock::now();
-    if (config_.band.enabled && result.depth.valid && !prev_left_.empty()) add_band_driving_seeds(frame, result);
-    tm.band_ms += ms_since(t);
-    t = Clock::now();
-    if (opt.densify && opt.densify_max_points > 0 && !prev_left_.empty()) densify(frame, result);
-    tm.densify_ms = ms_since(t);
-
-    // Dynamic ROIs.
-    t = Clock::now();
-    const bool objects = opt.track_objects && config_.regions.mask_mode == MaskMode::kDisparity;
-    RoiGroupingConfig grouping = config_.grouping;
-    if (objects) grouping.min_points = std::min(grouping.min_points, opt.continue_min_points);
-    std::vector<DynamicGroup> groups = group_dynamic_points(dyn_pts_, dyn_disp_, size, grouping, calibration_.baseline_m);
-    // A group smaller than grouping.min_points is a ROI only when continue_min_points of it belong to one object
-    // of the previous frame; each group takes over the object most of its points belong to.
-    group_object_.clear();
-    {
-      std::vector<DynamicGroup> kept;
-      for (DynamicGroup& g : groups) {
-        int object = -1, votes = 0;
-        if (objects) {
-          for (int m : g.members) {
-            const int idx = dyn_index_[static_cast<std::size_t>(m)];
-            const int o = static_cast<std::size_t>(idx) < track_object_.size() ? track_object_[static_cast<std::size_t>(idx)] : -1;
-            if (o < 0) continue;
-            int count = 0;
-            for (int m2 : g.members) {
-              const int idx2 = dyn_index_[static_cast<std::size_t>(m2)];
-              count += static_cast<std::size_t>(idx2) < track_object_.size() && track_object_[static_cast<std::size_t>(idx2)] == o;
-            }
-            if (count > votes) {
-              votes = count;
-              object = o;
-            }
-          }
-        }
-        if (static_cast<int>(g.members.size()) < config_.grouping.min_points && votes < opt.continue_min_points) continue;
-        if (votes < opt.continue_min_points) object = -1;
-        // Groups are largest first: a smaller group continuing an object that a larger one continues already is
-        // a part of it (its flood reaches the same connected pixels), not a second object.
-        if (object >= 0 && std::find(group_object_.begin(), group_object_.end(), object) != group_object_.end() &&
-            static_cast<int>(g.members.size()) < config_.grouping.min_points) {
-          continue;
-        }
-        group_object_.push_back(object);
-        kept.push_back(std::move(g));
-      }
-      groups = std::move(kept);
-    }
-    if (static_cast<int>(groups.size()) > opt.max_rois) {
-      groups.resize(static_cast<std::size_t>(opt.max_rois));
-      group_object_.resize(groups.size());
-    }
-    tm.grouping_ms = ms_since(t);
-
-    // The floor in disparity space, from the static points below the principal point (ground veto).
-    const bool coasting = objects && opt.coast_max_frames > 0 && !objects_.empty();
-    if ((!groups.empty() || coasting) && (config_.regions.ground_veto || opt.extend_to_floor)) {
-      static_pts_.clear();
-      static_disp_.clear();
-      for (const TrackedPoint& p : result.points) {
-        if (!p.tracked || p.dynamic || !(p.cur_disparity_px > 0)) continue;
-        static_pts_.push_back(p.cur_px);
-        static_disp_.push_back(p.cur_disparity_px);
-      }
-      result.ground_plane = fit_ground_plane(static_pts_, static_disp_, calibration_.left.cy);
-    }
-
-    result.rois.resize(groups.size());
-    int next_instance = 1;
-    instance_object_.assign(1, -1);
-    instance_near_moving_.assign(1, 0);
-    kept_regions_.clear();
-    auto process_group = [&](std::size_t g) {
-      RoiSegmentation& seg = result.rois[g];
-      const DynamicGroup& group = groups[g];
-      seg.coasted = coast_group_[g] != 0;
-      seg.roi = group.roi;
-      seg.mean_disparity_px = group.mean_disparity_px;
-      // Objects stand on the floor: when the group's lowest corner is well above the floor row at the group's
-      // disparity (legs without corners), the ROI reaches down to that row so the outline can include them.
-      if (opt.extend_to_floor && result.ground_plane.valid && result.ground_plane.b > 0) {
-        const DisparityPlane& gp = result.ground_plane;
-        const double x_mid = seg.roi.x + 0.5 * seg.roi.width;
-        const double d_near = group.mean_disparity_px + config_.grouping.t_disp_px + config_.grouping.t_disp_rel * group.mean_disparity_px;
-        const double y_floor = (d_near - gp.c - gp.a * x_mid) / gp.b;
-        const int margin = config_.grouping.margin_px;
-        const int bottom = std::min(size.height, static_cast<int>(std::ceil(y_floor)) + margin);
-        if (bottom > seg.roi.br().y && y_floor > seg.roi.y) seg.roi.height = bottom - seg.roi.y;
-        // ... and up to the top of an object of extend_to_height_m standing there (h * d / B px above the floor).
-        if (opt.extend_to_height_m > 0 && y_floor > seg.roi.y) {
-          const double baseline_m = calibration_.bf() / calibration_.left.fx;
-          const int top = std::max(0, static_cast<int>(std::floor(y_floor - opt.extend_to_height_m * group.mean_disparity_px / baseline_m)));
-          if (top < seg.roi.y) {
-            seg.roi.height += seg.roi.y - top;
-            seg.roi.y = top;
-          }
-        }
-      }
-      // An object near the left border may reach into the band without stereo matches (x < d): the ROI then
-      // starts at the border, so the outline can be completed there (outline.left_band_touch_px).
-      if (config_.outline.left_band_touch_px >= 0 && seg.roi.x > 0 && seg.roi.x <= 1.5 * group.mean_disparity_px) {
-        seg.roi.width += seg.roi.x;
-        seg.roi.x = 0;
-      }
-      seg.points.clear();
-      group_pts_.clear();
-      group_disp_.clear();
-      for (int m : group.members) {
-        const int idx = dyn_index_[static_cast<std::size_t>(m)];
-        seg.points.push_back(idx);
-        result.points[static_cast<std::size_t>(idx)].group = static_cast<int>(g);
-        group_pts_.push_back(dyn_pts_[static_cast<std::size_t>(m)]);
-        group_disp_.push_back(dyn_disp_[static_cast<std::size_t>(m)]);
-      }
-      seg.object_id = group_object_[g];
-      if (seg.roi.empty()) return;
-
-      t = Clock::now();
-      seg.half_scale = false;
-      if (opt.full_frame_disparity) {
-        result.full_disparity_px(seg.roi).copyTo(seg.disparity_px);
-      } else {
-        float max_d = 0;
-        for (float dd : group_disp_) max_d = std::max(max_d, dd);
-        const bool half = config_.regions.mask_mode == MaskMode::kDisparity && opt.half_scale_min_area_px > 0 &&
-                          seg.roi.area() > opt.half_scale_min_area_px;
-        seg.half_scale = half || opt.roi_scale != 1.0;
-        roi_max_disparity_px_ = static_cast<int>(std::ceil(max_d + opt.roi_disparity_margin_px));
-        roi_scale_used_ = half ? 0.5 : opt.roi_scale;
-        // Widening strips are matched like their ROI.
-        roi_row_step_used_ = seg.roi.area() >= opt.roi_row_step_min_area_px ? opt.roi_row_step : 1;
-        roi_disparity(frame, seg.roi, roi_max_disparity_px_, roi_scale_used_, seg.disparity_px);
-      }
-      tm.roi_disparity_ms += ms_since(t);
-
-      if (config_.regions.mask_mode == MaskMode::kDisparity) {
-        // The outline from the ROI's disparity (no SLIC, planes or boundaries).
-        t = Clock::now();
-        widen_ms_ = 0;
-        carve_ms_ = 0;
-        outline_region(frame, result, seg, next_instance);
-        tm.regions_ms += ms_since(t) - widen_ms_ - carve_ms_;
-        tm.motion_carve_ms += carve_ms_;
-        tm.roi_disparity_ms += widen_ms_;
-        return;
-      }
-
-      t = Clock::now();
-      if (opt.roi_scale == 1.0) {
-        seg.superpixels = slic_.segment(frame.left(seg.roi), seg.labels, &seg.slic);
-      } else {
-        cv::resize(frame.left(seg.roi), small_grey_, cv::Size(), opt.roi_scale, opt.roi_scale, cv::INTER_AREA);
-        seg.superpixels = slic_half_.segment(small_grey_, small_labels_, &seg.slic);
-        cv::resize(small_labels_, seg.labels, seg.roi.size(), 0, 0, cv::INTER_NEAREST);
-      }
-      tm.slic_ms += ms_since(t);
-
-      t = Clock::now();
-      fit_superpixel_planes(seg.labels, seg.superpixels, seg.disparity_px, seg.roi.tl(), config_.planes, seg.planes,
-                            opt.roi_scale == 1.0 ? 1 : 2);
-      tm.planes_ms += ms_since(t);
-
-      t = Clock::now();
-      graph_.build(seg.labels, seg.superpixels, seg.roi.tl());
-      label_boundaries(graph_, seg.planes, config_.boundaries);
-      seg.boundaries = graph_.boundaries();
-      tm.boundaries_ms += ms_since(t);
-
-      t = Clock::now();
-      static_pts_.clear();
-      static_disp_.clear();
-      for (const TrackedPoint& p : result.points) {
-        if (!p.tracked || p.dynamic || !seg.roi.contains(cv::Point(cvRound(p.cur_px.x), cvRound(p.cur_px.y)))) continue;
-        static_pts_.push_back(p.cur_px);
-        static_disp_.push_back(p.cur_disparity_px);
-      }
-      const std::vector<char>* moves_with_background = nullptr;
-      if (config_.photometric.enabled && result.depth.valid && !prev_left_.empty()) {
-        check_superpixel_motion(frame.left, prev_left_, calibration_.left, calibration_.bf(), result.depth.T_cur_prev,
-                                seg.labels, seg.roi.tl(), seg.planes, config_.photometric, seg.motion);
-        background_flags_.assign(seg.motion.size(), 0);
-        for (std::size_t k = 0; k < seg.motion.size(); ++k) background_flags_[k] = seg.motion[k].moves_with_background ? 1 : 0;
-        moves_with_background = &background_flags_;
-      } else {
-        seg.motion.clear();
-      }
-      seg.region = find_dynamic_region(seg.labels, seg.roi.tl(), graph_, seg.planes, group_pts_, group_disp_,
-                                       config_.regions, static_pts_, static_disp_,
-                                       result.ground_plane.valid ? &result.ground_plane : nullptr, moves_with_background);
-      if (!seg.region.rectangle.empty()) {
-        const cv::Rect rect = seg.region.rectangle & cv::Rect(cv::Point(0, 0), size);
-        result.mask.regions.push_back(rect);
-        region_mask_.create(size, CV_8UC1);
-        region_mask_(rect).setTo(0);
-        paint_region(seg.region, seg.labels, seg.roi.tl(), config_.regions.mask_mode, region_mask_);
-        next_instance = label_region_objects(region_mask_(rect), opt.split_side_by_side, next_instance,
-                                      result.mask.instances(rect));
-      }
-      tm.regions_ms += ms_since(t);
-    };
-    coast_group_.assign(groups.size(), 0);
-    for (std::size_t g = 0; g < groups.size(); ++g) process_group(g);
-    // Objects of earlier frames that no region of this frame continues coast on their own tracks.
-    if (coasting) {
-      const std::size_t first_coasted = groups.size();
-      add_coasting_groups(result, size, groups);
-      result.rois.resize(groups.size());
-      coast_group_.resize(groups.size(), 1);
-      for (std::size_t g = first_coasted; g < groups.size(); ++g) process_group(g);
-    }
-    carried_.clear();
-    if (objects && opt.band_carry_max_frames > 0 && !objects_.empty()) carry_band_masks(result, next_instance);
-    if (config_.band.enabled && result.depth.valid && !prev_left_.empty()) {
-      t = Clock::now();
-      band_prev_.clear();
-      band_cur_.clear();
-      for (const TrackedPoint& p : result.points) {
-        if (!p.tracked || p.cur_px.x >= config_.band.strip_px) continue;
-        band_prev_.push_back(p.prev_px);
-        band_cur_.push_back(p.cur_px);
-      }
-      band_.segment(frame.left, prev_left_, cur_pyramid_, prev_pyramid_, tracker_, result.lk_levels, calibration_.left,
-                    calibration_.bf(), result.depth.T_cur_prev, result.mask.instances, band_prev_, band_cur_, result.band);
-      add_band_regions(result, next_instance);
-      tm.band_ms += ms_since(t);
-    }
-    if (opt.mask_dilation_px > 0 && !result.mask.regions.empty()) {
-      const int k = 2 * opt.mask_dilation_px + 1;
-      cv::dilate(result.mask.instances, dilated_, cv::getStructuringElement(cv::MORPH_ELLIPSE, cv::Size(k, k)));
-      dilated_.copyTo(result.mask.instances);
-    }
-    cv::compare(result.mask.instances, 0, result.mask.image, cv::CMP_GT);
-    if (objects) update_objects(result);
-    // Each object's pixels, for the next frame's growth check (detector.growth_max_ratio).
-    if (objects && opt.growth_max_ratio > 0 && !result.mask.regions.empty()) {
-      result.mask.instances.copyTo(prev_instances_);
-      prev_instance_object_ = instance_object_;
-    } else {
-      prev_instances_.release();
     }
   }
+  history_.next_frame(cur_pts_, cur_disparity_px_, consistent_);
+  multiframe_.add_frame(result.depth.T_cur_prev, opt.use_depth_test && result.depth.valid, frame.left);
+  if (opt.use_depth_test) {
+    multiframe_.run(calibration_.left, calibration_.bf(), history_, tracked_, cur_pyramid_, config_.tracking,
+                    result.multiframe);
+  } else {
+    result.multiframe = MultiFrameResult{};
+  }
+  // Depth-edge check of the tracks only the multi-frame test flags.
+  const MultiFrameTestConfig& mf = config_.multiframe;
+  if (result.multiframe.valid && mf.edge_check_px > 0) {
+    for (std::size_t i = 0; i < result.multiframe.test.dynamic.size(); ++i) {
+      if (!result.multiframe.test.dynamic[i] || result.depth.dynamic.empty() || result.depth.dynamic[i] ||
+          (!result.epipolar.dynamic.empty() && result.epipolar.dynamic[i])) {
+        continue;
+      }
+      if (on_depth_edge_or_ambiguous(frame, cur_pts_[i], cur_disparity_px_[i])) result.multiframe.test.dynamic[i] = 0;
+    }
+  }
+  tm.multiframe_ms = ms_since(t);
+}
 
+void DynamicDetector::collect_points(DetectorResult& result) {
+  const DetectorOptions& opt = config_.detector;
+  const std::size_t n = prev_pts_.size();
+  result.points.resize(n);
+  dyn_pts_.clear();
+  dyn_disp_.clear();
+  dyn_index_.clear();
+  for (std::size_t i = 0; i < n; ++i) {
+    TrackedPoint& p = result.points[i];
+    p = TrackedPoint{};
+    p.prev_px = prev_pts_[i];
+    p.cur_px = cur_pts_[i];
+    p.prev_disparity_px = prev_disparity_px_[i];
+    p.cur_disparity_px = cur_disparity_px_[i];
+    p.tracked = tracked_[i] != 0;
+    p.age = history_.age(i);
+    if (!p.tracked) continue;
+    if (result.epipolar.valid) {
+      p.d_epi_px = result.epipolar.d_epi_px[i];
+      p.t_epi_px = result.epipolar.t_epi_px[i];
+      p.dynamic_epipolar = result.epipolar.dynamic[i] != 0;
+    }
+    if (result.depth.valid) {
+      p.reprojection_px = result.depth.reprojection_px[i];
+      p.disparity_residual_px = result.depth.disparity_residual_px[i];
+      p.dynamic_depth = result.depth.dynamic[i] != 0;
+    }
+    if (result.multiframe.valid) {
+      p.multiframe_px = result.multiframe.test.reprojection_px[i];
+      p.multiframe_disparity_residual_px = result.multiframe.test.disparity_residual_px[i];
+      p.dynamic_multiframe = result.multiframe.test.dynamic[i] != 0;
+    }
+    p.dynamic = (opt.use_epipolar_test && p.dynamic_epipolar) ||
+                (opt.use_depth_test && (p.dynamic_depth || p.dynamic_multiframe));
+    if (p.dynamic) {
+      dyn_pts_.push_back(p.cur_px);
+      dyn_disp_.push_back(p.cur_disparity_px);
+      dyn_index_.push_back(static_cast<int>(i));
+    }
+  }
+}
+
+void DynamicDetector::group_dynamic(DetectorResult& result, std::vector<DynamicGroup>& groups) {
+  const DetectorOptions& opt = config_.detector;
+  const cv::Size size = result.mask.image.size();
+  // Dynamic ROIs.
+  const auto t = Clock::now();
+  const bool objects = tracks_objects();
+  RoiGroupingConfig grouping = config_.grouping;
+  if (objects) grouping.min_points = std::min(grouping.min_points, opt.continue_min_points);
+  groups = group_dynamic_points(dyn_pts_, dyn_disp_, size, grouping, calibration_.baseline_m);
+  // A group smaller than grouping.min_points is a ROI only when continue_min_points of it belong to one object
+  // of the previous frame; each group takes over the object most of its points belong to.
+  group_object_.clear();
+  {
+    std::vector<DynamicGroup> kept;
+    for (DynamicGroup& g : groups) {
+      int object = -1, votes = 0;
+      if (objects) {
+        for (int m : g.members) {
+          const int idx = dyn_index_[static_cast<std::size_t>(m)];
+          const int o = static_cast<std::size_t>(idx) < track_object_.size() ? track_object_[static_cast<std::size_t>(idx)] : -1;
+          if (o < 0) continue;
+          int count = 0;
+          for (int m2 : g.members) {
+            const int idx2 = dyn_index_[static_cast<std::size_t>(m2)];
+            count += static_cast<std::size_t>(idx2) < track_object_.size() && track_object_[static_cast<std::size_t>(idx2)] == o;
+          }
+          if (count > votes) {
+            votes = count;
+            object = o;
+          }
+        }
+      }
+      if (static_cast<int>(g.members.size()) < config_.grouping.min_points && votes < opt.continue_min_points) continue;
+      if (votes < opt.continue_min_points) object = -1;
+      // Groups are largest first: a smaller group continuing an object that a larger one continues already is
+      // a part of it (its flood reaches the same connected pixels), not a second object.
+      if (object >= 0 && std::find(group_object_.begin(), group_object_.end(), object) != group_object_.end() &&
+          static_cast<int>(g.members.size()) < config_.grouping.min_points) {
+        continue;
+      }
+      group_object_.push_back(object);
+      kept.push_back(std::move(g));
+    }
+    groups = std::move(kept);
+  }
+  if (static_cast<int>(groups.size()) > opt.max_rois) {
+    groups.resize(static_cast<std::size_t>(opt.max_rois));
+    group_object_.resize(groups.size());
+  }
+  result.timings.grouping_ms = ms_since(t);
+}
+
+void DynamicDetector::outline_groups(const StereoFrame& frame, DetectorResult& result,
+                                     std::vector<DynamicGroup>& groups, int& next_instance) {
+  const DetectorOptions& opt = config_.detector;
+  const cv::Size size = frame.left.size();
+  // The floor in disparity space, from the static points below the principal point (ground veto).
+  const bool coasting = tracks_objects() && opt.coast_max_frames > 0 && !objects_.empty();
+  if ((!groups.empty() || coasting) && (config_.regions.ground_veto || opt.extend_to_floor)) {
+    static_pts_.clear();
+    static_disp_.clear();
+    for (const TrackedPoint& p : result.points) {
+      if (!p.tracked || p.dynamic || !(p.cur_disparity_px > 0)) continue;
+      static_pts_.push_back(p.cur_px);
+      static_disp_.push_back(p.cur_disparity_px);
+    }
+    result.ground_plane = fit_ground_plane(static_pts_, static_disp_, calibration_.left.cy);
+  }
+
+  result.rois.resize(groups.size());
+  instance_object_.assign(1, -1);
+  instance_near_moving_.assign(1, 0);
+  kept_regions_.clear();
+  coast_group_.assign(groups.size(), 0);
+  for (std::size_t g = 0; g < groups.size(); ++g) outline_group(frame, result, groups, g, next_instance);
+  // Objects of earlier frames that no region of this frame continues coast on their own tracks.
+  if (coasting) {
+    const std::size_t first_coasted = groups.size();
+    add_coasting_groups(result, size, groups);
+    result.rois.resize(groups.size());
+    coast_group_.resize(groups.size(), 1);
+    for (std::size_t g = first_coasted; g < groups.size(); ++g) outline_group(frame, result, groups, g, next_instance);
+  }
+}
+
+void DynamicDetector::outline_group(const StereoFrame& frame, DetectorResult& result,
+                                    const std::vector<DynamicGroup>& groups, std::size_t g, int& next_instance) {
+  const DetectorOptions& opt = config_.detector;
+  const cv::Size size = frame.left.size();
+  StageTimings& tm = result.timings;
+  auto t = Clock::now();
+  RoiSegmentation& seg = result.rois[g];
+  const DynamicGroup& group = groups[g];
+  seg.coasted = coast_group_[g] != 0;
+  seg.roi = group.roi;
+  seg.mean_disparity_px = group.mean_disparity_px;
+  // Objects stand on the floor: when the group's lowest corner is well above the floor row at the group's
+  // disparity (legs without corners), the ROI reaches down to that row so the outline can include them.
+  if (opt.extend_to_floor && result.ground_plane.valid && result.ground_plane.b > 0) {
+    const DisparityPlane& gp = result.ground_plane;
+    const double x_mid = seg.roi.x + 0.5 * seg.roi.width;
+    const double d_near = group.mean_disparity_px + config_.grouping.t_disp_px + config_.grouping.t_disp_rel * group.mean_disparity_px;
+    const double y_floor = (d_near - gp.c - gp.a * x_mid) / gp.b;
+    const int margin = config_.grouping.margin_px;
+    const int bottom = std::min(size.height, static_cast<int>(std::ceil(y_floor)) + margin);
+    if (bottom > seg.roi.br().y && y_floor > seg.roi.y) seg.roi.height = bottom - seg.roi.y;
+    // ... and up to the top of an object of extend_to_height_m standing there (h * d / B px above the floor).
+    if (opt.extend_to_height_m > 0 && y_floor > seg.roi.y) {
+      const double baseline_m = calibration_.bf() / calibration_.left.fx;
+      const int top = std::max(0, static_cast<int>(std::floor(y_floor - opt.extend_to_height_m * group.mean_disparity_px / baseline_m)));
+      if (top < seg.roi.y) {
+        seg.roi.height += seg.roi.y - top;
+        seg.roi.y = top;
+      }
+    }
+  }
+  // An object near the left border may reach into the band without stereo matches (x < d): the ROI then
+  // starts at the border, so the outline can be completed there (outline.left_band_touch_px).
+  if (config_.outline.left_band_touch_px >= 0 && seg.roi.x > 0 && seg.roi.x <= 1.5 * group.mean_disparity_px) {
+    seg.roi.width += seg.roi.x;
+    seg.roi.x = 0;
+  }
+  seg.points.clear();
+  group_pts_.clear();
+  group_disp_.clear();
+  for (int m : group.members) {
+    const int idx = dyn_index_[static_cast<std::size_t>(m)];
+    seg.points.push_back(idx);
+    result.points[static_cast<std::size_t>(idx)].group = static_cast<int>(g);
+    group_pts_.push_back(dyn_pts_[static_cast<std::size_t>(m)]);
+    group_disp_.push_back(dyn_disp_[static_cast<std::size_t>(m)]);
+  }
+  seg.object_id = group_object_[g];
+  if (seg.roi.empty()) return;
+
+  t = Clock::now();
+  seg.half_scale = false;
+  if (opt.full_frame_disparity) {
+    result.full_disparity_px(seg.roi).copyTo(seg.disparity_px);
+  } else {
+    float max_d = 0;
+    for (float dd : group_disp_) max_d = std::max(max_d, dd);
+    const bool half = config_.regions.mask_mode == MaskMode::kDisparity && opt.half_scale_min_area_px > 0 &&
+                      seg.roi.area() > opt.half_scale_min_area_px;
+    seg.half_scale = half || opt.roi_scale != 1.0;
+    roi_max_disparity_px_ = static_cast<int>(std::ceil(max_d + opt.roi_disparity_margin_px));
+    roi_scale_used_ = half ? 0.5 : opt.roi_scale;
+    // Widening strips are matched like their ROI.
+    roi_row_step_used_ = seg.roi.area() >= opt.roi_row_step_min_area_px ? opt.roi_row_step : 1;
+    roi_disparity(frame, seg.roi, roi_max_disparity_px_, roi_scale_used_, seg.disparity_px);
+  }
+  tm.roi_disparity_ms += ms_since(t);
+
+  if (config_.regions.mask_mode == MaskMode::kDisparity) {
+    // The outline from the ROI's disparity (no SLIC, planes or boundaries).
+    t = Clock::now();
+    widen_ms_ = 0;
+    carve_ms_ = 0;
+    outline_region(frame, result, seg, next_instance);
+    tm.regions_ms += ms_since(t) - widen_ms_ - carve_ms_;
+    tm.motion_carve_ms += carve_ms_;
+    tm.roi_disparity_ms += widen_ms_;
+    return;
+  }
+
+  t = Clock::now();
+  if (opt.roi_scale == 1.0) {
+    seg.superpixels = slic_.segment(frame.left(seg.roi), seg.labels, &seg.slic);
+  } else {
+    cv::resize(frame.left(seg.roi), small_grey_, cv::Size(), opt.roi_scale, opt.roi_scale, cv::INTER_AREA);
+    seg.superpixels = slic_half_.segment(small_grey_, small_labels_, &seg.slic);
+    cv::resize(small_labels_, seg.labels, seg.roi.size(), 0, 0, cv::INTER_NEAREST);
+  }
+  tm.slic_ms += ms_since(t);
+
+  t = Clock::now();
+  fit_superpixel_planes(seg.labels, seg.superpixels, seg.disparity_px, seg.roi.tl(), config_.planes, seg.planes,
+                        opt.roi_scale == 1.0 ? 1 : 2);
+  tm.planes_ms += ms_since(t);
+
+  t = Clock::now();
+  graph_.build(seg.labels, seg.superpixels, seg.roi.tl());
+  label_boundaries(graph_, seg.planes, config_.boundaries);
+  seg.boundaries = graph_.boundaries();
+  tm.boundaries_ms += ms_since(t);
+
+  t = Clock::now();
+  static_pts_.clear();
+  static_disp_.clear();
+  for (const TrackedPoint& p : result.points) {
+    if (!p.tracked || p.dynamic || !seg.roi.contains(cv::Point(cvRound(p.cur_px.x), cvRound(p.cur_px.y)))) continue;
+    static_pts_.push_back(p.cur_px);
+    static_disp_.push_back(p.cur_disparity_px);
+  }
+  const std::vector<char>* moves_with_background = nullptr;
+  if (config_.photometric.enabled && result.depth.valid && !prev_left_.empty()) {
+    check_superpixel_motion(frame.left, prev_left_, calibration_.left, calibration_.bf(), result.depth.T_cur_prev,
+                            seg.labels, seg.roi.tl(), seg.planes, config_.photometric, seg.motion);
+    background_flags_.assign(seg.motion.size(), 0);
+    for (std::size_t k = 0; k < seg.motion.size(); ++k) background_flags_[k] = seg.motion[k].moves_with_background ? 1 : 0;
+    moves_with_background = &background_flags_;
+  } else {
+    seg.motion.clear();
+  }
+  seg.region = find_dynamic_region(seg.labels, seg.roi.tl(), graph_, seg.planes, group_pts_, group_disp_,
+                                   config_.regions, static_pts_, static_disp_,
+                                   result.ground_plane.valid ? &result.ground_plane : nullptr, moves_with_background);
+  if (!seg.region.rectangle.empty()) {
+    const cv::Rect rect = seg.region.rectangle & cv::Rect(cv::Point(0, 0), size);
+    result.mask.regions.push_back(rect);
+    region_mask_.create(size, CV_8UC1);
+    region_mask_(rect).setTo(0);
+    paint_region(seg.region, seg.labels, seg.roi.tl(), config_.regions.mask_mode, region_mask_);
+    next_instance = label_region_objects(region_mask_(rect), opt.split_side_by_side, next_instance,
+                                  result.mask.instances(rect));
+  }
+  tm.regions_ms += ms_since(t);
+}
+
+void DynamicDetector::finish_mask(const StereoFrame& frame, DetectorResult& result, int& next_instance) {
+  const DetectorOptions& opt = config_.detector;
+  const bool objects = tracks_objects();
+  StageTimings& tm = result.timings;
+  carried_.clear();
+  if (objects && opt.band_carry_max_frames > 0 && !objects_.empty()) carry_band_masks(result, next_instance);
+  if (config_.band.enabled && result.depth.valid && !prev_left_.empty()) {
+    const auto t = Clock::now();
+    band_prev_.clear();
+    band_cur_.clear();
+    for (const TrackedPoint& p : result.points) {
+      if (!p.tracked || p.cur_px.x >= config_.band.strip_px) continue;
+      band_prev_.push_back(p.prev_px);
+      band_cur_.push_back(p.cur_px);
+    }
+    band_.segment(frame.left, prev_left_, cur_pyramid_, prev_pyramid_, tracker_, result.lk_levels, calibration_.left,
+                  calibration_.bf(), result.depth.T_cur_prev, result.mask.instances, band_prev_, band_cur_, result.band);
+    add_band_regions(result, next_instance);
+    tm.band_ms += ms_since(t);
+  }
+  if (opt.mask_dilation_px > 0 && !result.mask.regions.empty()) {
+    const int k = 2 * opt.mask_dilation_px + 1;
+    cv::dilate(result.mask.instances, dilated_, cv::getStructuringElement(cv::MORPH_ELLIPSE, cv::Size(k, k)));
+    dilated_.copyTo(result.mask.instances);
+  }
+  cv::compare(result.mask.instances, 0, result.mask.image, cv::CMP_GT);
+  if (objects) update_objects(result);
+  // Each object's pixels, for the next frame's growth check (detector.growth_max_ratio).
+  if (objects && opt.growth_max_ratio > 0 && !result.mask.regions.empty()) {
+    result.mask.instances.copyTo(prev_instances_);
+    prev_instance_object_ = instance_object_;
+  } else {
+    prev_instances_.release();
+  }
+}
+
+void DynamicDetector::replenish_tracks(const StereoFrame& frame, DetectorResult& result) {
+  const DetectorOptions& opt = config_.detector;
+  const cv::Size size = frame.left.size();
+  StageTimings& tm = result.timings;
   // The tracks that held continue into the next call (tracking.persistent); this frame's quadtree corners fill
   // the places no track covers.
-  t = Clock::now();
+  auto t = Clock::now();
   const LkTrackerConfig& trk = config_.tracking;
   prev_pts_.clear();
   prev_disparity_px_.clear();
@@ -757,15 +813,6 @@ void DynamicDetector::detect(const StereoFrame& frame, DetectorResult& result) {
     }
   }
   tm.point_disparity_ms += ms_since(t);
-  confirm_objects(result);
-
-  std::swap(prev_pyramid_, cur_pyramid_);
-  if (opt.densify || config_.photometric.enabled || config_.band.enabled || config_.motion_carve.enabled) {
-    frame.left.copyTo(prev_left_);
-    frame.right.copyTo(prev_right_);
-  }
-  has_previous_ = true;
-  tm.total_ms = ms_since(t_start);
 }
 
 void DynamicDetector::confirm_objects(DetectorResult& result) {

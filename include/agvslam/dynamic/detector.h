@@ -365,6 +365,28 @@ class DynamicDetector {
   void reset();
 
  private:
+  // The stages of detect(), in order.
+  // Clears the per-frame parts of `result` (a frame of another size than the last one resets the detector).
+  void begin_frame(const StereoFrame& frame, DetectorResult& result);
+  // LK of the tracks into this frame, their disparities, the epipolar, depth and multi-frame tests.
+  void track_and_test(const StereoFrame& frame, DetectorResult& result);
+  // result.points from the tests; the dynamic ones into dyn_pts_, dyn_disp_, dyn_index_.
+  void collect_points(DetectorResult& result);
+  // Eq. 4 grouping of the dynamic points into ROIs, each continuing the previous frame's object most of its points
+  // belong to (group_object_).
+  void group_dynamic(DetectorResult& result, std::vector<DynamicGroup>& groups);
+  // The floor plane, then each group's outline (and the coasting objects' groups) into result.rois and the mask.
+  void outline_groups(const StereoFrame& frame, DetectorResult& result, std::vector<DynamicGroup>& groups,
+                      int& next_instance);
+  void outline_group(const StereoFrame& frame, DetectorResult& result, const std::vector<DynamicGroup>& groups,
+                     std::size_t g, int& next_instance);
+  // The left band (carried and segmented regions), the mask's dilation and the objects kept for the next frame.
+  void finish_mask(const StereoFrame& frame, DetectorResult& result, int& next_instance);
+  // The tracks that continue, this frame's new quadtree corners and their disparities, each track's object.
+  void replenish_tracks(const StereoFrame& frame, DetectorResult& result);
+  // detector.track_objects with the disparity outline (objects are followed over frames).
+  bool tracks_objects() const;
+
   void densify(const StereoFrame& frame, DetectorResult& result);
   // While the AGV drives, the left strip's candidate movers (BandSegmenter::driving_seeds) that the epipolar or the
   // depth test flags join this frame's dynamic points (band.driving_seed_offset_px).
