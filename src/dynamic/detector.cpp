@@ -299,6 +299,7 @@ void DynamicDetector::detect(const StereoFrame& frame, DetectorResult& result) {
   if (result.has_previous) {
     track_and_test(frame, result);
     collect_points(result);
+    // Points beside the tracks: the left band's driving seeds, and densification around small dynamic groups.
     t = Clock::now();
     if (config_.band.enabled && result.depth.valid && !prev_left_.empty()) add_band_driving_seeds(frame, result);
     tm.band_ms += ms_since(t);
@@ -306,7 +307,7 @@ void DynamicDetector::detect(const StereoFrame& frame, DetectorResult& result) {
     if (opt.densify && opt.densify_max_points > 0 && !prev_left_.empty()) densify(frame, result);
     tm.densify_ms = ms_since(t);
     std::vector<DynamicGroup> groups;
-    group_dynamic(result, groups);
+    group_dynamic(frame.left.size(), result, groups);
     int next_instance = 1;
     outline_groups(frame, result, groups, next_instance);
     finish_mask(frame, result, next_instance);
@@ -465,10 +466,8 @@ void DynamicDetector::collect_points(DetectorResult& result) {
   }
 }
 
-void DynamicDetector::group_dynamic(DetectorResult& result, std::vector<DynamicGroup>& groups) {
+void DynamicDetector::group_dynamic(cv::Size size, DetectorResult& result, std::vector<DynamicGroup>& groups) {
   const DetectorOptions& opt = config_.detector;
-  const cv::Size size = result.mask.image.size();
-  // Dynamic ROIs.
   const auto t = Clock::now();
   const bool objects = tracks_objects();
   RoiGroupingConfig grouping = config_.grouping;

@@ -374,7 +374,7 @@ class DynamicDetector {
   void collect_points(DetectorResult& result);
   // Eq. 4 grouping of the dynamic points into ROIs, each continuing the previous frame's object most of its points
   // belong to (group_object_).
-  void group_dynamic(DetectorResult& result, std::vector<DynamicGroup>& groups);
+  void group_dynamic(cv::Size size, DetectorResult& result, std::vector<DynamicGroup>& groups);
   // The floor plane, then each group's outline (and the coasting objects' groups) into result.rois and the mask.
   void outline_groups(const StereoFrame& frame, DetectorResult& result, std::vector<DynamicGroup>& groups,
                       int& next_instance);
