@@ -425,7 +425,6 @@ void DynamicDetector::track_and_test(const StereoFrame& frame, DetectorResult& r
 }
 
 void DynamicDetector::collect_points(DetectorResult& result) {
-  const DetectorOptions& opt = config_.detector;
   const std::size_t n = prev_pts_.size();
   result.points.resize(n);
   dyn_pts_.clear();
@@ -456,13 +455,8 @@ void DynamicDetector::collect_points(DetectorResult& result) {
       p.multiframe_disparity_residual_px = result.multiframe.test.disparity_residual_px[i];
       p.dynamic_multiframe = result.multiframe.test.dynamic[i] != 0;
     }
-    p.dynamic = (opt.use_epipolar_test && p.dynamic_epipolar) ||
-                (opt.use_depth_test && (p.dynamic_depth || p.dynamic_multiframe));
-    if (p.dynamic) {
-      dyn_pts_.push_back(p.cur_px);
-      dyn_disp_.push_back(p.cur_disparity_px);
-      dyn_index_.push_back(static_cast<int>(i));
-    }
+    p.dynamic = flagged_by_enabled_tests(p);
+    if (p.dynamic) add_dynamic_point(p, static_cast<int>(i));
   }
 }
 
@@ -1427,9 +1421,7 @@ void DynamicDetector::add_coasting_groups(const DetectorResult& result, cv::Size
       y1 = std::max(y1, p.cur_px.y);
       sum_d += p.cur_disparity_px;
       g.members.push_back(static_cast<int>(dyn_pts_.size()));
-      dyn_pts_.push_back(p.cur_px);
-      dyn_disp_.push_back(p.cur_disparity_px);
-      dyn_index_.push_back(i);
+      add_dynamic_point(p, i);
     }
     const cv::Point shift(cvRound(median_of(dx)), cvRound(median_of(dy)));
     g.mean_disparity_px = sum_d / static_cast<double>(coast_tracks_.size());
@@ -1903,8 +1895,7 @@ TrackedPoint DynamicDetector::tested_new_point(const DetectorResult& result, con
   }
   p.multiframe_px = multiframe_px;
   p.dynamic_multiframe = dynamic_multiframe;
-  p.dynamic = (opt.use_epipolar_test && p.dynamic_epipolar) ||
-              (opt.use_depth_test && (p.dynamic_depth || p.dynamic_multiframe));
+  p.dynamic = flagged_by_enabled_tests(p);
   return p;
 }
 
@@ -1912,11 +1903,19 @@ void DynamicDetector::append_new_point(DetectorResult& result, const TrackedPoin
   result.points.push_back(p);
   history_.add(p.cur_px, p.cur_disparity_px);
   history_.add_earlier(1, p.prev_px, p.prev_disparity_px);
-  if (p.dynamic) {
-    dyn_pts_.push_back(p.cur_px);
-    dyn_disp_.push_back(p.cur_disparity_px);
-    dyn_index_.push_back(static_cast<int>(result.points.size() - 1));
-  }
+  if (p.dynamic) add_dynamic_point(p, static_cast<int>(result.points.size() - 1));
+}
+
+bool DynamicDetector::flagged_by_enabled_tests(const TrackedPoint& p) const {
+  const DetectorOptions& opt = config_.detector;
+  return (opt.use_epipolar_test && p.dynamic_epipolar) ||
+         (opt.use_depth_test && (p.dynamic_depth || p.dynamic_multiframe));
+}
+
+void DynamicDetector::add_dynamic_point(const TrackedPoint& p, int index) {
+  dyn_pts_.push_back(p.cur_px);
+  dyn_disp_.push_back(p.cur_disparity_px);
+  dyn_index_.push_back(index);
 }
 
 void DynamicDetector::test_densified_multiframe(const StereoFrame& frame, const DetectorResult& result) {

@@ -398,6 +398,10 @@ class DynamicDetector {
                                 bool dynamic_multiframe) const;
   // Appends such a point to the frame's points and to the track history (and, when dynamic, to dyn_pts_ & co.).
   void append_new_point(DetectorResult& result, const TrackedPoint& p);
+  // The union of the enabled tests (detector.use_epipolar_test, use_depth_test) on a point's flags.
+  bool flagged_by_enabled_tests(const TrackedPoint& p) const;
+  // Appends a point (row `index` of result.points) to the frame's dynamic points: dyn_pts_, dyn_disp_, dyn_index_.
+  void add_dynamic_point(const TrackedPoint& p, int index);
   // The multi-frame test of this frame's densified points (extra_*), into extra_mf_ / extra_mf_px_.
   void test_densified_multiframe(const StereoFrame& frame, const DetectorResult& result);
   // The multi-frame test's depth-edge and stereo checks of a point with this disparity (multiframe.edge_check_*,
