@@ -51,7 +51,7 @@ if [[ " $what " == *" sim "* ]]; then
   for scenario in static $scenarios; do
     for b in ref new; do
       dir=$data/sim_$b/$scenario
-      rm -rf "$dir"
+      rm -rf "$dir"; mkdir -p "$(dirname "$dir")"
       bin=$ref; [[ $b == new ]] && bin=$new
       "$bin/bin/agvslam-sim" --scenario "$scenario" --seed 101 --frames 40 --out "$dir" > "$dir.log" 2>&1
     done
@@ -86,7 +86,7 @@ if [[ " $what " == *" masks "* ]]; then
       for b in ref new; do
         bin=$ref; [[ $b == new ]] && bin=$new
         out=$data/masks_$b/${scenario}_$seed
-        rm -rf "$out"
+        rm -rf "$out"; mkdir -p "$(dirname "$out")"
         "$bin/bin/agvslam-dynamic" --dataset "$seq" "${params_dynamic[@]}" --out "$out" --overlay-every 0 \
           --json "$out.json" > "$out.txt" 2>&1
       done
