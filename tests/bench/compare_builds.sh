@@ -3,7 +3,7 @@
 # (a refactor): simulator images and ground truth, detector masks and scores, SLAM trajectories.
 #   tests/bench/compare_builds.sh --ref BUILD_DIR --new BUILD_DIR [--data DIR] [--seeds "101 102 103"]
 #       [--scenarios "scene1 scene2 scene3 scene4 scene5 scene6"] [--what "sim masks slam"] [--shared DIR]
-#       [--params-dynamic FILE]
+#       [--params-dynamic FILE | --params-dynamic-ref FILE --params-dynamic-new FILE]
 #   sim    renders 40 frames of every scenario with both builds' agvslam-sim and compares every file (md5)
 #   masks  runs both builds' agvslam-dynamic on <data>/<scenario>_<seed> (rendered once by the ref build, full
 #          length) and compares every mask PNG (md5) and the JSON scores with the timings left out
@@ -18,7 +18,8 @@ seeds="101 102 103"
 scenarios="scene1 scene2 scene3 scene4 scene5 scene6"
 what="sim masks slam"
 shared=${AGVSLAM_SHARED_DIR:-$(cd "$(dirname "$0")/../.." && pwd)/../shared}
-params_dynamic=()
+params_ref=()
+params_new=()
 while [[ $# -gt 0 ]]; do
   case "$1" in
     --ref) ref=$2; shift 2 ;;
@@ -28,8 +29,11 @@ while [[ $# -gt 0 ]]; do
     --scenarios) scenarios=$2; shift 2 ;;
     --what) what=$2; shift 2 ;;
     --shared) shared=$2; shift 2 ;;
-    --params-dynamic) params_dynamic=(--params-dynamic "$2"); shift 2 ;;
-    *) echo "compare_builds.sh: unknown option '$1' (expected --ref, --new, --data, --seeds, --scenarios, --what, --shared, --params-dynamic)" >&2; exit 2 ;;
+    --params-dynamic) params_ref=(--params-dynamic "$2"); params_new=(--params-dynamic "$2"); shift 2 ;;
+    # a file whose layout changed between the builds: each build reads its own
+    --params-dynamic-ref) params_ref=(--params-dynamic "$2"); shift 2 ;;
+    --params-dynamic-new) params_new=(--params-dynamic "$2"); shift 2 ;;
+    *) echo "compare_builds.sh: unknown option '$1' (expected --ref, --new, --data, --seeds, --scenarios, --what, --shared, --params-dynamic, --params-dynamic-ref, --params-dynamic-new)" >&2; exit 2 ;;
   esac
 done
 [[ -n $ref && -n $new ]] || { echo "compare_builds.sh: --ref BUILD_DIR and --new BUILD_DIR are required" >&2; exit 2; }
@@ -84,10 +88,11 @@ if [[ " $what " == *" masks "* ]]; then
         "$ref/bin/agvslam-sim" --scenario "$scenario" --seed "$seed" --out "$seq" > "$seq.log" 2>&1
       fi
       for b in ref new; do
-        bin=$ref; [[ $b == new ]] && bin=$new
+        bin=$ref; params=("${params_ref[@]}")
+        [[ $b == new ]] && { bin=$new; params=("${params_new[@]}"); }
         out=$data/masks_$b/${scenario}_$seed
         rm -rf "$out"; mkdir -p "$(dirname "$out")"
-        "$bin/bin/agvslam-dynamic" --dataset "$seq" "${params_dynamic[@]}" --out "$out" --overlay-every 0 \
+        "$bin/bin/agvslam-dynamic" --dataset "$seq" "${params[@]}" --out "$out" --overlay-every 0 \
           --json "$out.json" > "$out.txt" 2>&1
       done
       a=$data/masks_ref/${scenario}_$seed
