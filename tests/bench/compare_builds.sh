@@ -1,7 +1,7 @@
 #!/usr/bin/env bash
 # Compares the outputs of two builds of agvslam on the same inputs, for changes that must not change behaviour
 # (a refactor): simulator images and ground truth, detector masks and scores, SLAM trajectories.
-#   tests/bench/compare_builds.sh --ref BUILD_DIR --new BUILD_DIR [--data DIR] [--seeds "101 102 103"]
+#   tests/bench/compare_builds.sh --ref BUILD_DIR --new BUILD_DIR [--data DIR] [--out DIR] [--seeds "101 102 103"]
 #       [--scenarios "scene1 scene2 scene3 scene4 scene5 scene6"] [--what "sim masks slam"] [--shared DIR]
 #       [--params-dynamic FILE | --params-dynamic-ref FILE --params-dynamic-new FILE]
 #   sim    renders 40 frames of every scenario with both builds' agvslam-sim and compares every file (md5)
@@ -9,11 +9,13 @@
 #          length) and compares every mask PNG (md5) and the JSON scores with the timings left out
 #   slam   runs both builds' agvslam-run --mapping inline --dynamic detector|off on the shared KITTI 06, KITTI 01 and
 #          EuRoC V1_01 excerpts and compares the trajectories (largest position difference, m)
-# Prints one line per comparison ("same" or what differs) and exits 1 when anything differs.
+# Sequences are rendered into --data once and reused; every output goes under --out (default: --data), so several
+# comparisons can share one --data. Prints one line per comparison ("same" or what differs) and exits 1 when anything differs.
 set -euo pipefail
 ref=""
 new=""
 data=${TMPDIR:-/tmp}/agvslam-compare
+out_root=""
 seeds="101 102 103"
 scenarios="scene1 scene2 scene3 scene4 scene5 scene6"
 what="sim masks slam"
@@ -25,6 +27,7 @@ while [[ $# -gt 0 ]]; do
     --ref) ref=$2; shift 2 ;;
     --new) new=$2; shift 2 ;;
     --data) data=$2; shift 2 ;;
+    --out) out_root=$2; shift 2 ;;
     --seeds) seeds=$2; shift 2 ;;
     --scenarios) scenarios=$2; shift 2 ;;
     --what) what=$2; shift 2 ;;
@@ -33,7 +36,7 @@ while [[ $# -gt 0 ]]; do
     # a file whose layout changed between the builds: each build reads its own
     --params-dynamic-ref) params_ref=(--params-dynamic "$2"); shift 2 ;;
     --params-dynamic-new) params_new=(--params-dynamic "$2"); shift 2 ;;
-    *) echo "compare_builds.sh: unknown option '$1' (expected --ref, --new, --data, --seeds, --scenarios, --what, --shared, --params-dynamic, --params-dynamic-ref, --params-dynamic-new)" >&2; exit 2 ;;
+    *) echo "compare_builds.sh: unknown option '$1' (expected --ref, --new, --data, --out, --seeds, --scenarios, --what, --shared, --params-dynamic, --params-dynamic-ref, --params-dynamic-new)" >&2; exit 2 ;;
   esac
 done
 [[ -n $ref && -n $new ]] || { echo "compare_builds.sh: --ref BUILD_DIR and --new BUILD_DIR are required" >&2; exit 2; }
@@ -42,7 +45,8 @@ for b in "$ref" "$new"; do
     [[ -x $b/bin/$tool ]] || { echo "compare_builds.sh: $b/bin/$tool not found; build that tree first" >&2; exit 2; }
   done
 done
-mkdir -p "$data"
+out_root=${out_root:-$data}
+mkdir -p "$data" "$out_root"
 differ=0
 report() {  # name, status
   printf '%-44s %s\n' "$1" "$2"
@@ -54,15 +58,15 @@ tree_md5() { (cd "$1" && find . -type f ! -name '*.log' -print0 | sort -z | xarg
 if [[ " $what " == *" sim "* ]]; then
   for scenario in static $scenarios; do
     for b in ref new; do
-      dir=$data/sim_$b/$scenario
+      dir=$out_root/sim_$b/$scenario
       rm -rf "$dir"; mkdir -p "$(dirname "$dir")"
       bin=$ref; [[ $b == new ]] && bin=$new
       "$bin/bin/agvslam-sim" --scenario "$scenario" --seed 101 --frames 40 --out "$dir" > "$dir.log" 2>&1
     done
-    if diff <(tree_md5 "$data/sim_ref/$scenario") <(tree_md5 "$data/sim_new/$scenario") > "$data/sim_$scenario.diff"; then
-      report "sim $scenario (40 frames)" "same ($(tree_md5 "$data/sim_ref/$scenario" | wc -l) files)"
+    if diff <(tree_md5 "$out_root/sim_ref/$scenario") <(tree_md5 "$out_root/sim_new/$scenario") > "$out_root/sim_$scenario.diff"; then
+      report "sim $scenario (40 frames)" "same ($(tree_md5 "$out_root/sim_ref/$scenario" | wc -l) files)"
     else
-      report "sim $scenario (40 frames)" "DIFFERS: $(grep -c '^<' "$data/sim_$scenario.diff") files (see $data/sim_$scenario.diff)"
+      report "sim $scenario (40 frames)" "DIFFERS: $(grep -c '^<' "$out_root/sim_$scenario.diff") files (see $out_root/sim_$scenario.diff)"
     fi
   done
 fi
@@ -90,13 +94,13 @@ if [[ " $what " == *" masks "* ]]; then
       for b in ref new; do
         bin=$ref; params=("${params_ref[@]}")
         [[ $b == new ]] && { bin=$new; params=("${params_new[@]}"); }
-        out=$data/masks_$b/${scenario}_$seed
+        out=$out_root/masks_$b/${scenario}_$seed
         rm -rf "$out"; mkdir -p "$(dirname "$out")"
         "$bin/bin/agvslam-dynamic" --dataset "$seq" "${params[@]}" --out "$out" --overlay-every 0 \
           --json "$out.json" > "$out.txt" 2>&1
       done
-      a=$data/masks_ref/${scenario}_$seed
-      n=$data/masks_new/${scenario}_$seed
+      a=$out_root/masks_ref/${scenario}_$seed
+      n=$out_root/masks_new/${scenario}_$seed
       if ! diff <(cd "$a/mask" && md5sum ./*.png) <(cd "$n/mask" && md5sum ./*.png) > "$n.mask.diff"; then
         report "masks ${scenario}_$seed" "DIFFERS: $(grep -c '^<' "$n.mask.diff") masks (see $n.mask.diff)"
       elif ! diff <(strip_timings "$a.json") <(strip_timings "$n.json") > "$n.json.diff"; then
@@ -119,15 +123,15 @@ if [[ " $what " == *" slam "* ]]; then
     for mode in detector off; do
       for b in ref new; do
         bin=$ref; [[ $b == new ]] && bin=$new
-        out=$data/slam_$b/${d}_$mode
+        out=$out_root/slam_$b/${d}_$mode
         mkdir -p "$(dirname "$out")"
         "$bin/bin/agvslam-run" --dataset "$shared/data/$d" "${features[@]}" --dynamic "$mode" --mapping inline \
           --out "$out.txt" > "$out.log" 2>&1 || true
       done
-      a=$data/slam_ref/${d}_$mode.txt
-      n=$data/slam_new/${d}_$mode.txt
+      a=$out_root/slam_ref/${d}_$mode.txt
+      n=$out_root/slam_new/${d}_$mode.txt
       if [[ ! -s $a || ! -s $n ]]; then
-        report "slam $d $mode" "DIFFERS: a trajectory is missing (see $data/slam_*/${d}_$mode.log)"
+        report "slam $d $mode" "DIFFERS: a trajectory is missing (see $out_root/slam_*/${d}_$mode.log)"
         continue
       fi
       r=$(/usr/bin/env python3 - "$a" "$n" <<'PY'
