@@ -76,7 +76,7 @@ strip_timings() {  # JSON without timing fields (they differ from run to run)
 import json, sys
 def strip(x):
     if isinstance(x, dict):
-        return {k: strip(v) for k, v in x.items() if not (k.endswith("_ms") or k in ("timings", "cpu_ms", "wall_s", "fps"))}
+        return {k: strip(v) for k, v in x.items() if not (k == "ms" or k.endswith("_ms") or k in ("timings", "wall_s", "fps"))}
     if isinstance(x, list):
         return [strip(v) for v in x]
     return x
