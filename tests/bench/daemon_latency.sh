@@ -5,6 +5,7 @@
 # its own thread, outputs thread; DDS on loopback to agvslam-echo in a private network namespace.
 #
 #   tests/bench/daemon_latency.sh [--build DIR] [--scenario scene4] [--frames 400] [--seed 1] [--rt] [--out DIR]
+#                                 [--record]
 #
 # --rt runs agvslamd under SCHED_FIFO (chrt -f 10), as a vehicle computer would give the daemon its cores, so other
 # jobs on a shared build machine do not stand in its way; without it the figures are upper bounds under whatever
@@ -15,6 +16,8 @@
 #   stages           per-frame wall and thread-CPU time of the detector and tracking, queue waits (median / p99)
 # The rendered sequence is cached in BUILD/bench-data. Needs `unshare -n` (root or user namespaces).
 set -euo pipefail
+source "$(dirname "$0")/record.sh"
+record_init "$0" "$@"
 here=$(cd "$(dirname "$0")" && pwd)
 src=$(cd "$here/../.." && pwd)
 build=$src/build/release
@@ -30,6 +33,7 @@ while [ $# -gt 0 ]; do
     --frames) frames=$2; shift 2 ;;
     --seed) seed=$2; shift 2 ;;
     --rt) rt=1; shift ;;
+    --record) record=1; shift ;;
     --out) out=$2; shift 2 ;;
     -h|--help) sed -n '2,20p' "$0"; exit 0 ;;
     *) echo "daemon_latency.sh: unknown option $1" >&2; exit 2 ;;
@@ -96,6 +100,7 @@ load_before=$(cut -d' ' -f1 /proc/loadavg)
 $ns sh "$out/run.sh"
 load_after=$(cut -d' ' -f1 /proc/loadavg)
 
+record_start
 python3 - "$out" "$frames" "$rt" "$load_before" "$load_after" <<'EOF'
 import json, sys
 out, frames, rt, load_before, load_after = sys.argv[1], int(sys.argv[2]), sys.argv[3] == "1", sys.argv[4], sys.argv[5]
@@ -142,3 +147,4 @@ for name, key in [("capture -> outputs", "latency_capture_to_outputs_ms"), ("cap
 print("stages (median / p99 ms): " + ", ".join("%s %.1f / %.1f" % (k, v["median"], v["p99"]) for k, v in stage.items()))
 print("load average before / after: %s / %s%s" % (load_before, load_after, ", agvslamd under SCHED_FIFO" if rt else ""))
 EOF
+record_finish "daemon_latency $scenario rt $rt" "agvslamd on the host: delivered rate and latency ($scenario, $frames frames, SCHED_FIFO $rt)"

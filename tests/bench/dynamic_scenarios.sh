@@ -2,13 +2,15 @@
 # Scores the dynamic-region detector on simulator scenarios (issue 3 figures):
 #   tests/bench/dynamic_scenarios.sh [--build DIR] [--data DIR] [--seeds "101 102 103 104 105"]
 #                                    [--scenarios "static scene1 scene2 scene3 scene4 scene5"] [--threads N]
-#                                    [--params-dynamic FILE]
+#                                    [--params-dynamic FILE] [--record]
 # Generates each <scenario>_<seed> sequence under --data once (agvslam-sim, full default length), runs
 # agvslam-dynamic on it (JSON under <data>/results/) and prints one line per sequence and the totals:
 # object precision / recall / mean IoU (paper 004 eqs. 12-14), false regions per 100 frames, and the median and
 # p95 detector time per frame: wall and the detector thread's CPU time (agvslam-dynamic runs it with one OpenCV
 # thread; CPU time stays meaningful on a loaded machine). Rendering dominates: ~0.2 s per frame and core.
 set -euo pipefail
+source "$(dirname "$0")/record.sh"
+record_init "$0" "$@"
 build=build/release
 data=${TMPDIR:-/tmp}/agvslam-dynamic-scenarios
 seeds="101 102 103 104 105"
@@ -22,8 +24,9 @@ while [[ $# -gt 0 ]]; do
     --seeds) seeds=$2; shift 2 ;;
     --scenarios) scenarios=$2; shift 2 ;;
     --threads) threads=$2; shift 2 ;;
+    --record) record=1; shift ;;
     --params-dynamic) params=(--params-dynamic "$2"); shift 2 ;;
-    *) echo "dynamic_scenarios.sh: unknown option '$1' (expected --build, --data, --seeds, --scenarios, --threads, --params-dynamic)" >&2; exit 2 ;;
+    *) echo "dynamic_scenarios.sh: unknown option '$1' (expected --build, --data, --seeds, --scenarios, --threads, --params-dynamic, --record)" >&2; exit 2 ;;
   esac
 done
 sim=$build/bin/agvslam-sim
@@ -43,6 +46,7 @@ for scenario in $scenarios; do
       --json "$data/results/${scenario}_$seed.json" > "$data/results/${scenario}_$seed.txt" 2> /dev/null
   done
 done
+record_start
 /usr/bin/env python3 - "$data/results" $scenarios -- $seeds <<'PY'
 import json, sys
 root = sys.argv[1]
@@ -126,3 +130,4 @@ if motion:
 if static_frames:
     print(f"static: {static_regions} regions in {static_frames} frames ({100 * static_regions / static_frames:.2f} per 100 frames)")
 PY
+record_finish "dynamic_scenarios seeds $seeds" "Dynamic-region detector on the simulator scenes ($scenarios; seeds $seeds)"

@@ -4,7 +4,7 @@
 #   tests/bench/loop_scenarios.sh [--build DIR] [--data DIR] [--seeds "101 102 103 104 105"]
 #                                 [--loop-scenarios "scene4 scene5"] [--line-scenarios "scene2 scene3"]
 #                                 [--repeat N] [--dynamic gt|detector|off] [--mapping inline|thread]
-#                                 [--threads N] [--generate-only] [--table-only]
+#                                 [--threads N] [--generate-only] [--table-only] [--record]
 # Generates each <scenario>_<seed> sequence under --data once (agvslam-sim, full default length; ~0.2 s per frame
 # and core), runs agvslam-run on it with --loop on and --loop off (the loop scenarios played --repeat times in a row,
 # default 2: one lap ends where it started, the second lap revisits the whole loop), and on the line scenarios with
@@ -16,6 +16,8 @@
 # --dynamic gt (default) masks the simulator's moving objects from the ground truth, so that the figures measure
 # loop closing alone; --mapping inline (default) gives the same result for the same input.
 set -euo pipefail
+source "$(dirname "$0")/record.sh"
+record_init "$0" "$@"
 build=build/release
 data=${TMPDIR:-/tmp}/agvslam-loop-scenarios
 seeds="101 102 103 104 105"
@@ -38,9 +40,10 @@ while [[ $# -gt 0 ]]; do
     --dynamic) dynamic=$2; shift 2 ;;
     --mapping) mapping=$2; shift 2 ;;
     --threads) threads=$2; shift 2 ;;
+    --record) record=1; shift ;;
     --generate-only) generate_only=1; shift ;;
     --table-only) table_only=1; shift ;;
-    *) echo "loop_scenarios.sh: unknown option '$1' (expected --build, --data, --seeds, --loop-scenarios, --line-scenarios, --repeat, --dynamic, --mapping, --threads, --generate-only, --table-only)" >&2; exit 2 ;;
+    *) echo "loop_scenarios.sh: unknown option '$1' (expected --build, --data, --seeds, --loop-scenarios, --line-scenarios, --repeat, --dynamic, --mapping, --threads, --generate-only, --table-only, --record)" >&2; exit 2 ;;
   esac
 done
 sim=$build/bin/agvslam-sim
@@ -77,6 +80,7 @@ if [[ $table_only == 0 ]]; then
   done
 fi
 [[ $generate_only == 1 ]] && exit 0
+record_start
 /usr/bin/python3 - "$data" "$loop_scenarios" "$line_scenarios" $seeds <<'PY'
 import json, math, os, sys
 data, loop_sc, line_sc, seeds = sys.argv[1], sys.argv[2].split(), sys.argv[3].split(), sys.argv[4:]
@@ -138,3 +142,4 @@ for sc, s in summary.items():
     else:
         print(f"  {sc:<8} false loops in {s['false']}/{s['runs']} runs")
 PY
+record_finish "loop_scenarios seeds $seeds" "Loop closing on the simulator scenes ($loop_scenarios x $repeat laps, $line_scenarios; seeds $seeds)"

@@ -3,6 +3,7 @@
 # shipped vocabulary is trained on seeds 900-960, see params/vocabulary/README.md).
 #
 #   tests/bench/place_revisits.sh [--build DIR] [--cache DIR] [--vocabulary F[,F...]] [--frame-step N] [--json FILE]
+#                                 [--record]
 #
 # Renders (once, cached) with agvslam-sim, each scenario's whole timeline over 350 frames (the loop: 28.7 m in
 # 17.5 s, ~1.6 m/s, 8 cm between frames) or 200 frames (the aisle):
@@ -14,6 +15,8 @@
 # then runs agvslam-vocab --evaluate: loop revisits in each loop sequence (frames >= 10 s older), relocalisation
 # of the query run against the map run (camera within 1 m and 20 degrees), and false loops on the aisle.
 set -euo pipefail
+source "$(dirname "$0")/record.sh"
+record_init "$0" "$@"
 root=$(cd "$(dirname "$0")/../.." && pwd)
 build="$root/build/release"
 cache=""
@@ -26,8 +29,9 @@ while [[ $# -gt 0 ]]; do
     --cache) cache=$2; shift 2 ;;
     --vocabulary) vocabulary=$2; shift 2 ;;
     --frame-step) frame_step=$2; shift 2 ;;
+    --record) record=1; shift ;;
     --json) json=$2; shift 2 ;;
-    *) echo "unknown option $1 (expected --build, --cache, --vocabulary, --frame-step, --json)" >&2; exit 2 ;;
+    *) echo "unknown option $1 (expected --build, --cache, --vocabulary, --frame-step, --json, --record)" >&2; exit 2 ;;
   esac
 done
 cache=${cache:-$build/place_revisits}
@@ -49,6 +53,7 @@ render loop_static_s42 --scenario static --seed 42 --frames 350
 render map_static_s43 --scenario static --seed 43 --frames 350
 render query_scene5_s44 --scenario scene5 --seed 44 --layout-seed 43 --start-offset 7 --frames 350
 render line_scene2_s45 --scenario scene2 --seed 45 --frames 200
+record_start
 args=(--evaluate --vocabulary "$vocabulary" --frame-step "$frame_step" --threads 2)
 cd "$root"
 # Loops (the lap takes 17.5 s: frames >= 10 s older) and relocalisation.
@@ -57,3 +62,4 @@ cd "$root"
 # The aisle has no revisit (10 s long: frames >= 3 s, i.e. >= 5 m, older): every answer is false; max_false is
 # the score a loop threshold must stay above.
 "$vocab" "${args[@]}" --loop "$cache/line_scene2_s45" --min-gap-s 3 ${json:+--json "${json%.json}_aisle.json"}
+record_finish "place_revisits" "Place recognition on simulator revisits (shipped vocabulary unless --vocabulary)"

@@ -1,12 +1,14 @@
 #!/usr/bin/env bash
 # Map growth when the AGV drives the same loop again (issue 4: memory bounded on long runs over the same area):
 #   tests/bench/revisit_laps.sh [--build DIR] [--data DIR] [--seeds "101 102"] [--scenario scene4] [--laps 4]
-#                               [--threads N]
+#                               [--threads N] [--record]
 # Generates <scenario>_<seed> under --data once (agvslam-sim), plays it --laps times in a row with loop closing
 # (agvslam-run --repeat, --dynamic gt, --mapping inline) with the keyframe revisit rule of params/slam.yaml and
 # with it turned off (tracking.keyframe_revisit_distance_m: 0, ORB-SLAM2's keyframe decision alone), and prints
 # per run: keyframes and map points in the map after each lap, the map's memory, and the ATE RMSE over all laps.
 set -euo pipefail
+source "$(dirname "$0")/record.sh"
+record_init "$0" "$@"
 build=build/release
 data=${TMPDIR:-/tmp}/agvslam-revisit-laps
 seeds="101 102"
@@ -20,8 +22,9 @@ while [[ $# -gt 0 ]]; do
     --seeds) seeds=$2; shift 2 ;;
     --scenario) scenario=$2; shift 2 ;;
     --laps) laps=$2; shift 2 ;;
+    --record) record=1; shift ;;
     --threads) threads=$2; shift 2 ;;
-    *) echo "revisit_laps.sh: unknown option '$1' (expected --build, --data, --seeds, --scenario, --laps, --threads)" >&2; exit 2 ;;
+    *) echo "revisit_laps.sh: unknown option '$1' (expected --build, --data, --seeds, --scenario, --laps, --threads, --record)" >&2; exit 2 ;;
   esac
 done
 sim=$build/bin/agvslam-sim
@@ -34,6 +37,7 @@ mkdir -p "$data/revisit"
 off_params=$data/revisit/slam_revisit_off.yaml
 sed -E 's/^( *keyframe_revisit_distance_m:) *[0-9.]+/\1 0.0/' "$here/params/slam.yaml" > "$off_params"
 grep -q "keyframe_revisit_distance_m: 0.0" "$off_params" || { echo "revisit_laps.sh: could not turn the rule off in $off_params" >&2; exit 1; }
+record_start
 printf "%-12s %-4s %-28s %-28s %9s %9s\n" sequence rule "keyframes after each lap" "map points after each lap" "memory MB" "ATE m"
 for seed in $seeds; do
   seq=$data/${scenario}_$seed
@@ -54,3 +58,4 @@ print(f"{sys.argv[2]:<12} {sys.argv[3]:<4} {kf:<28} {mp:<28} {j['map']['memory_b
 PY
   done
 done
+record_finish "revisit_laps $scenario seeds $seeds" "Map growth over repeated laps ($scenario, $laps laps; seeds $seeds)"

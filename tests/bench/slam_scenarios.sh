@@ -3,7 +3,7 @@
 #   tests/bench/slam_scenarios.sh [--build DIR] [--data DIR] [--seeds "101 102 103 104 105"]
 #                                 [--scenarios "static scene1 scene2 scene3 scene4 scene5 scene6"]
 #                                 [--modes "detector gt off"] [--mapping inline|thread] [--threads N]
-#                                 [--generate-only] [--table-only]
+#                                 [--generate-only] [--table-only] [--record]
 # Generates each <scenario>_<seed> sequence under --data once (agvslam-sim, full default length; ~0.2-0.35 s per
 # frame and core), runs agvslam-run on it per mode (trajectory, JSON and log under <data>/slam/), and prints one
 # line per sequence: ATE RMSE per mode (SE(3)-aligned), drift (largest distance from the first position: the
@@ -14,6 +14,8 @@
 # --mapping inline (default) maps each keyframe before the next frame: the same input gives the same result.
 # --table-only prints the table from the results already under <data>/slam/.
 set -euo pipefail
+source "$(dirname "$0")/record.sh"
+record_init "$0" "$@"
 build=build/release
 data=${TMPDIR:-/tmp}/agvslam-slam-scenarios
 seeds="101 102 103 104 105"
@@ -32,9 +34,10 @@ while [[ $# -gt 0 ]]; do
     --modes) modes=$2; shift 2 ;;
     --mapping) mapping=$2; shift 2 ;;
     --threads) threads=$2; shift 2 ;;
+    --record) record=1; shift ;;
     --generate-only) generate_only=1; shift ;;
     --table-only) table_only=1; shift ;;
-    *) echo "slam_scenarios.sh: unknown option '$1' (expected --build, --data, --seeds, --scenarios, --modes, --mapping, --threads, --generate-only, --table-only)" >&2; exit 2 ;;
+    *) echo "slam_scenarios.sh: unknown option '$1' (expected --build, --data, --seeds, --scenarios, --modes, --mapping, --threads, --generate-only, --table-only, --record)" >&2; exit 2 ;;
   esac
 done
 sim=$build/bin/agvslam-sim
@@ -59,6 +62,7 @@ for scenario in $scenarios_to_run; do
   done
 done
 [[ $generate_only == 1 ]] && exit 0
+record_start
 /usr/bin/env python3 - "$data/slam" "$modes" $scenarios -- $seeds <<'PY'
 import json, os, sys
 root, modes = sys.argv[1], sys.argv[2].split()
@@ -108,3 +112,4 @@ for sc in scenarios:
             extra += f"  moving inliers {m} {sum(v) / len(v):.2f}%"
     print(f"  {sc:<8}" + "".join(f"  ATE {m} {vals[m]:.4f}" for m in modes) + f"  drift {sum(d) / len(d):.4f}" + extra)
 PY
+record_finish "slam_scenarios seeds $seeds mapping $mapping" "SLAM on the simulator scenes: ATE per --dynamic mode ($scenarios; seeds $seeds; mapping $mapping)"
