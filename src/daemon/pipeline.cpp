@@ -29,29 +29,6 @@ constexpr std::size_t kFpsRing = 512;
 
 // ---------------------------------------------------------------------------------------------------------------
 
-RollingStats::RollingStats(std::size_t capacity) : values_(capacity, 0.0), scratch_(capacity, 0.0) {}
-
-void RollingStats::add(double value) {
-  values_[next_] = value;
-  next_ = (next_ + 1) % values_.size();
-  filled_ = std::min(filled_ + 1, values_.size());
-  ++total_;
-}
-
-double RollingStats::quantile(double q) const {
-  if (filled_ == 0) return 0;
-  std::copy(values_.begin(), values_.begin() + static_cast<std::ptrdiff_t>(filled_), scratch_.begin());
-  const auto k = std::min(filled_ - 1, static_cast<std::size_t>(std::floor(q * static_cast<double>(filled_ - 1) + 0.5)));
-  std::nth_element(scratch_.begin(), scratch_.begin() + static_cast<std::ptrdiff_t>(k),
-                   scratch_.begin() + static_cast<std::ptrdiff_t>(filled_));
-  return scratch_[k];
-}
-
-double RollingStats::max() const {
-  if (filled_ == 0) return 0;
-  return *std::max_element(values_.begin(), values_.begin() + static_cast<std::ptrdiff_t>(filled_));
-}
-
 std::string PipelineStats::one_line() const {
   char buf[512];
   std::snprintf(buf, sizeof buf,
@@ -305,7 +282,7 @@ void Pipeline::detector_loop() {
       d.detected_mono_ns = monotonic_now_ns();
       d.mask = result.mask.image.clone();  // travels with the frame while the detector moves on
       d.captured = std::move(*f);
-      if (!detected_queue_->push(std::move(d))) break;  // closed: a later stage failed
+      if (detected_queue_->push(std::move(d)) == PushResult::kClosed) break;  // a later stage failed
     }
   } catch (const std::exception& e) {
     fail("detector", e);

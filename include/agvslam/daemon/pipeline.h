@@ -30,7 +30,8 @@
 #include <thread>
 #include <vector>
 
-#include "agvslam/daemon/bounded_queue.h"
+#include "agvslam/core/bounded_queue.h"
+#include "agvslam/core/stats.h"
 #include "agvslam/daemon/daemon_config.h"
 #include "agvslam/daemon/frame_source.h"
 #include "agvslam/daemon/pose_builder.h"
@@ -38,23 +39,6 @@
 #include "agvslam/dynamic/detector.h"
 
 namespace agvslam::daemon {
-
-// Quantiles over a window of the last `capacity` values (allocated once).
-class RollingStats {
- public:
-  explicit RollingStats(std::size_t capacity = 4096);
-  void add(double value);
-  std::size_t count() const { return filled_; }
-  uint64_t total() const { return total_; }
-  double quantile(double q) const;  // 0 when empty
-  double max() const;
-
- private:
-  std::vector<double> values_;
-  mutable std::vector<double> scratch_;
-  std::size_t next_ = 0, filled_ = 0;
-  uint64_t total_ = 0;
-};
 
 struct PipelineStats {
   uint64_t captured = 0;           // frames the source delivered
@@ -140,7 +124,7 @@ class Pipeline {
 
   mutable std::mutex stats_mutex_;
   PipelineStats stats_;
-  RollingStats latency_ms_, detector_ms_, tracking_ms_;
+  RollingSeries latency_ms_, detector_ms_, tracking_ms_;  // the last 4096 frames
   std::vector<int64_t> recent_frames_mono_ns_;  // ring of processing times for fps
   std::size_t recent_next_ = 0;
   std::string error_;
