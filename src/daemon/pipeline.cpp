@@ -54,9 +54,11 @@ struct Pipeline::DetectedFrame {
   int64_t detected_mono_ns = 0;
 };
 
-Pipeline::Pipeline(const DaemonConfig& config, const SourceSetup& setup, std::unique_ptr<FrameSource> source)
+Pipeline::Pipeline(const DaemonConfig& config, const SourceSetup& setup, std::unique_ptr<FrameSource> source,
+                   PipelineOptions options)
     : config_(config),
       setup_(setup),
+      options_(std::move(options)),
       source_(std::move(source)),
       builder_(config.base_link.T_base_cam() * setup.calibration.T_cam0_rect, config.covariance),
       capture_queue_(static_cast<std::size_t>(config.pipeline.capture_queue),
@@ -139,6 +141,7 @@ void Pipeline::wait() {
     if (t->joinable()) t->join();
   }
   if (!system_) return;
+  if (options_.settle_mapping) system_->wait_for_mapping();
   if (!final_written_ && !config_.trajectory.final_file.empty()) {
     final_written_ = true;
     try {
@@ -320,9 +323,10 @@ void Pipeline::tracking_loop() {
       OutputItem item;
       item.times = d->times;
       if (d->detected_mono_ns > 0) item.times.detected_queue_ms = static_cast<double>(monotonic_now_ns() - d->detected_mono_ns) * 1e-6;
+      const cv::Mat& mask = options_.ground_truth_masks ? c.ground_truth_mask : d->mask;
       const auto t0 = Clock::now();
       const double cpu0 = slam::thread_cpu_ms();
-      const slam::TrackResult r = system_->track_stereo(slam_t_ns, c.frame.left, c.frame.right, d->mask);
+      const slam::TrackResult r = system_->track_stereo(slam_t_ns, c.frame.left, c.frame.right, mask);
       item.times.tracking_cpu_ms = slam::thread_cpu_ms() - cpu0;
       const double tracking_ms = ms_since(t0);
       item.times.tracking_ms = tracking_ms;
@@ -336,8 +340,7 @@ void Pipeline::tracking_loop() {
       s.frame_index = c.frame.index;
       s.frames_processed = processed;
       const double area = static_cast<double>(c.frame.left.total());
-      s.dynamic_pixel_fraction = d->mask.empty() || area <= 0 ? 0.0F
-                                                              : static_cast<float>(cv::countNonZero(d->mask) / area);
+      s.dynamic_pixel_fraction = mask.empty() || area <= 0 ? 0.0F : static_cast<float>(cv::countNonZero(mask) / area);
       {
         std::lock_guard<std::mutex> lock(stats_mutex_);
         const int64_t now = monotonic_now_ns();
@@ -354,6 +357,7 @@ void Pipeline::tracking_loop() {
         tracking_ms_.add(tracking_ms);
         if (d->times.detector_ms >= 0) detector_ms_.add(d->times.detector_ms);
       }
+      if (options_.on_tracked) options_.on_tracked(TrackedFrame{c, mask, item.times, r});
       item.times.tracked_mono_ns = monotonic_now_ns();
       output_queue_.push(std::move(item));
     }

@@ -18,6 +18,9 @@
 // Every loop waits with a time-out (pipeline.poll_ms) and stamps a heartbeat, so alive() tells whether all of
 // them still turn. stop() closes the capture queue: what was captured is processed and published (drain), then
 // the threads end; the source is closed, files flushed.
+//
+// agvslam-run drives the same pipeline over a dataset (its outputs disabled): PipelineOptions adds tracking with
+// the dataset's ground-truth masks, a hook that sees every tracked frame, and letting mapping finish at the end.
 
 #include <atomic>
 #include <chrono>
@@ -61,10 +64,32 @@ struct PipelineStats {
   std::string one_line() const;  // systemd STATUS= and the periodic log line
 };
 
+// One frame as tracking left it, for a caller that follows every frame (agvslam-run's statistics).
+struct TrackedFrame {
+  const CapturedFrame& captured;
+  const cv::Mat& mask;  // the dynamic mask tracking used (detector or ground truth; empty: none)
+  const StageTimes& times;
+  const slam::TrackResult& result;
+};
+
+// What a caller other than agvslamd changes; the defaults are agvslamd's behaviour.
+struct PipelineOptions {
+  // Track with the frames' ground-truth masks (CapturedFrame::ground_truth_mask) instead of a detector's
+  // (pipeline.dynamic off).
+  bool ground_truth_masks = false;
+  // Called in the tracking thread after every frame, before its sample goes to the outputs.
+  std::function<void(const TrackedFrame&)> on_tracked;
+  // wait(): local mapping and loop closing finish every queued keyframe before the SLAM stops, so the final map
+  // and trajectory include them.
+  bool settle_mapping = false;
+};
+
 class Pipeline {
  public:
   // Builds the SLAM system, detector and outputs (no thread yet). Throws on an output that cannot be opened.
-  Pipeline(const DaemonConfig& config, const SourceSetup& setup, std::unique_ptr<FrameSource> source);
+  // `config` must outlive the pipeline.
+  Pipeline(const DaemonConfig& config, const SourceSetup& setup, std::unique_ptr<FrameSource> source,
+           PipelineOptions options = {});
   ~Pipeline();
   Pipeline(const Pipeline&) = delete;
   Pipeline& operator=(const Pipeline&) = delete;
@@ -89,6 +114,8 @@ class Pipeline {
   uint64_t frames_published() const { return frames_published_.load(); }
   PipelineStats stats() const;
   PoseOutputs& outputs() { return *outputs_; }
+  // The SLAM (agvslam-run loads a map into it before start() and reads its results after wait()).
+  slam::System& system() { return *system_; }
   // Called from the tracking loop after every frame and every poll time-out (the systemd watchdog hook).
   void set_processing_hook(std::function<void()> hook) { processing_hook_ = std::move(hook); }
 
@@ -104,6 +131,7 @@ class Pipeline {
 
   const DaemonConfig& config_;
   SourceSetup setup_;
+  PipelineOptions options_;
   std::unique_ptr<FrameSource> source_;
   std::unique_ptr<slam::System> system_;
   std::unique_ptr<dynamic::DynamicDetector> detector_;  // used by the detector thread only
