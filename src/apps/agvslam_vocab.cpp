@@ -54,6 +54,7 @@
 #include "agvslam/place/vocabulary.h"
 #include "agvslam/sim/sim_config.h"
 #include "agvslam/sim/simulator.h"
+#include "tool_main.h"
 
 namespace {
 
@@ -488,23 +489,12 @@ int main(int argc, char** argv) {
   app.add_option("--threshold", o.threshold, "score threshold reported with its precision and recall")->capture_default_str();
   app.add_option("--params-sim", o.params_sim, "simulator settings the --map/--query folders were rendered with");
   app.add_option("--info", o.info, "print a vocabulary file's header and description");
-  try {
-    app.parse(argc, argv);
-  } catch (const CLI::ParseError& e) {
-    return app.exit(e) == 0 ? 0 : 2;
-  }
-  if (o.params_features.empty() && fs::exists("params/features.yaml")) o.params_features = "params/features.yaml";
-  try {
+  return agvslam::apps::parse_and_run(app, argc, argv, [&] {
+    if (o.params_features.empty() && fs::exists("params/features.yaml")) o.params_features = "params/features.yaml";
     if (!o.info.empty()) return info(o);
     if (o.evaluate) return evaluate(o);
     if (o.images.empty() && o.datasets.empty())
       throw InputError("--images/--datasets", "", "expected folders to train on (or --evaluate, or --info FILE)");
     return train(o);
-  } catch (const InputError& e) {
-    spdlog::error("{}", e.what());
-    return 2;
-  } catch (const std::exception& e) {
-    spdlog::error("agvslam-vocab failed: {}", e.what());
-    return 1;
-  }
+  });
 }
