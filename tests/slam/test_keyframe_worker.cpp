@@ -35,6 +35,30 @@ struct Recorder {
   }
 };
 
+// A work function that blocks in the worker until released, so a test can look at the worker meanwhile.
+struct Gate {
+  std::mutex mutex;
+  std::condition_variable cv;
+  bool started = false, released = false;
+  void block() {
+    std::unique_lock<std::mutex> lock(mutex);
+    started = true;
+    cv.notify_all();
+    cv.wait(lock, [&] { return released; });
+  }
+  bool wait_started() {
+    std::unique_lock<std::mutex> lock(mutex);
+    return cv.wait_for(lock, 10s, [&] { return started; });
+  }
+  void release() {
+    {
+      std::lock_guard<std::mutex> lock(mutex);
+      released = true;
+    }
+    cv.notify_all();
+  }
+};
+
 TEST(KeyframeWorker, RefuseNewKeepsTheQueuedOnesAndProcessesThemInlineInOrder) {
   Recorder rec;
   KeyframeWorker w(2, KeyframeWorker::WhenFull::kRefuseNew, [&](const KeyFramePtr& kf) { rec(kf); });
@@ -100,21 +124,11 @@ TEST(KeyframeWorker, TheThreadProcessesEveryKeyframeAndWaitUntilIdleWaitsForTheL
 }
 
 TEST(KeyframeWorker, NotIdleWhileAKeyframeIsInProgress) {
-  std::mutex m;
-  std::condition_variable cv;
-  bool started = false, release = false;
-  KeyframeWorker w(2, KeyframeWorker::WhenFull::kRefuseNew, [&](const KeyFramePtr&) {
-    std::unique_lock<std::mutex> lock(m);
-    started = true;
-    cv.notify_all();
-    cv.wait(lock, [&] { return release; });
-  });
+  Gate gate;
+  KeyframeWorker w(2, KeyframeWorker::WhenFull::kRefuseNew, [&](const KeyFramePtr&) { gate.block(); });
   w.start();
   w.push(keyframe(1));
-  {
-    std::unique_lock<std::mutex> lock(m);
-    ASSERT_TRUE(cv.wait_for(lock, 10s, [&] { return started; }));
-  }
+  ASSERT_TRUE(gate.wait_started());
   EXPECT_TRUE(w.empty());   // taken off the queue ...
   EXPECT_FALSE(w.idle());   // ... but not done
   std::atomic<bool> waited{false};
@@ -124,42 +138,26 @@ TEST(KeyframeWorker, NotIdleWhileAKeyframeIsInProgress) {
   });
   std::this_thread::sleep_for(20ms);
   EXPECT_FALSE(waited.load());
-  {
-    std::lock_guard<std::mutex> lock(m);
-    release = true;
-  }
-  cv.notify_all();
+  gate.release();
   waiter.join();
   EXPECT_TRUE(w.idle());
 }
 
 TEST(KeyframeWorker, StopFinishesTheKeyframeInProgressAndLeavesTheRestQueued) {
-  std::mutex m;
-  std::condition_variable cv;
-  bool started = false, release = false;
+  Gate gate;
   Recorder rec;
   KeyframeWorker w(4, KeyframeWorker::WhenFull::kRefuseNew, [&](const KeyFramePtr& kf) {
     rec(kf);
-    std::unique_lock<std::mutex> lock(m);
-    started = true;
-    cv.notify_all();
-    cv.wait(lock, [&] { return release; });
+    gate.block();
   });
   w.start();
   w.push(keyframe(1));
-  {
-    std::unique_lock<std::mutex> lock(m);
-    ASSERT_TRUE(cv.wait_for(lock, 10s, [&] { return started; }));
-  }
+  ASSERT_TRUE(gate.wait_started());
   w.push(keyframe(2));
   w.push(keyframe(3));
   std::thread stopper([&] { w.stop(); });
   std::this_thread::sleep_for(20ms);
-  {
-    std::lock_guard<std::mutex> lock(m);
-    release = true;
-  }
-  cv.notify_all();
+  gate.release();
   stopper.join();
   EXPECT_FALSE(w.running());
   EXPECT_EQ(rec.get(), (std::vector<uint64_t>{1}));

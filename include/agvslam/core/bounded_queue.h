@@ -113,10 +113,6 @@ class BoundedQueue {
     not_full_.notify_all();
   }
 
-  bool closed() const {
-    std::lock_guard<std::mutex> lock(mutex_);
-    return closed_;
-  }
   // True when closed and nothing is left to pop.
   bool drained() const {
     std::lock_guard<std::mutex> lock(mutex_);
@@ -127,8 +123,6 @@ class BoundedQueue {
     return items_.size();
   }
   bool empty() const { return size() == 0; }
-  std::size_t capacity() const { return capacity_; }
-  QueuePolicy policy() const { return policy_; }
   // Items lost to a full queue: dropped (newest wins) or refused (refuse new).
   uint64_t dropped() const {
     std::lock_guard<std::mutex> lock(mutex_);

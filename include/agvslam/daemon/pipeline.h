@@ -3,9 +3,9 @@
 //
 //   capture   FrameSource::grab -> CapturedFrame
 //      |      capture queue (pipeline.capture_queue frames; newest wins, drops counted; lossless for a dataset at
-//      v      rate 0)
+//      v      rate 0 or played losslessly)
 //   detector  DynamicDetector on the frame (pipeline.dynamic detector; skipped with off), one frame ahead of
-//      |      tracking as in agvslam-run
+//      |      tracking
 //      |      detected queue (1 frame, waits: the capture queue is where frames are dropped)
 //      v
 //   tracking  slam::System::track_stereo -> PoseSampleBuilder -> OutputItem; the processing loop whose
@@ -113,7 +113,6 @@ class Pipeline {
   // Samples of processed frames (not heartbeats) handed to the outputs so far (READY=1 waits for the first).
   uint64_t frames_published() const { return frames_published_.load(); }
   PipelineStats stats() const;
-  PoseOutputs& outputs() { return *outputs_; }
   // The SLAM (agvslam-run loads a map into it before start() and reads its results after wait()).
   slam::System& system() { return *system_; }
   // Called from the tracking loop after every frame and every poll time-out (the systemd watchdog hook).
