@@ -60,7 +60,6 @@
 #include <opencv2/core.hpp>
 #include <optional>
 #include <string>
-#include <tuple>
 #include <vector>
 
 #include "agvslam/core/error.h"
@@ -223,6 +222,7 @@ Input open_input(const Options& o, const Settings& s) {
                                             dataset->root() + " has none");
   }
   in.setup = daemon::dataset_setup(std::move(dataset), first, last);
+  if (!o.map_dataset.empty()) in.T_w1_w2 = simulator_world_offset(o.map_dataset, o.dataset);
   return in;
 }
 
@@ -489,7 +489,7 @@ bool play(const Options& o, const Settings& s, const Input& in, FrameLog& log, S
   log_settings(o, s, in, config);
   daemon::DatasetPlayback playback;
   playback.laps = o.repeat;
-  if (s.blank) std::tie(playback.blank_first, playback.blank_last) = *s.blank;
+  playback.blank = s.blank;
   playback.ground_truth_masks = in.has_gt_masks;
   playback.lossless = true;
   daemon::PipelineOptions options;
@@ -717,8 +717,7 @@ void write_json(const Options& o, const Input& in, const FrameLog& log, const Sl
 int run(const Options& o) {
   const Settings s = check_options(o);
   cv::setNumThreads(o.opencv_threads);
-  Input in = open_input(o, s);
-  if (!o.map_dataset.empty()) in.T_w1_w2 = simulator_world_offset(o.map_dataset, o.dataset);
+  const Input in = open_input(o, s);
 
   FrameLog log(o.mapping == "inline", in.setup.last, (in.setup.last - in.setup.first + 1) * static_cast<std::size_t>(o.repeat));
   SlamResults results;

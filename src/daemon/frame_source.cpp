@@ -115,7 +115,7 @@ bool DatasetSource::load_next() {
   const auto t0 = std::chrono::steady_clock::now();
   pending_.frame = dataset_->frame(next_index_);  // rectified, CV_8UC1
   pending_.frame.t_ns += lap_ * lap_ns_;
-  pending_.blank = next_index_ >= playback_.blank_first && next_index_ <= playback_.blank_last;
+  pending_.blank = playback_.blank && next_index_ >= playback_.blank->first && next_index_ <= playback_.blank->second;
   if (pending_.blank) {
     pending_.frame.left = cv::Mat::zeros(pending_.frame.left.size(), pending_.frame.left.type());
     pending_.frame.right = cv::Mat::zeros(pending_.frame.right.size(), pending_.frame.right.type());

@@ -14,7 +14,9 @@
 
 #include <cstdint>
 #include <memory>
+#include <optional>
 #include <string>
+#include <utility>
 
 #include "agvslam/core/camera.h"
 #include "agvslam/core/stereo_frame.h"
@@ -85,8 +87,8 @@ struct DatasetPlayback {
   // Play the range this many times in a row; the stamps of lap n are shifted by n * lap_duration_ns (laps of a
   // loop sequence that ends where it starts).
   int laps = 1;
-  // Dataset indices first..last (inclusive) delivered as black images (a covered camera); none when first > last.
-  std::size_t blank_first = 1, blank_last = 0;
+  // Dataset indices first..last (inclusive) delivered as black images (a covered camera).
+  std::optional<std::pair<std::size_t, std::size_t>> blank;
   bool ground_truth_masks = false;  // deliver the dataset's ground-truth mask with every frame
   // Paced play (rate > 0) whose frames must all be processed: the pipeline then waits instead of dropping.
   bool lossless = false;
