@@ -204,7 +204,7 @@ agvslam::SE3d simulator_world_offset(const std::string& map_dir, const std::stri
   return T_map_c1.inverse() * T_map_c2;
 }
 
-// The dataset, the frames played and its ground-truth masks.
+// The dataset, the frames played, whether it has ground-truth masks, and (--map-dataset) the map's world frame.
 struct Input {
   daemon::SourceSetup setup;  // the dataset and frames first..last
   bool has_gt_masks = false;  // mask_0/ (simulator): every mode scores the pose's inliers against them
