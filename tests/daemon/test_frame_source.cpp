@@ -24,23 +24,7 @@ int64_t realtime_ns() {
   return static_cast<int64_t>(ts.tv_sec) * 1000000000LL + ts.tv_nsec;
 }
 
-// A KITTI-layout folder of n 64x48 frames; left image i is filled with 10 * i, the right with 10 * i + 1.
-std::string tiny_dataset(int n) {
-  const std::string dir = test::make_temp_dir("agvslamd-source");
-  fs::create_directories(dir + "/image_0");
-  fs::create_directories(dir + "/image_1");
-  std::string times;
-  for (int i = 0; i < n; ++i) {
-    char name[32];
-    std::snprintf(name, sizeof name, "/%06d.png", i);
-    cv::imwrite(dir + "/image_0" + name, cv::Mat(48, 64, CV_8UC1, cv::Scalar(10 * i)));
-    cv::imwrite(dir + "/image_1" + name, cv::Mat(48, 64, CV_8UC1, cv::Scalar(10 * i + 1)));
-    times += std::to_string(0.05 * i) + "\n";
-  }
-  test::write_text(dir + "/times.txt", times);
-  test::write_text(dir + "/calib.txt", "P0: 50 0 32 0 0 50 24 0 0 0 1 0\nP1: 50 0 32 -5 0 50 24 0 0 0 1 0\n");
-  return dir;
-}
+using test::tiny_dataset;
 
 DaemonConfig dataset_config(const std::string& dir, double rate, bool loop = false, const std::string& frames = "") {
   DaemonConfig c;
@@ -118,15 +102,7 @@ TEST(DatasetSource, ReleasesFramesOnAnAbsoluteScheduleAndReturnsWithinTheTimeout
 }
 
 TEST(DatasetSource, PlaysLapsWithContinuingStampsBlackFramesAndGroundTruthMasks) {
-  const std::string dir = tiny_dataset(5);
-  fs::create_directories(dir + "/mask_0");
-  for (int i = 0; i < 5; ++i) {
-    char name[32];
-    std::snprintf(name, sizeof name, "/%06d.png", i);
-    cv::Mat mask(48, 64, CV_8UC1, cv::Scalar(0));
-    mask.col(i).setTo(255);  // frame i: column i moving
-    cv::imwrite(dir + "/mask_0" + name, mask);
-  }
+  const std::string dir = tiny_dataset(5, /*with_masks=*/true);
   const DaemonConfig c = dataset_config(dir, 0, false, "1:3");
   const SourceSetup setup = prepare_source(c);
   DatasetPlayback playback;
