@@ -37,6 +37,7 @@
 #include <vector>
 
 #include "agvslam/core/error.h"
+#include "agvslam/core/stats.h"
 #include "agvslam/dynamic/detector.h"
 #include "agvslam/dynamic/median.h"
 #include "agvslam/eval/detection_scoring.h"
@@ -52,6 +53,7 @@ namespace {
 
 namespace fs = std::filesystem;
 using agvslam::InputError;
+using agvslam::Series;
 namespace dyn = agvslam::dynamic;
 namespace eval = agvslam::eval;
 
@@ -232,19 +234,7 @@ cv::Mat compose_overlay(const cv::Mat& left, const cv::Mat& right, const dyn::De
 }
 
 // ---------------------------------------------------------------------------------------------------------------
-// Timing statistics
-
-struct StageSeries {
-  std::vector<double> ms;
-  void add(double v) { ms.push_back(v); }
-  double quantile(double q) const {
-    if (ms.empty()) return 0;
-    std::vector<double> s = ms;
-    const std::size_t k = std::min(s.size() - 1, static_cast<std::size_t>(std::floor(q * static_cast<double>(s.size() - 1) + 0.5)));
-    std::nth_element(s.begin(), s.begin() + static_cast<std::ptrdiff_t>(k), s.end());
-    return s[k];
-  }
-};
+// Timing
 
 double thread_cpu_ms() {
   timespec ts{};
@@ -546,6 +536,269 @@ std::string fmt(double v, const char* format = "%.4f") {
   return buf;
 }
 
+// The dataset's ground truth where it has one (the simulator: mask_0/, instance_0/, disp_0/, objects.txt,
+// poses.txt).
+struct GroundTruth {
+  bool has_masks = false;
+  std::map<int, std::vector<agvslam::io::SceneObject>> objects;  // by frame
+  // Poses and the last frame's instances and disparity: each object's image motion against a static object's.
+  std::optional<agvslam::Trajectory> poses;
+  cv::Mat last_instances, last_disparity_px;
+};
+
+GroundTruth load_ground_truth(const agvslam::io::StereoDataset& dataset) {
+  GroundTruth gt;
+  gt.has_masks = fs::is_directory(fs::path(dataset.root()) / "mask_0");
+  const fs::path objects_path = fs::path(dataset.root()) / "objects.txt";
+  if (gt.has_masks && fs::exists(objects_path)) gt.objects = agvslam::io::read_objects_file(objects_path.string());
+  if (gt.has_masks) gt.poses = dataset.ground_truth();
+  return gt;
+}
+
+// One frame's ground truth (empty images where the dataset has none).
+struct FrameTruth {
+  cv::Mat mask, instances, disparity_px;
+};
+
+// Sums over the frames.
+struct Totals {
+  eval::DetectionScore score;
+  std::map<std::string, Series> timings;  // per stage (ms)
+  std::vector<std::string> stage_order;   // as the detector reports them
+  int regions = 0, frames_detected = 0, frames_with_regions = 0, unconfirmed = 0;
+  int instances_scored = 0;  // frames whose objects were scored with instance_0/ (their own pixels only)
+  RecallBreakdown breakdown;
+  nlohmann::json per_frame = nlohmann::json::array();
+
+  void add_time(const std::string& stage, double ms) {
+    if (timings.find(stage) == timings.end()) stage_order.push_back(stage);
+    timings[stage].add(ms);
+  }
+};
+
+// mask/, overlay/, rois/ and instances/ under --out.
+void create_output_folders(const Options& o) {
+  const fs::path out(o.out_dir);
+  std::error_code ec;
+  fs::create_directories(out / "mask", ec);
+  if (ec) throw InputError("--out", o.out_dir, "a folder that can be created (" + ec.message() + ")");
+  if (o.overlay_every > 0) fs::create_directories(out / "overlay", ec);
+  if (o.dump_rois) {
+    fs::create_directories(out / "rois", ec);
+    fs::create_directories(out / "instances", ec);
+  }
+}
+
+// The tracked points by test (and with --json-points each of them), and the multi-frame test's figures.
+void add_points_json(const Options& o, const dyn::DetectorResult& result, const cv::Mat& gt_mask, nlohmann::json& jf) {
+  int tracked = 0, epi = 0, depth = 0, multi = 0;
+  for (const auto& p : result.points) {
+    tracked += p.tracked ? 1 : 0;
+    epi += p.dynamic_epipolar ? 1 : 0;
+    depth += p.dynamic_depth ? 1 : 0;
+    multi += p.dynamic_multiframe ? 1 : 0;
+  }
+  if (o.json_points) {
+    nlohmann::json jp = nlohmann::json::array();
+    for (const auto& p : result.points) {
+      if (!p.tracked) continue;
+      const cv::Point q(cvRound(p.cur_px.x), cvRound(p.cur_px.y));
+      const int on_gt = gt_mask.empty() ? -1 : (gt_mask.at<uint8_t>(q) ? 1 : 0);
+      jp.push_back({{"x", p.cur_px.x}, {"y", p.cur_px.y}, {"d", p.cur_disparity_px}, {"age", p.age},
+                    {"densified", p.densified}, {"d_epi", p.d_epi_px}, {"t_epi", p.t_epi_px},
+                    {"reproj", p.reprojection_px}, {"disp_res", p.disparity_residual_px},
+                    {"mf", p.multiframe_px}, {"mf_disp", p.multiframe_disparity_residual_px},
+                    {"epipolar", p.dynamic_epipolar}, {"depth", p.dynamic_depth},
+                    {"multiframe", p.dynamic_multiframe}, {"dynamic", p.dynamic}, {"group", p.group},
+                    {"on_gt", on_gt}});
+    }
+    jf["tracked_points"] = jp;
+  }
+  jf["points"] = {{"tracked", tracked}, {"epipolar", epi}, {"depth", depth}, {"multiframe", multi}};
+  jf["multiframe"] = {{"valid", result.multiframe.valid}, {"frames_back", result.multiframe.frames_back},
+                      {"translation_m", result.multiframe.translation_m}, {"candidates", result.multiframe.candidates}, {"flagged", result.multiframe.flagged}, {"confirmed", result.multiframe.confirmed},
+                      {"a_reproj_px", result.multiframe.test.a_reproj_used_px},
+                      {"a_disp_px", result.multiframe.test.a_disp_used_px}};
+}
+
+// Every ROI with an outline: its size, verdict, points and motion; with --dump-rois also its outline as a PNG
+// (rois/<frame>_<k>.png, whatever its verdict) and its dynamic points' positions in both frames.
+nlohmann::json rois_json(const Options& o, std::size_t frame, const dyn::DetectorResult& result, const cv::Mat& gt_mask) {
+  nlohmann::json jr = nlohmann::json::array();
+  for (std::size_t k = 0; k < result.rois.size(); ++k) {
+    const auto& roi = result.rois[k];
+    if (roi.outline.empty()) continue;
+    const int px = cv::countNonZero(roi.outline);
+    const int on_gt = gt_mask.empty() ? -1 : cv::countNonZero(roi.outline & gt_mask(roi.roi));
+    jr.push_back({{"roi", {roi.roi.x, roi.roi.y, roi.roi.width, roi.roi.height}}, {"pixels", px}, {"on_gt", on_gt},
+                  {"points", roi.points.size()}, {"tracked_inside", roi.outline_stats.tracked_inside},
+                  {"dynamic_inside", roi.outline_stats.dynamic_inside},
+                  {"multiframe_tested_inside", roi.outline_stats.multiframe_tested_inside},
+                  {"multiframe_dynamic_inside", roi.outline_stats.multiframe_dynamic_inside}, {"d", roi.mean_disparity_px},
+                  {"motion", roi.outline_motion.apparent_motion_px},
+                  {"motion_multiframe", roi.outline_motion_multiframe.apparent_motion_px},
+                  {"verdict", dyn::to_string(roi.outline_verdict)}, {"coasted", roi.coasted}, {"median_offset", roi.outline_stats.median_offset_px},
+                  {"object", roi.object_id},
+                  {"motion_carve", {{"ran", roi.motion_carve.ran}, {"blocks_tested", roi.motion_carve.blocks_tested},
+                                    {"blocks_static", roi.motion_carve.blocks_static},
+                                    {"pixels_removed", roi.motion_carve.pixels_removed}}}});
+    if (o.dump_rois) {
+      char name[48];
+      std::snprintf(name, sizeof(name), "%06zu_%02zu.png", frame, k);
+      write_png((fs::path(o.out_dir) / "rois" / name).string(), roi.outline);
+      nlohmann::json tracks = nlohmann::json::array();
+      for (int idx : roi.points) {
+        const auto& p = result.points[static_cast<std::size_t>(idx)];
+        tracks.push_back({p.prev_px.x, p.prev_px.y, p.cur_px.x, p.cur_px.y, p.cur_disparity_px});
+      }
+      jr.back()["outline_png"] = std::string("rois/") + name;
+      jr.back()["tracks"] = tracks;
+    }
+  }
+  return jr;
+}
+
+// The frame scored against the ground-truth masks (eqs. 12-14), with per-object and per-detection diagnostics and
+// each moving object's ground-truth image motion since the last frame (eval/object_motion.h).
+void score_frame(std::size_t i, std::size_t first, const agvslam::io::StereoDataset& dataset, const GroundTruth& gt,
+                 const FrameTruth& truth, const eval::DetectionScoringConfig& scoring, const dyn::DetectorResult& result,
+                 Totals& totals, nlohmann::json& jf) {
+  std::vector<eval::GroundTruthObject> gt_objects;
+  const auto it = gt.objects.find(static_cast<int>(i));
+  if (it != gt.objects.end()) {
+    for (const auto& obj : it->second) {
+      if (obj.moving) gt_objects.push_back({obj.id, obj.box});
+    }
+  }
+  const eval::FrameDetectionScore f =
+      eval::score_detection_instances(result.mask.instances, truth.mask, gt_objects, scoring, truth.instances);
+  totals.score.add(f);
+  totals.instances_scored += truth.instances.empty() ? 0 : 1;
+  jf["tp"] = f.true_positives;
+  jf["fp"] = f.false_positives;
+  jf["fn"] = f.false_negatives;
+  jf["iou"] = f.matched_iou;
+  jf["objects"] = object_diagnostics(it == gt.objects.end() ? nullptr : &it->second, truth.mask, truth.instances,
+                                     truth.disparity_px, dataset.calibration().bf(), result, f);
+  if (gt.poses && i < gt.poses->size() && i > first && !truth.instances.empty() && !truth.disparity_px.empty() &&
+      !gt.last_instances.empty() && !gt.last_disparity_px.empty()) {
+    const agvslam::SE3d T_now_then = (*gt.poses)[i].T_w_c.inverse() * (*gt.poses)[i - 1].T_w_c;
+    for (auto& d : jf["objects"]) {
+      if (!d["moving"].get<bool>()) continue;
+      const eval::ObjectImageMotion m = eval::ground_truth_image_motion(
+          gt.last_instances, gt.last_disparity_px, truth.instances, truth.disparity_px, d["id"].get<int>(),
+          dataset.calibration().left, dataset.calibration().bf(), T_now_then);
+      d["gt_motion_px"] = m.offset_px;
+      d["gt_motion_valid"] = m.valid;
+    }
+  }
+  if (it != gt.objects.end()) totals.breakdown.add(it->second, jf["objects"], truth.mask.size(), scoring);
+  jf["detections"] = detection_diagnostics(f, result.mask.instances, truth.mask);
+}
+
+// The figures of a frame the detector compared with a previous one: stage times, regions, band, points, ROIs and,
+// with ground truth, the scores.
+void add_detected_frame(const Options& o, std::size_t i, std::size_t first, const agvslam::io::StereoDataset& dataset,
+                        const GroundTruth& gt, const FrameTruth& truth, const eval::DetectionScoringConfig& scoring,
+                        const dyn::DetectorResult& result, double detect_cpu_ms, Totals& totals, nlohmann::json& jf) {
+  ++totals.frames_detected;
+  for (const auto& [name, ms] : stage_values(result.timings)) totals.add_time(name, ms);
+  // The detector's CPU time on this thread (all of it with --opencv-threads 1): robust to other load.
+  totals.add_time("total_cpu", detect_cpu_ms);
+  const int n_regions = static_cast<int>(result.mask.regions.size());
+  totals.regions += n_regions;
+  totals.frames_with_regions += n_regions > 0 ? 1 : 0;
+  jf["regions"] = n_regions;
+  if (result.band.ran) {
+    jf["band"] = {{"static_segment_px", result.band.static_segment_px}, {"tracks", result.band.tracks}, {"corners", result.band.corners},
+                  {"seeds", result.band.seeds.size()}, {"regions", result.band.regions.size()},
+                  {"joined", result.band_joined}, {"objects", result.band_objects}, {"ms", result.timings.band_ms}};
+  }
+  if (result.band_driving_seeds > 0) {
+    jf["band_driving"] = {{"seeds", result.band_driving_seeds}, {"dynamic", result.band_driving_dynamic}};
+  }
+  jf["unconfirmed_objects"] = result.unconfirmed_objects;  // found, not reported (detector.confirm_min_box_iou)
+  totals.unconfirmed += result.unconfirmed_objects;
+  jf["dynamic_points"] = result.dynamic_point_count();
+  add_points_json(o, result, truth.mask, jf);
+  jf["mask_pixels"] = result.mask.pixel_count();
+  jf["total_ms"] = result.timings.total_ms;
+  jf["lk_levels"] = result.lk_levels;
+  if (result.ground_plane.valid) {
+    jf["ground_plane"] = {result.ground_plane.a, result.ground_plane.b, result.ground_plane.c};
+  }
+  jf["rois"] = rois_json(o, i, result, truth.mask);
+  if (!truth.mask.empty()) score_frame(i, first, dataset, gt, truth, scoring, result, totals, jf);
+}
+
+// PRECISION line, counts, scores with their breakdowns and the stage times.
+void print_summary(bool scored, const eval::DetectionScoringConfig& scoring, Totals& totals) {
+  const double nan = std::nan("");
+  const eval::DetectionScore& score = totals.score;
+  const double p = scored ? score.precision() : nan, r = scored ? score.recall() : nan, iou = scored ? score.mean_iou() : nan;
+  std::printf("PRECISION %s RECALL %s IOU %s\n", fmt(p).c_str(), fmt(r).c_str(), fmt(iou).c_str());
+  std::printf("frames: %d detected (the first has no previous frame); %d regions, %.3f per frame, %d frames with regions\n",
+              totals.frames_detected, totals.regions,
+              totals.frames_detected > 0 ? static_cast<double>(totals.regions) / totals.frames_detected : 0.0,
+              totals.frames_with_regions);
+  if (scored) {
+    std::printf("objects (IoU >= %.2f, objects under %d px don't care; %s): TP %d FP %d FN %d, %d don't-care; "
+                "false regions per 100 frames %.2f\n",
+                scoring.min_iou, scoring.min_object_pixels,
+                totals.instances_scored == score.frames() ? "each object its own pixels (instance_0/)"
+                : totals.instances_scored == 0          ? "each object the moving pixels in its box (no instance_0/)"
+                                                        : "instance_0/ for some frames only",
+                score.true_positives(), score.false_positives(), score.false_negatives(), score.ignored_objects(),
+                score.false_positives_per_100_frames());
+    std::printf("pixels: precision %.4f recall %.4f IoU %.4f\n", score.pixel_precision(), score.pixel_recall(),
+                score.pixel_iou());
+    std::printf("%s\n", totals.breakdown.describe().c_str());
+    std::printf("%s\n", totals.breakdown.describe_misses().c_str());
+    if (totals.breakdown.has_motion()) std::printf("%s\n", totals.breakdown.describe_motion().c_str());
+  } else {
+    std::printf("no ground-truth masks (mask_0/) in the dataset: not scored\n");
+  }
+  std::printf("time per frame [ms]      median      p95\n");
+  for (const auto& name : totals.stage_order) {
+    std::printf("  %-20s %9.3f %8.3f\n", name.c_str(), totals.timings[name].median(), totals.timings[name].quantile(0.95));
+  }
+}
+
+void write_json(const Options& o, const agvslam::io::StereoDataset& dataset, std::size_t first, std::size_t last,
+                bool scored, const eval::DetectionScoringConfig& scoring, Totals& totals) {
+  const eval::DetectionScore& score = totals.score;
+  nlohmann::json j;
+  j["dataset"] = dataset.root();
+  j["frames"] = {{"first", first}, {"last", last}, {"detected", totals.frames_detected}};
+  j["regions"] = {{"total", totals.regions},
+                  {"per_frame", totals.frames_detected > 0 ? static_cast<double>(totals.regions) / totals.frames_detected : 0.0},
+                  {"unconfirmed_objects", totals.unconfirmed}};
+  if (scored) {
+    j["scoring"] = {{"min_iou", scoring.min_iou}, {"min_object_pixels", scoring.min_object_pixels},
+                    {"instance_frames", totals.instances_scored}};
+    j["precision"] = score.precision();
+    j["recall"] = score.recall();
+    j["mean_iou"] = score.mean_iou();
+    j["true_positives"] = score.true_positives();
+    j["false_positives"] = score.false_positives();
+    j["false_negatives"] = score.false_negatives();
+    j["dont_care_objects"] = score.ignored_objects();
+    j["false_regions_per_100_frames"] = score.false_positives_per_100_frames();
+    j["pixel"] = {{"precision", score.pixel_precision()}, {"recall", score.pixel_recall()}, {"iou", score.pixel_iou()}};
+    j["recall_breakdown"] = totals.breakdown.to_json();
+    j["misses_by_stage"] = totals.breakdown.misses_json();
+    if (totals.breakdown.has_motion()) j["recall_by_ground_truth_motion"] = totals.breakdown.motion_json();
+  }
+  nlohmann::json jt;
+  for (const auto& name : totals.stage_order) {
+    jt[name] = {{"median_ms", totals.timings[name].median()}, {"p95_ms", totals.timings[name].quantile(0.95)}};
+  }
+  j["timings"] = jt;
+  j["per_frame"] = totals.per_frame;
+  std::string text = j.dump(2) + "\n";
+  agvslam::io::write_file_atomically(o.json_path, text);
+}
+
 int run(const Options& o) {
   const auto dataset = agvslam::io::open_dataset(o.dataset, o.calib);
   std::size_t first = 0, last = 0;
@@ -563,41 +816,18 @@ int run(const Options& o) {
   spdlog::info("  stereo settings{}", o.params_stereo.empty() ? " (built-in defaults)" : " from " + o.params_stereo);
   for (const auto& line : stereo_config.describe()) spdlog::info("    {}", line);
 
-  // Ground truth: masks (and object boxes) where the dataset has them.
-  const bool has_gt_masks = fs::is_directory(fs::path(dataset->root()) / "mask_0");
-  std::map<int, std::vector<agvslam::io::SceneObject>> objects;
-  const fs::path objects_path = fs::path(dataset->root()) / "objects.txt";
-  if (has_gt_masks && fs::exists(objects_path)) objects = agvslam::io::read_objects_file(objects_path.string());
+  GroundTruth gt = load_ground_truth(*dataset);
   eval::DetectionScoringConfig scoring;
   scoring.min_iou = o.min_iou;
   scoring.min_object_pixels = o.min_object_pixels;
-
+  create_output_folders(o);
   const fs::path out(o.out_dir);
-  std::error_code ec;
-  fs::create_directories(out / "mask", ec);
-  if (ec) throw InputError("--out", o.out_dir, "a folder that can be created (" + ec.message() + ")");
-  if (o.overlay_every > 0) fs::create_directories(out / "overlay", ec);
-  if (o.dump_rois) {
-    fs::create_directories(out / "rois", ec);
-    fs::create_directories(out / "instances", ec);
-  }
 
   cv::setNumThreads(o.opencv_threads);
   dyn::DynamicDetector detector(dataset->calibration(), dynamic_config, stereo_config);
   agvslam::stereo::StereoSgbm display_sgbm(stereo_config.sgbm);
   dyn::DetectorResult result;
-  eval::DetectionScore score;
-  std::map<std::string, StageSeries> timings;
-  std::vector<std::string> stage_order;
-  int regions_total = 0, frames_detected = 0, frames_with_regions = 0, unconfirmed_total = 0;
-  int instances_scored = 0;  // frames whose objects were scored with instance_0/ (their own pixels only)
-  RecallBreakdown breakdown;
-  nlohmann::json per_frame = nlohmann::json::array();
-  // Ground-truth poses (the simulator's poses.txt) and the last frame's instances and disparity: each object's
-  // image motion against a static object's.
-  const std::optional<agvslam::Trajectory> gt_poses = has_gt_masks ? dataset->ground_truth() : std::nullopt;
-  cv::Mat last_gt_instances, last_gt_disparity;
-
+  Totals totals;
   for (std::size_t i = first; i <= last; ++i) {
     const agvslam::StereoFrame frame = dataset->frame(i);
     const double cpu_before_ms = thread_cpu_ms();
@@ -605,217 +835,28 @@ int run(const Options& o) {
     const double detect_cpu_ms = thread_cpu_ms() - cpu_before_ms;
     write_png((out / "mask" / frame_name(i)).string(), result.mask.image);
     if (o.dump_rois) write_png((out / "instances" / frame_name(i)).string(), result.mask.instances);
-    cv::Mat gt_mask, gt_instances, gt_disparity;
-    if (has_gt_masks) {
-      gt_mask = dataset->ground_truth_mask(i);
-      gt_instances = dataset->ground_truth_instances(i);  // empty without instance_0/
-      gt_disparity = dataset->ground_truth_disparity_px(i);  // empty without disp_0/
+    FrameTruth truth;
+    if (gt.has_masks) {
+      truth.mask = dataset->ground_truth_mask(i);
+      truth.instances = dataset->ground_truth_instances(i);        // empty without instance_0/
+      truth.disparity_px = dataset->ground_truth_disparity_px(i);  // empty without disp_0/
     }
     nlohmann::json jf;
     jf["frame"] = i;
-    if (result.has_previous) {
-      ++frames_detected;
-      for (const auto& [name, ms] : stage_values(result.timings)) {
-        if (timings.find(name) == timings.end()) stage_order.push_back(name);
-        timings[name].add(ms);
-      }
-      // The detector's CPU time on this thread (all of it with --opencv-threads 1): robust to other load.
-      if (timings.find("total_cpu") == timings.end()) stage_order.push_back("total_cpu");
-      timings["total_cpu"].add(detect_cpu_ms);
-      const int n_regions = static_cast<int>(result.mask.regions.size());
-      regions_total += n_regions;
-      frames_with_regions += n_regions > 0 ? 1 : 0;
-      jf["regions"] = n_regions;
-      if (result.band.ran) {
-        jf["band"] = {{"static_segment_px", result.band.static_segment_px}, {"tracks", result.band.tracks}, {"corners", result.band.corners},
-                      {"seeds", result.band.seeds.size()}, {"regions", result.band.regions.size()},
-                      {"joined", result.band_joined}, {"objects", result.band_objects}, {"ms", result.timings.band_ms}};
-      }
-      if (result.band_driving_seeds > 0) {
-        jf["band_driving"] = {{"seeds", result.band_driving_seeds}, {"dynamic", result.band_driving_dynamic}};
-      }
-      jf["unconfirmed_objects"] = result.unconfirmed_objects;  // found, not reported (detector.confirm_min_box_iou)
-      unconfirmed_total += result.unconfirmed_objects;
-      jf["dynamic_points"] = result.dynamic_point_count();
-      {
-        int tracked = 0, epi = 0, depth = 0, multi = 0;
-        for (const auto& p : result.points) {
-          tracked += p.tracked ? 1 : 0;
-          epi += p.dynamic_epipolar ? 1 : 0;
-          depth += p.dynamic_depth ? 1 : 0;
-          multi += p.dynamic_multiframe ? 1 : 0;
-        }
-        if (o.json_points) {
-          nlohmann::json jp = nlohmann::json::array();
-          for (const auto& p : result.points) {
-            if (!p.tracked) continue;
-            const cv::Point q(cvRound(p.cur_px.x), cvRound(p.cur_px.y));
-            const int on_gt = gt_mask.empty() ? -1 : (gt_mask.at<uint8_t>(q) ? 1 : 0);
-            jp.push_back({{"x", p.cur_px.x}, {"y", p.cur_px.y}, {"d", p.cur_disparity_px}, {"age", p.age},
-                          {"densified", p.densified}, {"d_epi", p.d_epi_px}, {"t_epi", p.t_epi_px},
-                          {"reproj", p.reprojection_px}, {"disp_res", p.disparity_residual_px},
-                          {"mf", p.multiframe_px}, {"mf_disp", p.multiframe_disparity_residual_px},
-                          {"epipolar", p.dynamic_epipolar}, {"depth", p.dynamic_depth},
-                          {"multiframe", p.dynamic_multiframe}, {"dynamic", p.dynamic}, {"group", p.group},
-                          {"on_gt", on_gt}});
-          }
-          jf["tracked_points"] = jp;
-        }
-        jf["points"] = {{"tracked", tracked}, {"epipolar", epi}, {"depth", depth}, {"multiframe", multi}};
-        jf["multiframe"] = {{"valid", result.multiframe.valid}, {"frames_back", result.multiframe.frames_back},
-                            {"translation_m", result.multiframe.translation_m}, {"candidates", result.multiframe.candidates}, {"flagged", result.multiframe.flagged}, {"confirmed", result.multiframe.confirmed},
-                            {"a_reproj_px", result.multiframe.test.a_reproj_used_px},
-                            {"a_disp_px", result.multiframe.test.a_disp_used_px}};
-      }
-      jf["mask_pixels"] = result.mask.pixel_count();
-      jf["total_ms"] = result.timings.total_ms;
-      jf["lk_levels"] = result.lk_levels;
-      if (result.ground_plane.valid) {
-        jf["ground_plane"] = {result.ground_plane.a, result.ground_plane.b, result.ground_plane.c};
-      }
-      {
-        nlohmann::json jr = nlohmann::json::array();
-        for (std::size_t k = 0; k < result.rois.size(); ++k) {
-          const auto& roi = result.rois[k];
-          if (roi.outline.empty()) continue;
-          const int px = cv::countNonZero(roi.outline);
-          const int on_gt = gt_mask.empty() ? -1 : cv::countNonZero(roi.outline & gt_mask(roi.roi));
-          jr.push_back({{"roi", {roi.roi.x, roi.roi.y, roi.roi.width, roi.roi.height}}, {"pixels", px}, {"on_gt", on_gt},
-                        {"points", roi.points.size()}, {"tracked_inside", roi.outline_stats.tracked_inside},
-                        {"dynamic_inside", roi.outline_stats.dynamic_inside},
-                        {"multiframe_tested_inside", roi.outline_stats.multiframe_tested_inside},
-                        {"multiframe_dynamic_inside", roi.outline_stats.multiframe_dynamic_inside}, {"d", roi.mean_disparity_px},
-                        {"motion", roi.outline_motion.apparent_motion_px},
-                        {"motion_multiframe", roi.outline_motion_multiframe.apparent_motion_px},
-                        {"verdict", dyn::to_string(roi.outline_verdict)}, {"coasted", roi.coasted}, {"median_offset", roi.outline_stats.median_offset_px},
-                        {"object", roi.object_id},
-                        {"motion_carve", {{"ran", roi.motion_carve.ran}, {"blocks_tested", roi.motion_carve.blocks_tested},
-                                          {"blocks_static", roi.motion_carve.blocks_static},
-                                          {"pixels_removed", roi.motion_carve.pixels_removed}}}});
-          if (o.dump_rois) {
-            // Debugging (--dump-rois): the outline as drawn, whatever its verdict, and the ROI's own dynamic
-            // points with their positions in both frames.
-            char name[48];
-            std::snprintf(name, sizeof(name), "%06zu_%02zu.png", i, k);
-            write_png((out / "rois" / name).string(), roi.outline);
-            nlohmann::json tracks = nlohmann::json::array();
-            for (int idx : roi.points) {
-              const auto& p = result.points[static_cast<std::size_t>(idx)];
-              tracks.push_back({p.prev_px.x, p.prev_px.y, p.cur_px.x, p.cur_px.y, p.cur_disparity_px});
-            }
-            jr.back()["outline_png"] = std::string("rois/") + name;
-            jr.back()["tracks"] = tracks;
-          }
-        }
-        jf["rois"] = jr;
-      }
-      if (!gt_mask.empty()) {
-        std::vector<eval::GroundTruthObject> gt_objects;
-        const auto it = objects.find(static_cast<int>(i));
-        if (it != objects.end()) {
-          for (const auto& obj : it->second) {
-            if (obj.moving) gt_objects.push_back({obj.id, obj.box});
-          }
-        }
-        const eval::FrameDetectionScore f =
-            eval::score_detection_instances(result.mask.instances, gt_mask, gt_objects, scoring, gt_instances);
-        score.add(f);
-        instances_scored += gt_instances.empty() ? 0 : 1;
-        jf["tp"] = f.true_positives;
-        jf["fp"] = f.false_positives;
-        jf["fn"] = f.false_negatives;
-        jf["iou"] = f.matched_iou;
-        jf["objects"] = object_diagnostics(it == objects.end() ? nullptr : &it->second, gt_mask, gt_instances, gt_disparity,
-                                           dataset->calibration().bf(), result, f);
-        // Each object's image motion against a static object's since the last frame (ground-truth poses,
-        // disparity and instances; eval/object_motion.h).
-        if (gt_poses && i < gt_poses->size() && i > first && !gt_instances.empty() && !gt_disparity.empty() &&
-            !last_gt_instances.empty() && !last_gt_disparity.empty()) {
-          const agvslam::SE3d T_now_then = (*gt_poses)[i].T_w_c.inverse() * (*gt_poses)[i - 1].T_w_c;
-          for (auto& d : jf["objects"]) {
-            if (!d["moving"].get<bool>()) continue;
-            const eval::ObjectImageMotion m = eval::ground_truth_image_motion(
-                last_gt_instances, last_gt_disparity, gt_instances, gt_disparity, d["id"].get<int>(),
-                dataset->calibration().left, dataset->calibration().bf(), T_now_then);
-            d["gt_motion_px"] = m.offset_px;
-            d["gt_motion_valid"] = m.valid;
-          }
-        }
-        if (it != objects.end()) breakdown.add(it->second, jf["objects"], gt_mask.size(), scoring);
-        jf["detections"] = detection_diagnostics(f, result.mask.instances, gt_mask);
-      }
-    }
-    per_frame.push_back(jf);
-    last_gt_instances = gt_instances;
-    last_gt_disparity = gt_disparity;
+    if (result.has_previous) add_detected_frame(o, i, first, *dataset, gt, truth, scoring, result, detect_cpu_ms, totals, jf);
+    totals.per_frame.push_back(jf);
+    gt.last_instances = truth.instances;
+    gt.last_disparity_px = truth.disparity_px;
     if (o.overlay_every > 0 && result.has_previous && (i - first) % static_cast<std::size_t>(o.overlay_every) == 0) {
       write_png((out / "overlay" / frame_name(i)).string(),
-                compose_overlay(frame.left, frame.right, result, gt_mask, display_sgbm));
+                compose_overlay(frame.left, frame.right, result, truth.mask, display_sgbm));
     }
     if ((i - first + 1) % 100 == 0) spdlog::info("  frame {}/{}", i - first + 1, last - first + 1);
   }
 
-  const bool scored = has_gt_masks && score.frames() > 0;
-  const double nan = std::nan("");
-  const double p = scored ? score.precision() : nan, r = scored ? score.recall() : nan, iou = scored ? score.mean_iou() : nan;
-  std::printf("PRECISION %s RECALL %s IOU %s\n", fmt(p).c_str(), fmt(r).c_str(), fmt(iou).c_str());
-  std::printf("frames: %d detected (the first has no previous frame); %d regions, %.3f per frame, %d frames with regions\n",
-              frames_detected, regions_total, frames_detected > 0 ? static_cast<double>(regions_total) / frames_detected : 0.0,
-              frames_with_regions);
-  if (scored) {
-    std::printf("objects (IoU >= %.2f, objects under %d px don't care; %s): TP %d FP %d FN %d, %d don't-care; "
-                "false regions per 100 frames %.2f\n",
-                scoring.min_iou, scoring.min_object_pixels,
-                instances_scored == score.frames() ? "each object its own pixels (instance_0/)"
-                : instances_scored == 0          ? "each object the moving pixels in its box (no instance_0/)"
-                                                 : "instance_0/ for some frames only",
-                score.true_positives(), score.false_positives(), score.false_negatives(), score.ignored_objects(),
-                score.false_positives_per_100_frames());
-    std::printf("pixels: precision %.4f recall %.4f IoU %.4f\n", score.pixel_precision(), score.pixel_recall(),
-                score.pixel_iou());
-    std::printf("%s\n", breakdown.describe().c_str());
-    std::printf("%s\n", breakdown.describe_misses().c_str());
-    if (breakdown.has_motion()) std::printf("%s\n", breakdown.describe_motion().c_str());
-  } else {
-    std::printf("no ground-truth masks (mask_0/) in the dataset: not scored\n");
-  }
-  std::printf("time per frame [ms]      median      p95\n");
-  for (const auto& name : stage_order) {
-    std::printf("  %-20s %9.3f %8.3f\n", name.c_str(), timings[name].quantile(0.5), timings[name].quantile(0.95));
-  }
-
-  if (!o.json_path.empty()) {
-    nlohmann::json j;
-    j["dataset"] = dataset->root();
-    j["frames"] = {{"first", first}, {"last", last}, {"detected", frames_detected}};
-    j["regions"] = {{"total", regions_total},
-                    {"per_frame", frames_detected > 0 ? static_cast<double>(regions_total) / frames_detected : 0.0},
-                    {"unconfirmed_objects", unconfirmed_total}};
-    if (scored) {
-      j["scoring"] = {{"min_iou", scoring.min_iou}, {"min_object_pixels", scoring.min_object_pixels},
-                      {"instance_frames", instances_scored}};
-      j["precision"] = score.precision();
-      j["recall"] = score.recall();
-      j["mean_iou"] = score.mean_iou();
-      j["true_positives"] = score.true_positives();
-      j["false_positives"] = score.false_positives();
-      j["false_negatives"] = score.false_negatives();
-      j["dont_care_objects"] = score.ignored_objects();
-      j["false_regions_per_100_frames"] = score.false_positives_per_100_frames();
-      j["pixel"] = {{"precision", score.pixel_precision()}, {"recall", score.pixel_recall()}, {"iou", score.pixel_iou()}};
-      j["recall_breakdown"] = breakdown.to_json();
-      j["misses_by_stage"] = breakdown.misses_json();
-      if (breakdown.has_motion()) j["recall_by_ground_truth_motion"] = breakdown.motion_json();
-    }
-    nlohmann::json jt;
-    for (const auto& name : stage_order) {
-      jt[name] = {{"median_ms", timings[name].quantile(0.5)}, {"p95_ms", timings[name].quantile(0.95)}};
-    }
-    j["timings"] = jt;
-    j["per_frame"] = per_frame;
-    std::string text = j.dump(2) + "\n";
-    agvslam::io::write_file_atomically(o.json_path, text);
-  }
+  const bool scored = gt.has_masks && totals.score.frames() > 0;
+  print_summary(scored, scoring, totals);
+  if (!o.json_path.empty()) write_json(o, *dataset, first, last, scored, scoring, totals);
   return 0;
 }
 

@@ -26,6 +26,7 @@
 #include <vector>
 
 #include "agvslam/core/error.h"
+#include "agvslam/core/stats.h"
 #include "agvslam/drivers/dds/subscriber.h"
 #include "tool_main.h"
 
@@ -47,15 +48,6 @@ struct Options {
   std::string summary_path;
 };
 
-double percentile(std::vector<double> v, double p) {
-  if (v.empty()) return 0.0;
-  std::sort(v.begin(), v.end());
-  const double pos = p * static_cast<double>(v.size() - 1);
-  const auto lo = static_cast<std::size_t>(std::floor(pos));
-  const std::size_t hi = std::min(lo + 1, v.size() - 1);
-  return v[lo] + (pos - static_cast<double>(lo)) * (v[hi] - v[lo]);
-}
-
 double yaw_deg(const geometry_msgs_msg_dds__Quaternion_& q) {
   return std::atan2(2.0 * (q.w * q.z + q.x * q.y), 1.0 - 2.0 * (q.y * q.y + q.z * q.z)) * 180.0 / M_PI;
 }
@@ -71,12 +63,12 @@ int run(const Options& o) {
                o.timeout_s, o.json ? "json" : "text");
 
   long received = 0;
-  std::vector<double> latency_ms;
+  agvslam::Series latency_ms;
   std::map<std::string, long> per_topic;
   auto emit = [&](const char* topic, nlohmann::json msg, int64_t stamp_ns, int64_t recv_t_ns, const std::string& text) {
     ++received;
     ++per_topic[topic];
-    latency_ms.push_back(static_cast<double>(recv_t_ns - stamp_ns) * 1e-6);
+    latency_ms.add(static_cast<double>(recv_t_ns - stamp_ns) * 1e-6);
     if (o.json) {
       nlohmann::json line = {{"topic", topic}, {"recv_t_ns", recv_t_ns}, {"msg", std::move(msg)}};
       std::printf("%s\n", line.dump().c_str());
@@ -131,10 +123,10 @@ int run(const Options& o) {
   nlohmann::json summary = {{"received", received},
                             {"per_topic", per_topic},
                             {"latency_ms",
-                             {{"median", percentile(latency_ms, 0.5)},
-                              {"p95", percentile(latency_ms, 0.95)},
-                              {"p99", percentile(latency_ms, 0.99)},
-                              {"max", latency_ms.empty() ? 0.0 : *std::max_element(latency_ms.begin(), latency_ms.end())}}},
+                             {{"median", latency_ms.median()},
+                              {"p95", latency_ms.quantile(0.95)},
+                              {"p99", latency_ms.quantile(0.99)},
+                              {"max", latency_ms.max()}}},
                             {"timed_out", timed_out}};
   if (o.json) std::printf("%s\n", nlohmann::json{{"summary", summary}}.dump().c_str());
   std::fflush(stdout);
@@ -144,7 +136,7 @@ int run(const Options& o) {
     out << summary.dump(2) << "\n";
   }
   spdlog::info("agvslam-echo: received {} samples; latency stamp->receive median {:.3f} ms, p99 {:.3f} ms{}",
-               received, percentile(latency_ms, 0.5), percentile(latency_ms, 0.99), timed_out ? " (timed out)" : "");
+               received, latency_ms.median(), latency_ms.quantile(0.99), timed_out ? " (timed out)" : "");
   return timed_out && o.count > 0 && received < o.count ? 1 : 0;
 }
 

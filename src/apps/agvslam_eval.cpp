@@ -5,19 +5,21 @@
 //
 // Association is by index when both files are KITTI poses without times; otherwise by nearest time stamp
 // (--times gives KITTI files their time stamps). The first line of stdout is `ATE_RMSE_M <value>`.
-// Exit status: 0 on success, 2 on bad input (with a message naming the file or option).
+// Exit status: 0 on success, 2 on bad input (with a message naming the file or option), 1 on any other failure.
 
 #include <CLI/CLI.hpp>
 #include <cstdio>
 #include <fstream>
 #include <nlohmann/json.hpp>
 #include <optional>
+#include <spdlog/sinks/stdout_color_sinks.h>
 #include <spdlog/spdlog.h>
 
 #include "agvslam/core/error.h"
 #include "agvslam/eval/metrics.h"
 #include "agvslam/eval/plot.h"
 #include "agvslam/io/trajectory_io.h"
+#include "tool_main.h"
 
 namespace {
 
@@ -136,6 +138,8 @@ int run(const Options& o) {
 }  // namespace
 
 int main(int argc, char** argv) {
+  // Logs go to stderr: stdout carries the results, starting with the ATE_RMSE_M line.
+  spdlog::set_default_logger(spdlog::stderr_color_mt("agvslam-eval"));
   CLI::App app{"agvslam-eval: ATE, RPE and KITTI relative errors of an estimated trajectory against ground truth"};
   Options o;
   app.add_option("--gt", o.gt_path, "ground-truth trajectory file")->required();
@@ -149,11 +153,5 @@ int main(int argc, char** argv) {
   app.add_option("--rpe-delta", o.rpe_delta, "frame step of the relative pose error")->capture_default_str();
   app.add_option("--json", o.json_path, "write every figure to this JSON file");
   app.add_option("--plot", o.plot_path, "write a top-view PNG of both trajectories");
-  CLI11_PARSE(app, argc, argv);
-  try {
-    return run(o);
-  } catch (const InputError& e) {
-    std::fprintf(stderr, "agvslam-eval: error: %s\n", e.what());
-    return 2;
-  }
+  return agvslam::apps::parse_and_run(app, argc, argv, [&] { return run(o); });
 }

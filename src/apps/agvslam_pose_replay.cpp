@@ -71,104 +71,101 @@ uint32_t parse_id(const std::string& text) {
   throw agvslam::InputError("--can-base-id", text, "expected a CAN id such as 0x300");
 }
 
-int run(const Options& o) {
+void check_options(const Options& o) {
   if ((o.synthetic > 0) == !o.trajectory.empty()) {
     throw agvslam::InputError("options", "--synthetic/--trajectory", "expected exactly one of them");
   }
   if (!o.dds && o.can_interface.empty() && !o.json) {
     throw agvslam::InputError("options", "--dds/--can/--json", "expected at least one output");
   }
-  agvslam::Trajectory traj;
-  if (!o.trajectory.empty()) {
-    traj = agvslam::io::read_trajectory(o.trajectory, agvslam::io::TrajectoryFormat::kTum, std::nullopt);
-    if (traj.empty()) throw agvslam::InputError(o.trajectory, "", "expected at least one pose");
-  }
-  const std::size_t n = o.synthetic > 0 ? static_cast<std::size_t>(o.synthetic) : traj.size();
+}
 
-  std::unique_ptr<dds::DdsPosePublisher> dds_pub;
-  if (o.dds) {
-    dds::DdsConfig cfg;
-    cfg.domain_id = o.domain;
-    cfg.network_interface = o.interface;
-    cfg.topic_namespace = o.ns;
-    cfg.validate("agvslam-pose-replay options");
-    spdlog::info("agvslam-pose-replay: {}{}", cfg.describe(), o.sync ? ", writes on the caller's thread" : "");
-    dds_pub = std::make_unique<dds::DdsPosePublisher>(cfg, !o.sync);
-    if (o.wait_subscribers > 0) {
-      const auto timeout = std::chrono::milliseconds(static_cast<int64_t>(o.wait_timeout_s * 1000));
-      if (!dds_pub->wait_for_subscribers(o.wait_subscribers, timeout)) {
-        spdlog::error("agvslam-pose-replay: fewer than {} subscriber(s) on every topic after {} s", o.wait_subscribers,
-                      o.wait_timeout_s);
-        return 1;
-      }
-    }
-  }
-  std::unique_ptr<can::CanPosePublisher> can_pub;
-  if (!o.can_interface.empty()) {
-    can::CanConfig cfg;
-    cfg.interface = o.can_interface;
-    cfg.base_id = parse_id(o.can_base_id);
-    cfg.extended_ids = o.can_extended;
-    cfg.fd = o.can_fd;
-    cfg.rate_hz = o.can_rate_hz;
-    cfg.validate("agvslam-pose-replay options");
-    spdlog::info("agvslam-pose-replay: {}", cfg.describe());
-    can_pub = std::make_unique<can::CanPosePublisher>(cfg);
-  }
-  spdlog::info("agvslam-pose-replay: {} samples ({}), rate {} Hz, stamps {}", n,
-               o.synthetic > 0 ? "synthetic" : o.trajectory, o.rate_hz, o.stamp);
+// The DDS publisher (null without --dds); false when the subscribers asked for did not come in time.
+bool open_dds(const Options& o, std::unique_ptr<dds::DdsPosePublisher>& pub) {
+  if (!o.dds) return true;
+  dds::DdsConfig cfg;
+  cfg.domain_id = o.domain;
+  cfg.network_interface = o.interface;
+  cfg.topic_namespace = o.ns;
+  cfg.validate("agvslam-pose-replay options");
+  spdlog::info("agvslam-pose-replay: {}{}", cfg.describe(), o.sync ? ", writes on the caller's thread" : "");
+  pub = std::make_unique<dds::DdsPosePublisher>(cfg, !o.sync);
+  if (o.wait_subscribers <= 0) return true;
+  const auto timeout = std::chrono::milliseconds(static_cast<int64_t>(o.wait_timeout_s * 1000));
+  if (pub->wait_for_subscribers(o.wait_subscribers, timeout)) return true;
+  spdlog::error("agvslam-pose-replay: fewer than {} subscriber(s) on every topic after {} s", o.wait_subscribers,
+                o.wait_timeout_s);
+  return false;
+}
 
+// The CAN publisher (null without --can).
+std::unique_ptr<can::CanPosePublisher> open_can(const Options& o) {
+  if (o.can_interface.empty()) return nullptr;
+  can::CanConfig cfg;
+  cfg.interface = o.can_interface;
+  cfg.base_id = parse_id(o.can_base_id);
+  cfg.extended_ids = o.can_extended;
+  cfg.fd = o.can_fd;
+  cfg.rate_hz = o.can_rate_hz;
+  cfg.validate("agvslam-pose-replay options");
+  spdlog::info("agvslam-pose-replay: {}", cfg.describe());
+  return std::make_unique<can::CanPosePublisher>(cfg);
+}
+
+struct Publishers {
+  std::unique_ptr<dds::DdsPosePublisher> dds;
+  std::unique_ptr<can::CanPosePublisher> can;
+};
+
+// Sample i: synthetic, or the trajectory's pose i (tracking), stamped now or with its source time.
+drv::PoseSample make_sample(const Options& o, const agvslam::Trajectory& traj, std::size_t i) {
+  const int64_t source_t_ns = o.synthetic > 0 ? static_cast<int64_t>(i) * 50000000 : traj[i].t_ns;
+  drv::PoseSample s = drv::synthetic_pose_sample(i, source_t_ns);
+  if (o.synthetic == 0) {
+    s.T_map_base = traj[i].T_w_c;
+    s.tracking_state = drv::TrackingState::kTracking;
+  }
+  if (o.stamp == "now") s.t_ns = dds::realtime_now_ns();
+  return s;
+}
+
+// Hands one sample to every output; with --json prints what each did.
+void send(const Options& o, std::size_t i, const drv::PoseSample& s, Publishers& pub) {
   const dds::FrameIds frames;  // the DdsConfig defaults, as the publisher uses them
-  const auto period = o.rate_hz > 0 ? std::chrono::nanoseconds(static_cast<int64_t>(1e9 / o.rate_hz))
-                                    : std::chrono::nanoseconds(0);
-  auto next = std::chrono::steady_clock::now();
-  for (std::size_t i = 0; i < n; ++i) {
-    if (period.count() > 0) {
-      std::this_thread::sleep_until(next);
-      next += period;
-    }
-    const int64_t source_t_ns = o.synthetic > 0 ? static_cast<int64_t>(i) * 50000000 : traj[i].t_ns;
-    drv::PoseSample s = drv::synthetic_pose_sample(i, source_t_ns);
-    if (o.synthetic == 0) {
-      s.T_map_base = traj[i].T_w_c;
-      s.tracking_state = drv::TrackingState::kTracking;
-    }
-    if (o.stamp == "now") s.t_ns = dds::realtime_now_ns();
-    nlohmann::json line;
-    if (o.json) line = {{"i", i}, {"t_ns", s.t_ns}, {"sample", drv::pose_sample_to_json(s)}};
-    if (dds_pub) {
-      if (o.sync) {
-        dds_pub->write_now(s);
-      } else {
-        dds_pub->publish(s);
-      }
-      if (o.json) {
-        dds::PoseMsg pm{};
-        dds::OdomMsg om{};
-        dds::StatusMsg sm{};
-        dds::fill_pose_msg(s, frames, pm);
-        dds::fill_odom_msg(s, frames, om);
-        dds::fill_status_msg(s, frames, sm);
-        line["dds"] = {{"pose", dds::to_json(pm)}, {"odom", dds::to_json(om)}, {"status", dds::to_json(sm)}};
-      }
-    }
-    if (can_pub) {
-      const can::CanPublishResult r = can_pub->publish(s);
-      if (o.json) {
-        line["can"] = {{"due", r.due}, {"sent", r.sent}, {"counter", r.counter}, {"frames_sent", r.frames_sent}};
-      }
+  nlohmann::json line;
+  if (o.json) line = {{"i", i}, {"t_ns", s.t_ns}, {"sample", drv::pose_sample_to_json(s)}};
+  if (pub.dds) {
+    if (o.sync) {
+      pub.dds->write_now(s);
+    } else {
+      pub.dds->publish(s);
     }
     if (o.json) {
-      std::printf("%s\n", line.dump().c_str());
-      std::fflush(stdout);  // a test watching the file sees each sample as it goes
+      dds::PoseMsg pm{};
+      dds::OdomMsg om{};
+      dds::StatusMsg sm{};
+      dds::fill_pose_msg(s, frames, pm);
+      dds::fill_odom_msg(s, frames, om);
+      dds::fill_status_msg(s, frames, sm);
+      line["dds"] = {{"pose", dds::to_json(pm)}, {"odom", dds::to_json(om)}, {"status", dds::to_json(sm)}};
     }
   }
-  std::fflush(stdout);
+  if (pub.can) {
+    const can::CanPublishResult r = pub.can->publish(s);
+    if (o.json) line["can"] = {{"due", r.due}, {"sent", r.sent}, {"counter", r.counter}, {"frames_sent", r.frames_sent}};
+  }
+  if (o.json) {
+    std::printf("%s\n", line.dump().c_str());
+    std::fflush(stdout);  // a test watching the file sees each sample as it goes
+  }
+}
 
+// What the outputs did (the DDS writes acknowledged first); logged, and printed with --json.
+void summarise(const Options& o, std::size_t n, Publishers& pub) {
   nlohmann::json summary = {{"samples", n}};
-  if (dds_pub) {
-    const bool flushed = dds_pub->flush(std::chrono::seconds(5));
-    const auto st = dds_pub->stats();
+  if (pub.dds) {
+    const bool flushed = pub.dds->flush(std::chrono::seconds(5));
+    const auto st = pub.dds->stats();
     summary["dds"] = {{"submitted", st.submitted},
                       {"published", st.published},
                       {"dropped_queue_full", st.dropped_queue_full},
@@ -177,8 +174,8 @@ int run(const Options& o) {
     spdlog::info("agvslam-pose-replay: dds published {} of {}, dropped {}, write errors {}, all acknowledged: {}",
                  st.published, st.submitted, st.dropped_queue_full, st.write_errors, flushed);
   }
-  if (can_pub) {
-    const auto st = can_pub->stats();
+  if (pub.can) {
+    const auto st = pub.can->stats();
     summary["can"] = {{"cycles", st.cycles},
                       {"cycles_sent", st.cycles_sent},
                       {"frames_sent", st.frames_sent},
@@ -190,13 +187,42 @@ int run(const Options& o) {
                       {"error_frames", st.error_frames.total},
                       {"bus_off", st.error_frames.bus_off},
                       {"open", st.open},
-                      {"last_error", can_pub->last_error()}};
+                      {"last_error", pub.can->last_error()}};
     spdlog::info("agvslam-pose-replay: can {} cycles, {} sent whole, {} frames sent, dropped {} (no buffer) {} (down), "
                  "{} opens",
                  st.cycles, st.cycles_sent, st.frames_sent, st.frames_dropped_no_buffer, st.frames_dropped_down,
                  st.reopens);
   }
   if (o.json) std::printf("%s\n", nlohmann::json{{"summary", summary}}.dump().c_str());
+}
+
+int run(const Options& o) {
+  check_options(o);
+  agvslam::Trajectory traj;
+  if (!o.trajectory.empty()) {
+    traj = agvslam::io::read_trajectory(o.trajectory, agvslam::io::TrajectoryFormat::kTum, std::nullopt);
+    if (traj.empty()) throw agvslam::InputError(o.trajectory, "", "expected at least one pose");
+  }
+  const std::size_t n = o.synthetic > 0 ? static_cast<std::size_t>(o.synthetic) : traj.size();
+
+  Publishers pub;
+  if (!open_dds(o, pub.dds)) return 1;
+  pub.can = open_can(o);
+  spdlog::info("agvslam-pose-replay: {} samples ({}), rate {} Hz, stamps {}", n,
+               o.synthetic > 0 ? "synthetic" : o.trajectory, o.rate_hz, o.stamp);
+
+  const auto period = o.rate_hz > 0 ? std::chrono::nanoseconds(static_cast<int64_t>(1e9 / o.rate_hz))
+                                    : std::chrono::nanoseconds(0);
+  auto next = std::chrono::steady_clock::now();
+  for (std::size_t i = 0; i < n; ++i) {
+    if (period.count() > 0) {
+      std::this_thread::sleep_until(next);
+      next += period;
+    }
+    send(o, i, make_sample(o, traj, i), pub);
+  }
+  std::fflush(stdout);
+  summarise(o, n, pub);
   return 0;
 }
 

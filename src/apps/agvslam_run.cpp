@@ -8,15 +8,16 @@
 //               [--save-map FILE] [--load-map FILE --mode localise|map] [--blank A:B] [--repeat N]
 //               [--map-dataset DIR]
 //
-// Reads KITTI-layout folders (also what agvslam-sim writes) and EuRoC ASL folders through agvslam::io. The frames
-// are read, and with --dynamic detector their dynamic masks computed, in a second thread one frame ahead of
-// tracking (bounded queue of two), so detection of frame k+1 overlaps tracking of frame k. --dynamic gt takes the
-// dataset's ground-truth masks (simulator mask_0/), --dynamic off is the plain ORB-SLAM2-like baseline.
+// Reads KITTI-layout folders (also what agvslam-sim writes) and EuRoC ASL folders through agvslam::io, and runs
+// them through agvslamd's pipeline (agvslam/daemon/pipeline.h) with its outputs off and lossless queues (every
+// frame processed): a reader thread, with --dynamic detector a detector thread (detection of frame k+1 overlaps
+// tracking of frame k), and the tracking thread. --dynamic gt takes the dataset's ground-truth masks (simulator
+// mask_0/), --dynamic off is the plain ORB-SLAM2-like baseline.
 //
 // --mapping thread runs local mapping in its own thread, as on the vehicle; --mapping inline maps each keyframe
 // before the next frame (deterministic: the same input gives the same trajectory; the tracking times then include
 // that mapping work, shown separately as inline_mapping: take speed figures with --mapping thread). --speed 1 feeds frames at the
-// dataset's rate (the real-time case), 0 as fast as tracking goes.
+// dataset's rate (the real-time case; none is dropped when the pipeline falls behind), 0 as fast as tracking goes.
 //
 // Writes TRAJ with the pose of every tracked frame (each relative to its reference keyframe, composed with the
 // keyframe's final pose, as ORB-SLAM2 saves trajectories); with --format kitti and frames missing, TRAJ.times
@@ -48,23 +49,23 @@
 
 #include <algorithm>
 #include <chrono>
+#include <cmath>
+#include <cstdio>
 #include <filesystem>
 #include <fstream>
-#include <cmath>
-#include <condition_variable>
-#include <cstdio>
-#include <deque>
 #include <map>
+#include <memory>
 #include <mutex>
 #include <nlohmann/json.hpp>
 #include <opencv2/core.hpp>
 #include <optional>
 #include <string>
-#include <thread>
 #include <vector>
 
 #include "agvslam/core/error.h"
-#include "agvslam/dynamic/detector.h"
+#include "agvslam/core/stats.h"
+#include "agvslam/daemon/frame_source.h"
+#include "agvslam/daemon/pipeline.h"
 #include "agvslam/eval/association.h"
 #include "agvslam/eval/metrics.h"
 #include "agvslam/features/features_config.h"
@@ -79,11 +80,11 @@
 namespace {
 
 using agvslam::InputError;
+using agvslam::Series;
 namespace slam = agvslam::slam;
 namespace dyn = agvslam::dynamic;
+namespace daemon = agvslam::daemon;
 using Clock = std::chrono::steady_clock;
-
-double ms_since(Clock::time_point t0) { return std::chrono::duration<double, std::milli>(Clock::now() - t0).count(); }
 
 enum class DynamicMode { kDetector, kGroundTruth, kOff };
 
@@ -99,6 +100,14 @@ struct Options {
   int repeat = 1;
   double speed = 0;
   int opencv_threads = 1;
+};
+
+// The options checked and parsed.
+struct Settings {
+  DynamicMode dynamic = DynamicMode::kDetector;
+  agvslam::io::TrajectoryFormat format = agvslam::io::TrajectoryFormat::kTum;
+  slam::MapMode map_mode = slam::MapMode::kMapping;
+  std::optional<std::pair<std::size_t, std::size_t>> blank;  // --blank A:B, inclusive
 };
 
 // "A:B" (inclusive) for --blank.
@@ -118,6 +127,46 @@ std::pair<std::size_t, std::size_t> parse_blank(const std::string& text) {
     throw InputError("--blank", text, "expected A:B with 0 <= A <= B (inclusive frame range to black out)");
   }
   return {a, b};
+}
+
+DynamicMode parse_dynamic_mode(const std::string& text) {
+  if (text == "detector") return DynamicMode::kDetector;
+  if (text == "gt") return DynamicMode::kGroundTruth;
+  if (text == "off") return DynamicMode::kOff;
+  throw InputError("--dynamic", text, "expected detector, gt or off");
+}
+
+// Every option that can be checked before a file is read; InputError naming the option otherwise.
+Settings check_options(const Options& o) {
+  Settings s;
+  s.dynamic = parse_dynamic_mode(o.dynamic);
+  s.format = agvslam::io::parse_trajectory_format(o.format, "--format");
+  if (s.format == agvslam::io::TrajectoryFormat::kEuroc) throw InputError("--format", o.format, "expected tum or kitti");
+  if (o.mapping != "thread" && o.mapping != "inline") throw InputError("--mapping", o.mapping, "expected thread or inline");
+  if (!(o.speed >= 0)) throw InputError("--speed", std::to_string(o.speed), "expected a factor >= 0 (0: as fast as possible)");
+  if (o.opencv_threads < 1 || o.opencv_threads > 64) {
+    throw InputError("--opencv-threads", std::to_string(o.opencv_threads), "expected an integer in [1, 64]");
+  }
+  if (o.loop != "on" && o.loop != "off") throw InputError("--loop", o.loop, "expected on or off");
+  if (o.repeat < 1 || o.repeat > 100) throw InputError("--repeat", std::to_string(o.repeat), "expected an integer in [1, 100]");
+  if (!o.mode.empty()) {
+    if (o.load_map.empty()) throw InputError("--mode", o.mode, "expected only with --load-map");
+    s.map_mode = slam::parse_map_mode(o.mode, "--mode");
+  } else if (!o.load_map.empty()) {
+    throw InputError("--load-map", o.load_map, "expected --mode localise or --mode map with it");
+  }
+  if (!o.map_dataset.empty() && o.load_map.empty()) throw InputError("--map-dataset", o.map_dataset, "expected only with --load-map");
+  if (!o.blank.empty()) s.blank = parse_blank(o.blank);
+  if (!o.save_map.empty()) {
+    // Checked now rather than after the whole run.
+    std::filesystem::path folder = std::filesystem::path(o.save_map).parent_path();
+    if (folder.empty()) folder = ".";
+    std::error_code ec;
+    if (!std::filesystem::is_directory(folder, ec)) {
+      throw InputError("--save-map", o.save_map, "expected a file in an existing folder (" + folder.string() + " is not one)");
+    }
+  }
+  return s;
 }
 
 // T_w1_w2: the world frame of a simulator run (its first left camera) in the world frame of another run through
@@ -155,73 +204,93 @@ agvslam::SE3d simulator_world_offset(const std::string& map_dir, const std::stri
   return T_map_c1.inverse() * T_map_c2;
 }
 
-struct Series {
-  std::vector<double> v;
-  void add(double x) { v.push_back(x); }
-  double quantile(double q) const {
-    if (v.empty()) return 0;
-    std::vector<double> s = v;
-    const std::size_t k = std::min(s.size() - 1, static_cast<std::size_t>(std::floor(q * static_cast<double>(s.size() - 1) + 0.5)));
-    std::nth_element(s.begin(), s.begin() + static_cast<std::ptrdiff_t>(k), s.end());
-    return s[k];
-  }
-  double max() const { return v.empty() ? 0 : *std::max_element(v.begin(), v.end()); }
-  nlohmann::json json() const {
-    return {{"median_ms", quantile(0.5)}, {"p95_ms", quantile(0.95)}, {"max_ms", max()}, {"count", v.size()}};
-  }
+// The dataset, the frames played, whether it has ground-truth masks, and (--map-dataset) the map's world frame.
+struct Input {
+  daemon::SourceSetup setup;  // the dataset and frames first..last
+  bool has_gt_masks = false;  // mask_0/ (simulator): every mode scores the pose's inliers against them
+  std::optional<agvslam::SE3d> T_w1_w2;  // --map-dataset: this run's world frame in the map's
 };
 
-// One input frame with its mask (produced by the reader / detector thread).
-struct Job {
-  std::size_t index = 0;
-  agvslam::StereoFrame frame;
-  cv::Mat mask;
-  cv::Mat gt_mask;           // the dataset's ground-truth moving-object mask when it has one (scores inlier leakage)
-  double detector_ms = -1;   // -1: no detector
-  double detector_cpu_ms = -1;
-  double read_ms = 0;
-  int lap = 0;               // --repeat
-  bool blank = false;        // --blank
-  std::string error;         // an exception in the worker, re-raised by the main thread
-  bool end = false;
-};
+Input open_input(const Options& o, const Settings& s) {
+  std::shared_ptr<const agvslam::io::StereoDataset> dataset = agvslam::io::open_dataset(o.dataset, o.calib);
+  std::size_t first = 0, last = 0;
+  agvslam::io::parse_frame_range(o.frames, dataset->size(), "--frames", o.frames, first, last);
+  Input in;
+  in.has_gt_masks = !dataset->ground_truth_mask(first).empty();
+  if (s.dynamic == DynamicMode::kGroundTruth && !in.has_gt_masks) {
+    throw InputError("--dynamic", "gt", "expected a dataset with ground-truth masks (mask_0/, as agvslam-sim writes); " +
+                                            dataset->root() + " has none");
+  }
+  in.setup = daemon::dataset_setup(std::move(dataset), first, last);
+  if (!o.map_dataset.empty()) in.T_w1_w2 = simulator_world_offset(o.map_dataset, o.dataset);
+  return in;
+}
 
-// Bounded queue between the reader/detector thread and tracking.
-class JobQueue {
- public:
-  explicit JobQueue(std::size_t capacity) : capacity_(capacity) {}
-  void push(Job job) {
-    std::unique_lock<std::mutex> lock(mutex_);
-    not_full_.wait(lock, [&] { return queue_.size() < capacity_ || cancelled_; });
-    if (cancelled_) return;
-    queue_.push_back(std::move(job));
-    not_empty_.notify_one();
-  }
-  Job pop() {
-    std::unique_lock<std::mutex> lock(mutex_);
-    not_empty_.wait(lock, [&] { return !queue_.empty(); });
-    Job job = std::move(queue_.front());
-    queue_.pop_front();
-    not_full_.notify_one();
-    return job;
-  }
-  void cancel() {
-    std::lock_guard<std::mutex> lock(mutex_);
-    cancelled_ = true;
-    not_full_.notify_all();
-  }
-  bool cancelled() {
-    std::lock_guard<std::mutex> lock(mutex_);
-    return cancelled_;
-  }
+// agvslamd's configuration for playing the dataset: the stage settings from the command line, no outputs.
+daemon::DaemonConfig pipeline_config(const Options& o, const Settings& s) {
+  daemon::DaemonConfig c;
+  c.path = "agvslam-run";
+  c.source.type = daemon::SourceType::kDataset;
+  c.source.dataset = o.dataset;
+  c.source.rate = o.speed;
+  c.pipeline.dynamic = s.dynamic == DynamicMode::kDetector ? daemon::DynamicMode::kDetector : daemon::DynamicMode::kOff;
+  c.pipeline.mapping = o.mapping == "thread" ? daemon::MappingMode::kThread : daemon::MappingMode::kInline;
+  c.pipeline.opencv_threads = o.opencv_threads;
+  c.outputs.dds_enabled = false;
+  c.outputs.can_enabled = false;
 
- private:
-  std::size_t capacity_;
-  std::mutex mutex_;
-  std::condition_variable not_full_, not_empty_;
-  std::deque<Job> queue_;
-  bool cancelled_ = false;
-};
+  slam::SystemConfig& system = c.system;
+  if (!o.params_slam.empty()) system.slam = slam::load_slam_config(o.params_slam);
+  if (!o.params_features.empty()) {
+    const agvslam::features::FeaturesConfig f = agvslam::features::load_features_config(o.params_features);
+    system.orb = f.orb;
+    system.stereo = f.stereo_matching;
+  }
+  system.threaded_mapping = o.mapping == "thread";
+  c.place = agvslam::place::load_place_config(o.params_place);  // the pipeline loads the vocabulary
+  system.direct_index_level = c.place->direct_index_level;
+  if (o.loop == "off") system.slam.loop_closing.enabled = false;
+  if (s.dynamic == DynamicMode::kDetector) {
+    if (!o.params_dynamic.empty()) c.detector = dyn::load_dynamic_config(o.params_dynamic);
+    if (!o.params_stereo.empty()) c.stereo = agvslam::stereo::load_stereo_config(o.params_stereo);
+  }
+  return c;
+}
+
+void log_settings(const Options& o, const Settings& s, const Input& in, const daemon::DaemonConfig& c) {
+  const agvslam::io::StereoDataset& dataset = *in.setup.dataset;
+  spdlog::info("agvslam-run: {} dataset {} ({} frames at {:.1f} Hz, using {}..{})", dataset.kind(), dataset.root(),
+               dataset.size(), dataset.rate_hz(), in.setup.first, in.setup.last);
+  spdlog::info("  calibration: {}", dataset.calibration().summary());
+  spdlog::info("  dynamic regions: {}", o.dynamic == "detector" ? "detector (paper 004 III.A-B), one frame ahead in its own thread"
+                                        : o.dynamic == "gt"     ? "ground-truth masks (mask_0/)"
+                                                                : "off (ORB-SLAM2-like baseline)");
+  spdlog::info("  mapping: {}, speed {}, OpenCV threads per stage {}", o.mapping == "thread" ? "own thread" : "inline (deterministic)",
+               o.speed > 0 ? std::to_string(o.speed) + "x the dataset rate" : std::string("as fast as possible"), o.opencv_threads);
+  spdlog::info("  output: {} ({}){}", o.out, agvslam::io::to_string(s.format), o.json.empty() ? "" : ", stats " + o.json);
+  spdlog::info("  slam settings{}", o.params_slam.empty() ? " (built-in defaults)" : " from " + o.params_slam);
+  spdlog::info("  place recognition from {}: {}", o.params_place, c.place->describe());
+  spdlog::info("  loop closing {}; map: {}{}{}", o.loop, o.load_map.empty() ? "new" : "load " + o.load_map,
+               o.load_map.empty() ? "" : std::string(" (mode ") + slam::to_string(s.map_mode) + ")",
+               o.save_map.empty() ? "" : ", save to " + o.save_map);
+  if (s.blank) spdlog::info("  blank (covered camera) frames {}..{}", s.blank->first, s.blank->second);
+  if (o.repeat > 1) spdlog::info("  {} laps of frames {}..{}", o.repeat, in.setup.first, in.setup.last);
+  if (in.T_w1_w2) {
+    spdlog::info("  map frame: the ground truth is expressed in {}'s world frame (t = {:.3f} {:.3f} {:.3f} m)", o.map_dataset,
+                 in.T_w1_w2->translation().x(), in.T_w1_w2->translation().y(), in.T_w1_w2->translation().z());
+  }
+  spdlog::info("  feature settings{}", o.params_features.empty() ? " (built-in defaults)" : " from " + o.params_features);
+  if (s.dynamic == DynamicMode::kDetector) {
+    spdlog::info("  detector settings{}", o.params_dynamic.empty() ? " (built-in defaults)" : " from " + o.params_dynamic);
+    for (const auto& line : c.detector.describe()) spdlog::info("    {}", line);
+    spdlog::info("  stereo settings{}", o.params_stereo.empty() ? " (built-in defaults)" : " from " + o.params_stereo);
+    for (const auto& line : c.stereo.describe()) spdlog::info("    {}", line);
+  }
+}
+
+nlohmann::json timing_json(const Series& s) {
+  return {{"median_ms", s.median()}, {"p95_ms", s.quantile(0.95)}, {"max_ms", s.max()}, {"count", s.count()}};
+}
 
 class ProgressBar {
  public:
@@ -251,257 +320,115 @@ class ProgressBar {
   Clock::time_point start_, last_draw_{};
 };
 
-int run(const Options& o) {
-  DynamicMode mode = DynamicMode::kDetector;
-  if (o.dynamic == "detector") {
-    mode = DynamicMode::kDetector;
-  } else if (o.dynamic == "gt") {
-    mode = DynamicMode::kGroundTruth;
-  } else if (o.dynamic == "off") {
-    mode = DynamicMode::kOff;
-  } else {
-    throw InputError("--dynamic", o.dynamic, "expected detector, gt or off");
-  }
-  const agvslam::io::TrajectoryFormat format = agvslam::io::parse_trajectory_format(o.format, "--format");
-  if (format == agvslam::io::TrajectoryFormat::kEuroc) throw InputError("--format", o.format, "expected tum or kitti");
-  if (o.mapping != "thread" && o.mapping != "inline") throw InputError("--mapping", o.mapping, "expected thread or inline");
-  if (!(o.speed >= 0)) throw InputError("--speed", std::to_string(o.speed), "expected a factor >= 0 (0: as fast as possible)");
-  if (o.opencv_threads < 1 || o.opencv_threads > 64) {
-    throw InputError("--opencv-threads", std::to_string(o.opencv_threads), "expected an integer in [1, 64]");
-  }
-  cv::setNumThreads(o.opencv_threads);
-  if (o.loop != "on" && o.loop != "off") throw InputError("--loop", o.loop, "expected on or off");
-  if (o.repeat < 1 || o.repeat > 100) throw InputError("--repeat", std::to_string(o.repeat), "expected an integer in [1, 100]");
-  slam::MapMode map_mode = slam::MapMode::kMapping;
-  if (!o.mode.empty()) {
-    if (o.load_map.empty()) throw InputError("--mode", o.mode, "expected only with --load-map");
-    map_mode = slam::parse_map_mode(o.mode, "--mode");
-  } else if (!o.load_map.empty()) {
-    throw InputError("--load-map", o.load_map, "expected --mode localise or --mode map with it");
-  }
-  if (!o.map_dataset.empty() && o.load_map.empty()) throw InputError("--map-dataset", o.map_dataset, "expected only with --load-map");
-  std::optional<std::pair<std::size_t, std::size_t>> blank;
-  if (!o.blank.empty()) blank = parse_blank(o.blank);
-  if (!o.save_map.empty()) {
-    // Checked now rather than after the whole run.
-    std::filesystem::path folder = std::filesystem::path(o.save_map).parent_path();
-    if (folder.empty()) folder = ".";
-    std::error_code ec;
-    if (!std::filesystem::is_directory(folder, ec)) {
-      throw InputError("--save-map", o.save_map, "expected a file in an existing folder (" + folder.string() + " is not one)");
-    }
+// The per-frame figures of the run, gathered in the pipeline's tracking thread (add()) and read once it ended.
+class FrameLog {
+ public:
+  // Stages in the order of the timing table.
+  static constexpr const char* kStageOrder[] = {"extract", "stereo", "map_wait", "frame", "local_map", "keyframe",
+                                                "inline_mapping", "tracking", "tracking_cpu", "detector", "detector_cpu",
+                                                "frontend_sum", "frontend_cpu", "frame_interval", "read"};
+
+  FrameLog(bool inline_mapping, std::size_t last, std::size_t total_frames)
+      : inline_mapping_(inline_mapping), last_(last), total_frames_(total_frames) {}
+
+  // Just before the first frame: the clocks of the progress bar, the frame interval and the wall time start.
+  void start() {
+    progress_.emplace(total_frames_);
+    t_start_ = t_prev_frame_ = t_last_frame_ = Clock::now();
   }
 
-  const auto dataset = agvslam::io::open_dataset(o.dataset, o.calib);
-  std::size_t first = 0, last = 0;
-  agvslam::io::parse_frame_range(o.frames, dataset->size(), "--frames", o.frames, first, last);
-  // With ground-truth masks (simulator folders) every mode scores the pose's inliers against them.
-  const bool has_gt_masks = !dataset->ground_truth_mask(first).empty();
-  if (mode == DynamicMode::kGroundTruth && !has_gt_masks) {
-    throw InputError("--dynamic", "gt", "expected a dataset with ground-truth masks (mask_0/, as agvslam-sim writes); " +
-                                            dataset->root() + " has none");
+  void add(const daemon::TrackedFrame& f) {
+    const slam::TrackResult& r = f.result;
+    count(f.captured, r);
+    add_timings(f, r);
+    const int moving_inliers = score_moving_inliers(f.captured.ground_truth_mask, r);
+    add_record(f, moving_inliers);
+    progress_->update(frames, slam::to_string(r.state), r.keyframes);
+    t_last_frame_ = Clock::now();
   }
 
-  slam::SystemConfig config;
-  if (!o.params_slam.empty()) config.slam = slam::load_slam_config(o.params_slam);
-  if (!o.params_features.empty()) {
-    const agvslam::features::FeaturesConfig f = agvslam::features::load_features_config(o.params_features);
-    config.orb = f.orb;
-    config.stereo = f.stereo_matching;
-  }
-  config.frame_rate_hz = dataset->rate_hz();
-  config.threaded_mapping = o.mapping == "thread";
-  const agvslam::place::PlaceConfig place_config = agvslam::place::load_place_config(o.params_place);
-  config.vocabulary = slam::load_vocabulary(place_config);
-  config.direct_index_level = place_config.direct_index_level;
-  if (o.loop == "off") config.slam.loop_closing.enabled = false;
-  std::optional<agvslam::SE3d> T_w1_w2;
-  if (!o.map_dataset.empty()) T_w1_w2 = simulator_world_offset(o.map_dataset, o.dataset);
-  dyn::DynamicDetectorConfig dynamic_config;
-  agvslam::stereo::StereoConfig stereo_config;
-  if (mode == DynamicMode::kDetector) {
-    if (!o.params_dynamic.empty()) dynamic_config = dyn::load_dynamic_config(o.params_dynamic);
-    if (!o.params_stereo.empty()) stereo_config = agvslam::stereo::load_stereo_config(o.params_stereo);
+  // The progress bar's last line; the time from the start to the last frame (s).
+  double finish() {
+    progress_->update(frames, "done", keyframes, true);
+    progress_->finish();
+    return std::chrono::duration<double>(t_last_frame_ - t_start_).count();
   }
 
-  spdlog::info("agvslam-run: {} dataset {} ({} frames at {:.1f} Hz, using {}..{})", dataset->kind(), dataset->root(),
-               dataset->size(), dataset->rate_hz(), first, last);
-  spdlog::info("  calibration: {}", dataset->calibration().summary());
-  spdlog::info("  dynamic regions: {}", o.dynamic == "detector" ? "detector (paper 004 III.A-B), one frame ahead in a second thread"
-                                        : o.dynamic == "gt"     ? "ground-truth masks (mask_0/)"
-                                                                : "off (ORB-SLAM2-like baseline)");
-  spdlog::info("  mapping: {}, speed {}, OpenCV threads per stage {}", o.mapping == "thread" ? "own thread" : "inline (deterministic)",
-               o.speed > 0 ? std::to_string(o.speed) + "x the dataset rate" : std::string("as fast as possible"), o.opencv_threads);
-  spdlog::info("  output: {} ({}){}", o.out, agvslam::io::to_string(format), o.json.empty() ? "" : ", stats " + o.json);
-  spdlog::info("  slam settings{}", o.params_slam.empty() ? " (built-in defaults)" : " from " + o.params_slam);
-  spdlog::info("  place recognition from {}: {}", o.params_place, place_config.describe());
-  spdlog::info("  loop closing {}; map: {}{}{}", o.loop, o.load_map.empty() ? "new" : "load " + o.load_map,
-               o.load_map.empty() ? "" : std::string(" (mode ") + slam::to_string(map_mode) + ")",
-               o.save_map.empty() ? "" : ", save to " + o.save_map);
-  if (blank) spdlog::info("  blank (covered camera) frames {}..{}", blank->first, blank->second);
-  if (o.repeat > 1) spdlog::info("  {} laps of frames {}..{}", o.repeat, first, last);
-  if (T_w1_w2) {
-    spdlog::info("  map frame: the ground truth is expressed in {}'s world frame (t = {:.3f} {:.3f} {:.3f} m)", o.map_dataset,
-                 T_w1_w2->translation().x(), T_w1_w2->translation().y(), T_w1_w2->translation().z());
-  }
-  spdlog::info("  feature settings{}", o.params_features.empty() ? " (built-in defaults)" : " from " + o.params_features);
-  if (mode == DynamicMode::kDetector) {
-    spdlog::info("  detector settings{}", o.params_dynamic.empty() ? " (built-in defaults)" : " from " + o.params_dynamic);
-    for (const auto& line : dynamic_config.describe()) spdlog::info("    {}", line);
-    spdlog::info("  stereo settings{}", o.params_stereo.empty() ? " (built-in defaults)" : " from " + o.params_stereo);
-    for (const auto& line : stereo_config.describe()) spdlog::info("    {}", line);
-  }
-
-  slam::System system(dataset->calibration(), config);
-  for (const auto& line : system.describe()) spdlog::info("    {}", line);
-  nlohmann::json load_json;
-  if (!o.load_map.empty()) {
-    const slam::MapLoadStats ls = system.load_map(o.load_map, map_mode);
-    spdlog::info("  loaded {}: {} keyframes, {} map points, {:.1f} MB (read {:.0f} ms, decode {:.0f} ms, bag of words {:.0f} ms)",
-                 o.load_map, ls.keyframes, ls.map_points, static_cast<double>(ls.bytes) / 1e6, ls.read_ms, ls.decode_ms, ls.bow_ms);
-    load_json = {{"file", o.load_map}, {"mode", slam::to_string(map_mode)}, {"keyframes", ls.keyframes},
-                 {"map_points", ls.map_points}, {"bytes", ls.bytes}, {"read_ms", ls.read_ms}, {"decode_ms", ls.decode_ms},
-                 {"bow_ms", ls.bow_ms}};
-  }
-
-  // Reader (+ detector) thread, one frame ahead.
-  JobQueue queue(2);
-  std::thread worker([&] {
-    std::optional<dyn::DynamicDetector> detector;
-    dyn::DetectorResult result;
-    try {
-      if (mode == DynamicMode::kDetector) detector.emplace(dataset->calibration(), dynamic_config, stereo_config);
-      const std::size_t per_lap = last - first + 1;
-      const int64_t lap_ns = per_lap > 1 ? (dataset->frame(last).t_ns - dataset->frame(first).t_ns) +
-                                               static_cast<int64_t>(1e9 / dataset->rate_hz())
-                                         : static_cast<int64_t>(1e9 / dataset->rate_hz());
-      for (std::size_t step = 0; step < per_lap * static_cast<std::size_t>(o.repeat) && !queue.cancelled(); ++step) {
-        const std::size_t i = first + step % per_lap;
-        const int64_t lap = static_cast<int64_t>(step / per_lap);
-        Job job;
-        job.index = i;
-        job.lap = static_cast<int>(lap);
-        const auto t0 = Clock::now();
-        job.frame = dataset->frame(i);
-        job.frame.t_ns += lap * lap_ns;
-        if (blank && i >= blank->first && i <= blank->second) {
-          job.frame.left = cv::Mat::zeros(job.frame.left.size(), job.frame.left.type());
-          job.frame.right = cv::Mat::zeros(job.frame.right.size(), job.frame.right.type());
-          job.blank = true;
-        }
-        job.read_ms = ms_since(t0);
-        if (mode == DynamicMode::kDetector) {
-          const auto t1 = Clock::now();
-          const double cpu1 = slam::thread_cpu_ms();
-          detector->detect(job.frame, result);
-          job.detector_ms = ms_since(t1);
-          job.detector_cpu_ms = slam::thread_cpu_ms() - cpu1;
-          job.mask = result.mask.image.clone();
-        }
-        if (has_gt_masks) job.gt_mask = dataset->ground_truth_mask(i);
-        if (mode == DynamicMode::kGroundTruth) job.mask = job.gt_mask;
-        queue.push(std::move(job));
-      }
-    } catch (const std::exception& e) {
-      Job job;
-      job.error = e.what();
-      queue.push(std::move(job));
-      return;
-    }
-    Job end;
-    end.end = true;
-    queue.push(std::move(end));
-  });
-  struct WorkerGuard {
-    JobQueue& q;
-    std::thread& t;
-    ~WorkerGuard() {
-      q.cancel();
-      if (t.joinable()) t.join();
-    }
-  } guard{queue, worker};
-
-  std::map<std::string, Series> series;
-  const std::vector<std::string> stage_order = {"extract", "stereo", "map_wait", "frame", "local_map", "keyframe",
-                                                "inline_mapping", "tracking", "tracking_cpu", "detector", "detector_cpu", "frontend_sum",
-                                                "frontend_cpu", "frame_interval", "read"};
-  nlohmann::json per_frame = nlohmann::json::array();
-  std::size_t frames = 0, tracked = 0, lost = 0, resets = 0, recovered = 0, max_queue = 0;
-  std::size_t keyframes = 0;
-  ProgressBar progress((last - first + 1) * static_cast<std::size_t>(o.repeat));
+  std::size_t frames = 0, tracked = 0, lost = 0, resets = 0, recovered = 0, max_queue = 0, keyframes = 0;
   long first_tracked = -1;          // frames processed before the first pose
-  long blank_end_step = -1;         // step of the last blanked frame (first lap)
   long blank_recovered_after = -1;  // frames after the blank until a pose
   std::vector<std::size_t> laps_keyframes, laps_points;
   // Inliers of the pose on ground-truth moving objects (what the dynamic masks are there to prevent).
   std::vector<double> moving_inlier_fraction;
   std::size_t moving_inliers_total = 0, inliers_total = 0;
-  const auto t_run = Clock::now();
-  auto t_prev_output = Clock::now();
-  const double period_s = o.speed > 0 ? 1.0 / (dataset->rate_hz() * o.speed) : 0;
+  std::map<std::string, Series> series;  // per-stage times (ms)
+  nlohmann::json per_frame = nlohmann::json::array();
 
-  for (;;) {
-    Job job = queue.pop();
-    if (!job.error.empty()) throw std::runtime_error("reading or detecting frames: " + job.error);
-    if (job.end) break;
-    if (period_s > 0) {  // real-time pacing: frame k is due at k * period
-      const auto due = t_run + std::chrono::duration_cast<Clock::duration>(std::chrono::duration<double>(period_s * static_cast<double>(frames)));
-      std::this_thread::sleep_until(due);
-    }
-    const slam::TrackResult r = system.track_stereo(job.frame.t_ns, job.frame.left, job.frame.right, job.mask);
+ private:
+  void count(const daemon::CapturedFrame& c, const slam::TrackResult& r) {
     const long step = static_cast<long>(frames);
     ++frames;
-    if (r.state == slam::TrackingState::kOk && first_tracked < 0) first_tracked = step;
-    if (job.blank && job.lap == 0) blank_end_step = step;
-    if (blank_end_step >= 0 && blank_recovered_after < 0 && !job.blank && r.state == slam::TrackingState::kOk) {
-      blank_recovered_after = step - blank_end_step - 1;
-    }
-    if (job.index == last) {
+    const bool ok = r.state == slam::TrackingState::kOk;
+    if (ok && first_tracked < 0) first_tracked = step;
+    if (c.blank && c.lap == 0) blank_end_step_ = step;
+    if (blank_end_step_ >= 0 && blank_recovered_after < 0 && !c.blank && ok) blank_recovered_after = step - blank_end_step_ - 1;
+    if (static_cast<std::size_t>(c.source_index) == last_) {
       laps_keyframes.push_back(r.keyframes);
       laps_points.push_back(r.map_points);
     }
-    if (r.state == slam::TrackingState::kOk) ++tracked;
+    if (ok) ++tracked;
     if (r.state == slam::TrackingState::kLost) ++lost;
     if (r.counts.reset) ++resets;
     if (r.counts.recovered) ++recovered;
     keyframes = r.keyframes;
     max_queue = std::max(max_queue, r.mapping_queue);
-    const double interval = ms_since(t_prev_output);
-    t_prev_output = Clock::now();
+  }
+
+  void add_timings(const daemon::TrackedFrame& f, const slam::TrackResult& r) {
+    const auto now = Clock::now();
+    const double interval_ms = std::chrono::duration<double, std::milli>(now - t_prev_frame_).count();
+    t_prev_frame_ = now;
     series["extract"].add(r.timings.extract_ms);
     series["stereo"].add(r.timings.stereo_ms);
     series["map_wait"].add(r.timings.map_wait_ms);
     series["frame"].add(r.timings.frame_ms);
     series["local_map"].add(r.timings.local_map_ms);
     series["keyframe"].add(r.timings.keyframe_ms);
-    if (o.mapping == "inline") series["inline_mapping"].add(r.timings.inline_mapping_ms);
+    if (inline_mapping_) series["inline_mapping"].add(r.timings.inline_mapping_ms);
     series["tracking"].add(r.timings.total_ms);
     series["tracking_cpu"].add(r.timings.total_cpu_ms);
-    series["read"].add(job.read_ms);
-    if (job.detector_ms >= 0) {
-      series["detector"].add(job.detector_ms);
-      series["frontend_sum"].add(job.detector_ms + r.timings.total_ms);
-      series["detector_cpu"].add(job.detector_cpu_ms);
-      series["frontend_cpu"].add(job.detector_cpu_ms + r.timings.total_cpu_ms);
+    series["read"].add(f.captured.read_ms);
+    if (f.times.detector_ms >= 0) {
+      series["detector"].add(f.times.detector_ms);
+      series["frontend_sum"].add(f.times.detector_ms + r.timings.total_ms);
+      series["detector_cpu"].add(f.times.detector_cpu_ms);
+      series["frontend_cpu"].add(f.times.detector_cpu_ms + r.timings.total_cpu_ms);
     }
-    if (frames > 1) series["frame_interval"].add(interval);
-    int moving_inliers = -1;
-    if (!job.gt_mask.empty() && r.pose_valid && !r.inlier_keypoints_px.empty()) {
-      moving_inliers = 0;
-      for (const cv::Point2f& pt : r.inlier_keypoints_px) {
-        const int x = std::clamp(static_cast<int>(std::lround(pt.x)), 0, job.gt_mask.cols - 1);
-        const int y = std::clamp(static_cast<int>(std::lround(pt.y)), 0, job.gt_mask.rows - 1);
-        if (job.gt_mask.at<uint8_t>(y, x) != 0) ++moving_inliers;
-      }
-      moving_inliers_total += static_cast<std::size_t>(moving_inliers);
-      inliers_total += r.inlier_keypoints_px.size();
-      moving_inlier_fraction.push_back(static_cast<double>(moving_inliers) / static_cast<double>(r.inlier_keypoints_px.size()));
+    if (frames > 1) series["frame_interval"].add(interval_ms);
+  }
+
+  // The pose's inliers on ground-truth moving pixels; -1 when not scored (no mask or no pose).
+  int score_moving_inliers(const cv::Mat& gt_mask, const slam::TrackResult& r) {
+    if (gt_mask.empty() || !r.pose_valid || r.inlier_keypoints_px.empty()) return -1;
+    int moving = 0;
+    for (const cv::Point2f& pt : r.inlier_keypoints_px) {
+      const int x = std::clamp(static_cast<int>(std::lround(pt.x)), 0, gt_mask.cols - 1);
+      const int y = std::clamp(static_cast<int>(std::lround(pt.y)), 0, gt_mask.rows - 1);
+      if (gt_mask.at<uint8_t>(y, x) != 0) ++moving;
     }
-    per_frame.push_back({{"frame", job.index},
-                         {"lap", job.lap},
-                         {"blank", job.blank},
+    moving_inliers_total += static_cast<std::size_t>(moving);
+    inliers_total += r.inlier_keypoints_px.size();
+    moving_inlier_fraction.push_back(static_cast<double>(moving) / static_cast<double>(r.inlier_keypoints_px.size()));
+    return moving;
+  }
+
+  void add_record(const daemon::TrackedFrame& f, int moving_inliers) {
+    const slam::TrackResult& r = f.result;
+    per_frame.push_back({{"frame", f.captured.source_index},
+                         {"lap", f.captured.lap},
+                         {"blank", f.captured.blank},
                          {"loops", r.loops_closed},
-                         {"t_ns", job.frame.t_ns},
+                         {"t_ns", f.captured.frame.t_ns},
                          {"state", slam::to_string(r.state)},
                          {"features", r.counts.features},
                          {"stereo_features", r.counts.stereo_features},
@@ -512,71 +439,117 @@ int run(const Options& o) {
                          {"keyframes", r.keyframes},
                          {"map_points", r.map_points},
                          {"mapping_queue", r.mapping_queue},
-                         {"mask_pixels", job.mask.empty() ? 0 : cv::countNonZero(job.mask)},
+                         {"mask_pixels", f.mask.empty() ? 0 : cv::countNonZero(f.mask)},
                          {"moving_inliers", moving_inliers},
                          {"p_w_c", r.pose_valid ? nlohmann::json::array({r.T_w_c.translation().x(), r.T_w_c.translation().y(),
                                                                          r.T_w_c.translation().z()})
                                                 : nlohmann::json()},
                          {"tracking_ms", r.timings.total_ms},
-                         {"detector_ms", job.detector_ms}});
-    progress.update(frames, slam::to_string(r.state), r.keyframes);
+                         {"detector_ms", f.times.detector_ms}});
   }
-  progress.update(frames, "done", keyframes, true);
-  progress.finish();
-  const double run_s = ms_since(t_run) / 1000.0;
-  system.wait_for_mapping();
-  const agvslam::Trajectory trajectory = system.trajectory();
-  const slam::LocalMappingStats mstats = system.mapping_stats();
-  const slam::LoopClosingStats lstats = system.loop_stats();
-  nlohmann::json save_json;
-  if (!o.save_map.empty()) {
-    const slam::MapSaveStats ss = system.save_map(o.save_map);
-    spdlog::info("saved {}: {} keyframes, {} map points, {:.1f} MB (encode {:.0f} ms, write {:.0f} ms)", o.save_map,
-                 ss.keyframes, ss.map_points, static_cast<double>(ss.bytes) / 1e6, ss.encode_ms, ss.write_ms);
-    save_json = {{"file", o.save_map}, {"keyframes", ss.keyframes}, {"map_points", ss.map_points}, {"bytes", ss.bytes},
-                 {"encode_ms", ss.encode_ms}, {"write_ms", ss.write_ms}};
-  }
-  const auto mapping_history = system.local_mapping().timing_history();
-  agvslam::slam::MapCounts map_counts;
-  {
-    std::lock_guard<std::mutex> lock(system.map().mutex());
-    map_counts = system.map().counts();
-  }
-  system.shutdown();
 
-  // Trajectory.
-  agvslam::io::write_trajectory(o.out, trajectory, format);
-  if (format == agvslam::io::TrajectoryFormat::kKitti && trajectory.size() != frames) {
+  const bool inline_mapping_;
+  const std::size_t last_, total_frames_;
+  std::optional<ProgressBar> progress_;
+  long blank_end_step_ = -1;  // step of the last blanked frame (first lap)
+  Clock::time_point t_start_, t_prev_frame_, t_last_frame_;
+};
+
+// What the SLAM holds at the end of the run.
+struct SlamResults {
+  agvslam::Trajectory trajectory;
+  slam::LocalMappingStats mapping;
+  slam::LoopClosingStats loops;
+  std::vector<slam::KeyframeMappingTimes> mapping_history;
+  slam::MapCounts map_counts;
+  nlohmann::json load_map, save_map;  // null when not asked for
+};
+
+nlohmann::json load_map(slam::System& system, const Options& o, const Settings& s) {
+  const slam::MapLoadStats ls = system.load_map(o.load_map, s.map_mode);
+  spdlog::info("  loaded {}: {} keyframes, {} map points, {:.1f} MB (read {:.0f} ms, decode {:.0f} ms, bag of words {:.0f} ms)",
+               o.load_map, ls.keyframes, ls.map_points, static_cast<double>(ls.bytes) / 1e6, ls.read_ms, ls.decode_ms, ls.bow_ms);
+  return {{"file", o.load_map}, {"mode", slam::to_string(s.map_mode)}, {"keyframes", ls.keyframes},
+          {"map_points", ls.map_points}, {"bytes", ls.bytes}, {"read_ms", ls.read_ms}, {"decode_ms", ls.decode_ms},
+          {"bow_ms", ls.bow_ms}};
+}
+
+nlohmann::json save_map(slam::System& system, const std::string& file) {
+  const slam::MapSaveStats ss = system.save_map(file);
+  spdlog::info("saved {}: {} keyframes, {} map points, {:.1f} MB (encode {:.0f} ms, write {:.0f} ms)", file, ss.keyframes,
+               ss.map_points, static_cast<double>(ss.bytes) / 1e6, ss.encode_ms, ss.write_ms);
+  return {{"file", file}, {"keyframes", ss.keyframes}, {"map_points", ss.map_points}, {"bytes", ss.bytes},
+          {"encode_ms", ss.encode_ms}, {"write_ms", ss.write_ms}};
+}
+
+// Plays the dataset through the pipeline; the frames' figures go to `log`. False when a pipeline thread failed
+// (its error is logged).
+bool play(const Options& o, const Settings& s, const Input& in, FrameLog& log, SlamResults& results) {
+  const daemon::DaemonConfig config = pipeline_config(o, s);
+  log_settings(o, s, in, config);
+  daemon::DatasetPlayback playback;
+  playback.laps = o.repeat;
+  playback.blank = s.blank;
+  playback.ground_truth_masks = in.has_gt_masks;
+  playback.lossless = true;
+  daemon::PipelineOptions options;
+  options.ground_truth_masks = s.dynamic == DynamicMode::kGroundTruth;
+  options.on_tracked = [&log](const daemon::TrackedFrame& f) { log.add(f); };
+  options.settle_mapping = true;
+  daemon::Pipeline pipeline(config, in.setup, std::make_unique<daemon::DatasetSource>(in.setup, config.source, playback),
+                            std::move(options));
+  slam::System& system = pipeline.system();
+  for (const auto& line : system.describe()) spdlog::info("    {}", line);
+  if (!o.load_map.empty()) results.load_map = load_map(system, o, s);
+
+  log.start();
+  pipeline.start();
+  pipeline.wait();
+  if (pipeline.failed()) return false;
+  results.trajectory = system.trajectory();
+  results.mapping = system.mapping_stats();
+  results.loops = system.loop_stats();
+  if (!o.save_map.empty()) results.save_map = save_map(system, o.save_map);
+  results.mapping_history = system.local_mapping().timing_history();
+  std::lock_guard<std::mutex> lock(system.map().mutex());
+  results.map_counts = system.map().counts();
+  return true;
+}
+
+void write_trajectory(const Options& o, const Settings& s, const agvslam::Trajectory& trajectory, std::size_t frames) {
+  agvslam::io::write_trajectory(o.out, trajectory, s.format);
+  if (s.format == agvslam::io::TrajectoryFormat::kKitti && trajectory.size() != frames) {
     std::vector<int64_t> times;
     for (const auto& p : trajectory) times.push_back(p.t_ns);
     agvslam::io::write_kitti_times(o.out + ".times", times);
     spdlog::warn("{} of {} frames tracked: {} lists the stamps of the written poses (agvslam-eval --times)",
                  trajectory.size(), frames, o.out + ".times");
   }
+}
 
-  std::printf("FRAMES %zu TRACKED %zu KEYFRAMES %zu LOST %zu\n", frames, tracked, keyframes, lost);
+// The dataset's ground truth of the frames played, lap after lap with the same continuing stamps as the frames.
+std::optional<agvslam::Trajectory> played_ground_truth(const Options& o, const daemon::SourceSetup& setup) {
+  const agvslam::io::StereoDataset& dataset = *setup.dataset;
+  std::optional<agvslam::Trajectory> gt = dataset.ground_truth();
+  if (!gt || (o.repeat == 1 && setup.first == 0 && setup.last + 1 >= dataset.size())) return gt;
+  const int64_t lap_ns = daemon::lap_duration_ns(dataset, setup.first, setup.last);
+  const int64_t t_first = dataset.timestamp_ns(setup.first), t_last = dataset.timestamp_ns(setup.last);
+  agvslam::Trajectory played;
+  for (int lap = 0; lap < o.repeat; ++lap) {
+    for (const auto& p : *gt) {
+      if (p.t_ns < t_first || p.t_ns > t_last) continue;
+      played.push_back({p.t_ns + lap * lap_ns, p.T_w_c});
+    }
+  }
+  return played;
+}
+
+// ATE_RMSE_M (SE(3)-aligned) and DRIFT_M lines; j["ate"].
+void report_accuracy(const agvslam::Trajectory& trajectory, const std::optional<agvslam::Trajectory>& gt, nlohmann::json& j) {
   // Drift: the largest distance of a tracked position from the first one (for sequences where the camera stands
   // still, e.g. simulator scene1 and the EuRoC excerpt).
   double drift_m = 0;
   for (const auto& p : trajectory) drift_m = std::max(drift_m, (p.T_w_c.translation() - trajectory.front().T_w_c.translation()).norm());
-  nlohmann::json j;
-  std::optional<agvslam::Trajectory> gt = dataset->ground_truth();
-  if (gt && (o.repeat > 1 || first > 0 || last + 1 < dataset->size())) {
-    // The ground truth of the frames played, lap after lap, with the same continuing stamps.
-    agvslam::Trajectory g;
-    const std::size_t per_lap = last - first + 1;
-    const int64_t lap_ns = per_lap > 1 ? (dataset->frame(last).t_ns - dataset->frame(first).t_ns) +
-                                             static_cast<int64_t>(1e9 / dataset->rate_hz())
-                                       : static_cast<int64_t>(1e9 / dataset->rate_hz());
-    const int64_t t_first = dataset->frame(first).t_ns, t_last = dataset->frame(last).t_ns;
-    for (int lap = 0; lap < o.repeat; ++lap) {
-      for (const auto& p : *gt) {
-        if (p.t_ns < t_first || p.t_ns > t_last) continue;
-        g.push_back({p.t_ns + lap * lap_ns, p.T_w_c});
-      }
-    }
-    gt = g;
-  }
   if (gt && !trajectory.empty()) {
     const auto pairs = agvslam::eval::associate_by_timestamp(*gt, trajectory, 5'000'000);
     if (pairs.size() >= 3) {
@@ -592,31 +565,41 @@ int run(const Options& o) {
     }
   }
   std::printf("DRIFT_M %.5f (largest distance from the first tracked position)\n", drift_m);
-  if (!moving_inlier_fraction.empty()) {
-    Series f;
-    f.v = moving_inlier_fraction;
-    const double mean = inliers_total ? static_cast<double>(moving_inliers_total) / static_cast<double>(inliers_total) : 0;
-    const std::size_t over10 = static_cast<std::size_t>(
-        std::count_if(f.v.begin(), f.v.end(), [](double x) { return x > 0.10; }));
-    std::printf("MOVING_INLIERS %.4f (of the pose inliers on ground-truth moving objects; p95 %.4f, max %.4f, %zu of %zu "
-                "frames over 10%%)\n",
-                mean, f.quantile(0.95), f.max(), over10, f.v.size());
-    j["moving_inliers"] = {{"fraction", mean}, {"p95_fraction", f.quantile(0.95)}, {"max_fraction", f.max()},
-                           {"frames_over_10pct", over10}, {"frames_scored", f.v.size()}, {"total", moving_inliers_total}};
-  }
-  if (gt && T_w1_w2 && !trajectory.empty()) {
-    // Positions in the saved map's frame, without alignment.
-    agvslam::Trajectory gt_map;
-    for (const auto& p : *gt) gt_map.push_back({p.t_ns, *T_w1_w2 * p.T_w_c});
-    const auto pairs = agvslam::eval::associate_by_timestamp(gt_map, trajectory, 5'000'000);
-    if (pairs.size() >= 1) {
-      const auto ate = agvslam::eval::compute_ate(pairs, agvslam::eval::AlignMode::kNone);
-      std::printf("MAP_FRAME_ATE_M %.5f (no alignment, %zu poses, max %.4f m)\n", ate.translation_m.rmse,
-                  ate.translation_m.count, ate.translation_m.max);
-      j["map_frame_ate"] = {{"rmse_m", ate.translation_m.rmse}, {"max_m", ate.translation_m.max},
-                            {"poses", ate.translation_m.count}};
-    }
-  }
+  j["drift_m"] = drift_m;
+}
+
+// MOVING_INLIERS line; j["moving_inliers"].
+void report_moving_inliers(const FrameLog& log, nlohmann::json& j) {
+  if (log.moving_inlier_fraction.empty()) return;
+  Series f;
+  for (double x : log.moving_inlier_fraction) f.add(x);
+  const double mean = log.inliers_total ? static_cast<double>(log.moving_inliers_total) / static_cast<double>(log.inliers_total) : 0;
+  const auto over10 = static_cast<std::size_t>(
+      std::count_if(f.values().begin(), f.values().end(), [](double x) { return x > 0.10; }));
+  std::printf("MOVING_INLIERS %.4f (of the pose inliers on ground-truth moving objects; p95 %.4f, max %.4f, %zu of %zu "
+              "frames over 10%%)\n",
+              mean, f.quantile(0.95), f.max(), over10, f.count());
+  j["moving_inliers"] = {{"fraction", mean}, {"p95_fraction", f.quantile(0.95)}, {"max_fraction", f.max()},
+                         {"frames_over_10pct", over10}, {"frames_scored", f.count()}, {"total", log.moving_inliers_total}};
+}
+
+// MAP_FRAME_ATE_M line (positions in the saved map's frame, without alignment); j["map_frame_ate"].
+void report_map_frame_accuracy(const agvslam::Trajectory& trajectory, const std::optional<agvslam::Trajectory>& gt,
+                               const agvslam::SE3d& T_w1_w2, nlohmann::json& j) {
+  if (!gt || trajectory.empty()) return;
+  agvslam::Trajectory gt_map;
+  for (const auto& p : *gt) gt_map.push_back({p.t_ns, T_w1_w2 * p.T_w_c});
+  const auto pairs = agvslam::eval::associate_by_timestamp(gt_map, trajectory, 5'000'000);
+  if (pairs.size() < 1) return;
+  const auto ate = agvslam::eval::compute_ate(pairs, agvslam::eval::AlignMode::kNone);
+  std::printf("MAP_FRAME_ATE_M %.5f (no alignment, %zu poses, max %.4f m)\n", ate.translation_m.rmse,
+              ate.translation_m.count, ate.translation_m.max);
+  j["map_frame_ate"] = {{"rmse_m", ate.translation_m.rmse}, {"max_m", ate.translation_m.max},
+                        {"poses", ate.translation_m.count}};
+}
+
+// LOOPS line; returns the loops as JSON.
+nlohmann::json report_loops(const slam::LoopClosingStats& lstats) {
   std::printf("LOOPS %llu", static_cast<unsigned long long>(lstats.loops_closed));
   nlohmann::json loops_json = nlohmann::json::array();
   for (const slam::LoopEvent& e : lstats.loops) {
@@ -634,82 +617,125 @@ int run(const Options& o) {
                           {"global_ba_ms", e.global_ba_ms}, {"global_ba_merge_ms", e.global_ba_merge_ms}});
   }
   std::printf("\n");
-  std::printf("RELOCALISATION first_tracked %ld", first_tracked);
-  if (blank) std::printf(" blank_recovered_after %ld", blank_recovered_after);
+  return loops_json;
+}
+
+// RELOCALISATION, laps and counts lines.
+void report_counts(const Options& o, const Settings& s, const FrameLog& log, const SlamResults& results) {
+  std::printf("RELOCALISATION first_tracked %ld", log.first_tracked);
+  if (s.blank) std::printf(" blank_recovered_after %ld", log.blank_recovered_after);
   std::printf("\n");
   if (o.repeat > 1) {
     std::printf("laps:");
-    for (std::size_t k = 0; k < laps_keyframes.size(); ++k) {
-      std::printf(" [%zu: %zu keyframes, %zu map points]", k + 1, laps_keyframes[k], laps_points[k]);
+    for (std::size_t k = 0; k < log.laps_keyframes.size(); ++k) {
+      std::printf(" [%zu: %zu keyframes, %zu map points]", k + 1, log.laps_keyframes[k], log.laps_points[k]);
     }
     std::printf("\n");
   }
+  const slam::LocalMappingStats& m = results.mapping;
+  const slam::MapCounts& map = results.map_counts;
   std::printf("counts: %zu frames, %zu tracked, %zu lost, %zu recovered, %zu resets; %zu keyframes, %zu map points "
               "(%.1f MB); mapping: %llu keyframes processed, %llu skipped (queue full), max queue %zu, %llu culled "
               "keyframes, %llu created / %llu culled points\n",
-              frames, tracked, lost, recovered, resets, map_counts.keyframes, map_counts.map_points,
-              static_cast<double>(map_counts.memory_bytes) / 1e6, static_cast<unsigned long long>(mstats.keyframes_processed),
-              static_cast<unsigned long long>(mstats.keyframes_skipped), max_queue,
-              static_cast<unsigned long long>(mstats.keyframes_culled), static_cast<unsigned long long>(mstats.points_created),
-              static_cast<unsigned long long>(mstats.points_culled));
-  std::printf("time per frame [ms]   median      p95      max\n");
-  for (const auto& name : stage_order) {
-    const auto it = series.find(name);
-    if (it == series.end() || it->second.v.empty()) continue;
-    std::printf("  %-16s %9.2f %8.2f %8.2f\n", name.c_str(), it->second.quantile(0.5), it->second.quantile(0.95),
-                it->second.max());
+              log.frames, log.tracked, log.lost, log.recovered, log.resets, map.keyframes, map.map_points,
+              static_cast<double>(map.memory_bytes) / 1e6, static_cast<unsigned long long>(m.keyframes_processed),
+              static_cast<unsigned long long>(m.keyframes_skipped), log.max_queue,
+              static_cast<unsigned long long>(m.keyframes_culled), static_cast<unsigned long long>(m.points_created),
+              static_cast<unsigned long long>(m.points_culled));
+}
+
+// Local mapping's per-keyframe times (ms) by step.
+std::map<std::string, Series> mapping_series(const std::vector<slam::KeyframeMappingTimes>& history) {
+  std::map<std::string, Series> series;
+  for (const auto& h : history) {
+    series["insert"].add(h.insert_ms);
+    series["point_culling"].add(h.culling_ms);
+    series["triangulation"].add(h.triangulation_ms);
+    series["fusion"].add(h.fusion_ms);
+    series["local_ba"].add(h.ba_ms);
+    series["keyframe_culling"].add(h.kf_culling_ms);
+    series["total"].add(h.total_ms);
   }
-  std::map<std::string, Series> mapping_series;
-  for (const auto& h : mapping_history) {
-    mapping_series["insert"].add(h.insert_ms);
-    mapping_series["point_culling"].add(h.culling_ms);
-    mapping_series["triangulation"].add(h.triangulation_ms);
-    mapping_series["fusion"].add(h.fusion_ms);
-    mapping_series["local_ba"].add(h.ba_ms);
-    mapping_series["keyframe_culling"].add(h.kf_culling_ms);
-    mapping_series["total"].add(h.total_ms);
+  return series;
+}
+
+// The timing tables; the mapping table's rows are added to `mapping` (as zeros when no keyframe was mapped).
+void report_timings(const FrameLog& log, std::map<std::string, Series>& mapping, double run_s) {
+  std::printf("time per frame [ms]   median      p95      max\n");
+  for (const char* name : FrameLog::kStageOrder) {
+    const auto it = log.series.find(name);
+    if (it == log.series.end() || it->second.empty()) continue;
+    std::printf("  %-16s %9.2f %8.2f %8.2f\n", name, it->second.median(), it->second.quantile(0.95), it->second.max());
   }
   std::printf("time per keyframe (local mapping) [ms]   median      p95      max\n");
   for (const char* name : {"triangulation", "fusion", "local_ba", "total"}) {
-    const Series& s = mapping_series[name];
-    std::printf("  %-16s %9.2f %8.2f %8.2f\n", name, s.quantile(0.5), s.quantile(0.95), s.max());
+    const Series& s = mapping[name];
+    std::printf("  %-16s %9.2f %8.2f %8.2f\n", name, s.median(), s.quantile(0.95), s.max());
   }
-  std::printf("wall time %.1f s, %.1f frames/s\n", run_s, run_s > 0 ? static_cast<double>(frames) / run_s : 0.0);
+  std::printf("wall time %.1f s, %.1f frames/s\n", run_s, run_s > 0 ? static_cast<double>(log.frames) / run_s : 0.0);
+}
 
-  if (!o.json.empty()) {
-    j["dataset"] = dataset->root();
-    j["dynamic"] = o.dynamic;
-    j["mapping"] = o.mapping;
-    j["speed"] = o.speed;
-    j["frames"] = {{"first", first}, {"last", last}, {"processed", frames}, {"tracked", tracked}, {"lost", lost},
-                   {"recovered", recovered}, {"resets", resets}};
-    j["drift_m"] = drift_m;
-    j["loops"] = loops_json;
-    j["loop_closing"] = {{"enabled", o.loop == "on"}, {"keyframes_processed", lstats.keyframes_processed},
-                         {"keyframes_dropped", lstats.keyframes_dropped}, {"consistent_detections", lstats.consistent_detections},
-                         {"rejected_geometry", lstats.rejected_geometry}, {"rejected_correction", lstats.rejected_correction},
-                         {"loops_closed", lstats.loops_closed}, {"global_ba_runs", lstats.global_ba_runs},
-                         {"global_ba_aborted", lstats.global_ba_aborted}};
-    j["relocalisation"] = {{"first_tracked", first_tracked}, {"blank_recovered_after", blank_recovered_after}};
-    if (!load_json.is_null()) j["load_map"] = load_json;
-    if (!save_json.is_null()) j["save_map"] = save_json;
-    if (o.repeat > 1) j["laps"] = {{"keyframes", laps_keyframes}, {"map_points", laps_points}};
-    j["map"] = {{"keyframes", map_counts.keyframes}, {"map_points", map_counts.map_points},
-                {"observations", map_counts.observations}, {"memory_bytes", map_counts.memory_bytes}};
-    j["local_mapping"] = {{"keyframes_processed", mstats.keyframes_processed}, {"keyframes_skipped", mstats.keyframes_skipped},
-                          {"keyframes_culled", mstats.keyframes_culled}, {"points_created", mstats.points_created},
-                          {"points_fused", mstats.points_fused}, {"points_culled", mstats.points_culled},
-                          {"ba_runs", mstats.ba_runs}, {"ba_aborted", mstats.ba_aborted}, {"ba_outliers", mstats.ba_outliers},
-                          {"max_queue", max_queue}};
-    nlohmann::json jt, jm;
-    for (const auto& [name, s] : series) jt[name] = s.json();
-    for (const auto& [name, s] : mapping_series) jm[name] = s.json();
-    j["timings"] = jt;
-    j["mapping_timings"] = jm;
-    j["wall_s"] = run_s;
-    j["per_frame"] = per_frame;
-    agvslam::io::write_file_atomically(o.json, j.dump(1) + "\n");
-  }
+// The --json statistics, added to what the reports put into j.
+void write_json(const Options& o, const Input& in, const FrameLog& log, const SlamResults& results,
+                const std::map<std::string, Series>& mapping, const nlohmann::json& loops_json, double run_s,
+                nlohmann::json& j) {
+  const slam::LocalMappingStats& m = results.mapping;
+  const slam::LoopClosingStats& l = results.loops;
+  const slam::MapCounts& map = results.map_counts;
+  j["dataset"] = in.setup.dataset->root();
+  j["dynamic"] = o.dynamic;
+  j["mapping"] = o.mapping;
+  j["speed"] = o.speed;
+  j["frames"] = {{"first", in.setup.first}, {"last", in.setup.last}, {"processed", log.frames}, {"tracked", log.tracked},
+                 {"lost", log.lost}, {"recovered", log.recovered}, {"resets", log.resets}};
+  j["loops"] = loops_json;
+  j["loop_closing"] = {{"enabled", o.loop == "on"}, {"keyframes_processed", l.keyframes_processed},
+                       {"keyframes_dropped", l.keyframes_dropped}, {"consistent_detections", l.consistent_detections},
+                       {"rejected_geometry", l.rejected_geometry}, {"rejected_correction", l.rejected_correction},
+                       {"loops_closed", l.loops_closed}, {"global_ba_runs", l.global_ba_runs},
+                       {"global_ba_aborted", l.global_ba_aborted}};
+  j["relocalisation"] = {{"first_tracked", log.first_tracked}, {"blank_recovered_after", log.blank_recovered_after}};
+  if (!results.load_map.is_null()) j["load_map"] = results.load_map;
+  if (!results.save_map.is_null()) j["save_map"] = results.save_map;
+  if (o.repeat > 1) j["laps"] = {{"keyframes", log.laps_keyframes}, {"map_points", log.laps_points}};
+  j["map"] = {{"keyframes", map.keyframes}, {"map_points", map.map_points}, {"observations", map.observations},
+              {"memory_bytes", map.memory_bytes}};
+  j["local_mapping"] = {{"keyframes_processed", m.keyframes_processed}, {"keyframes_skipped", m.keyframes_skipped},
+                        {"keyframes_culled", m.keyframes_culled}, {"points_created", m.points_created},
+                        {"points_fused", m.points_fused}, {"points_culled", m.points_culled}, {"ba_runs", m.ba_runs},
+                        {"ba_aborted", m.ba_aborted}, {"ba_outliers", m.ba_outliers}, {"max_queue", log.max_queue}};
+  nlohmann::json jt, jm;
+  for (const auto& [name, s] : log.series) jt[name] = timing_json(s);
+  for (const auto& [name, s] : mapping) jm[name] = timing_json(s);
+  j["timings"] = jt;
+  j["mapping_timings"] = jm;
+  j["wall_s"] = run_s;
+  j["per_frame"] = log.per_frame;
+  agvslam::io::write_file_atomically(o.json, j.dump(1) + "\n");
+}
+
+int run(const Options& o) {
+  const Settings s = check_options(o);
+  cv::setNumThreads(o.opencv_threads);
+  const Input in = open_input(o, s);
+
+  FrameLog log(o.mapping == "inline", in.setup.last, (in.setup.last - in.setup.first + 1) * static_cast<std::size_t>(o.repeat));
+  SlamResults results;
+  if (!play(o, s, in, log, results)) return 1;
+  const double run_s = log.finish();
+
+  write_trajectory(o, s, results.trajectory, log.frames);
+  std::printf("FRAMES %zu TRACKED %zu KEYFRAMES %zu LOST %zu\n", log.frames, log.tracked, log.keyframes, log.lost);
+  nlohmann::json j;
+  const std::optional<agvslam::Trajectory> gt = played_ground_truth(o, in.setup);
+  report_accuracy(results.trajectory, gt, j);
+  report_moving_inliers(log, j);
+  if (in.T_w1_w2) report_map_frame_accuracy(results.trajectory, gt, *in.T_w1_w2, j);
+  const nlohmann::json loops_json = report_loops(results.loops);
+  report_counts(o, s, log, results);
+  std::map<std::string, Series> mapping = mapping_series(results.mapping_history);
+  report_timings(log, mapping, run_s);
+  if (!o.json.empty()) write_json(o, in, log, results, mapping, loops_json, run_s, j);
   return 0;
 }
 

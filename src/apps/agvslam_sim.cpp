@@ -11,6 +11,7 @@
 // option, file or folder), 1 on any other failure.
 
 #include <CLI/CLI.hpp>
+#include <spdlog/sinks/stdout_color_sinks.h>
 #include <spdlog/spdlog.h>
 
 #include <chrono>
@@ -22,6 +23,7 @@
 #include "agvslam/io/trajectory_io.h"
 #include "agvslam/sim/sim_config.h"
 #include "agvslam/sim/simulator.h"
+#include "tool_main.h"
 
 namespace {
 
@@ -127,9 +129,16 @@ int run(const Options& o) {
   return 0;
 }
 
+void list_scenarios() {
+  for (const auto& s : sim::scenario_catalogue())
+    std::printf("%-7s %4.0f frames at 20 Hz  %s\n", s.name.c_str(), s.nominal_duration_s * 20.0, s.description.c_str());
+}
+
 }  // namespace
 
 int main(int argc, char** argv) {
+  // Logs go to stderr: stdout carries --list.
+  spdlog::set_default_logger(spdlog::stderr_color_mt("agvslam-sim"));
   CLI::App app{"agvslam-sim: synthetic stereo warehouse sequences (KITTI layout + disparity, motion mask, objects)"};
   Options o;
   bool list = false;
@@ -147,23 +156,15 @@ int main(int argc, char** argv) {
   app.add_option("--params", o.params_path, "camera/rendering settings (params/sim.yaml)");
   app.add_option("--threads", o.threads, "rendering threads (the output does not depend on it)")->capture_default_str();
   app.add_flag("--list", list, "list the scenarios and exit");
-  CLI11_PARSE(app, argc, argv);
-  o.frames_given = app.count("--frames") > 0;
-  o.layout_seed_given = app.count("--layout-seed") > 0;
-  if (list) {
-    for (const auto& s : sim::scenario_catalogue())
-      std::printf("%-7s %4.0f frames at 20 Hz  %s\n", s.name.c_str(), s.nominal_duration_s * 20.0, s.description.c_str());
-    return 0;
-  }
-  try {
+  return agvslam::apps::parse_and_run(app, argc, argv, [&] {
+    if (list) {
+      list_scenarios();
+      return 0;
+    }
+    o.frames_given = app.count("--frames") > 0;
+    o.layout_seed_given = app.count("--layout-seed") > 0;
     if (o.scenario.empty()) throw InputError("--scenario", "", "expected a scenario name: " + names);
     if (o.out_dir.empty()) throw InputError("--out", "", "expected an output folder");
     return run(o);
-  } catch (const InputError& e) {
-    std::fprintf(stderr, "agvslam-sim: error: %s\n", e.what());
-    return 2;
-  } catch (const std::exception& e) {
-    std::fprintf(stderr, "agvslam-sim: failed: %s\n", e.what());
-    return 1;
-  }
+  });
 }

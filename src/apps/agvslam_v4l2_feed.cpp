@@ -19,6 +19,7 @@
 #include <cstdio>
 #include <filesystem>
 #include <fstream>
+#include <memory>
 #include <nlohmann/json.hpp>
 #include <spdlog/sinks/stdout_color_sinks.h>
 #include <spdlog/spdlog.h>
@@ -28,10 +29,12 @@
 #include <ctime>
 
 #include "agvslam/core/error.h"
+#include "agvslam/core/stats.h"
 #include "agvslam/drivers/v4l2/device.h"
 #include "agvslam/drivers/v4l2/pixel_convert.h"
 #include "agvslam/drivers/v4l2/stereo_camera.h"
 #include "agvslam/io/dataset.h"
+#include "tool_main.h"
 
 namespace {
 
@@ -66,13 +69,160 @@ std::string hex(uint64_t h) {
   return buf;
 }
 
-double percentile(std::vector<double> v, double p) {
-  if (v.empty()) return 0;
-  std::sort(v.begin(), v.end());
-  return v[std::min(v.size() - 1, static_cast<std::size_t>(p * static_cast<double>(v.size() - 1) + 0.5))];
+// Options that need no file: InputError naming the option otherwise.
+void check_options(const Options& o) {
+  if (!o.dry_run && o.left.empty()) throw InputError("--left", "", "expected an output device");
+  if (!o.dry_run && !o.side_by_side && o.right.empty())
+    throw InputError("--right", "", "expected an output device (or --side-by-side)");
+  if (o.rate_hz < 0) throw InputError("--rate-hz", "", "expected a rate > 0");
+}
+
+// The frames a..b-1 of the dataset, continuous; for MJPEG cropped to multiples of 16.
+struct Frames {
+  std::vector<cv::Mat> left, right;
+};
+
+Frames load_frames(const Options& o, const agvslam::io::StereoDataset& ds, std::size_t a, std::size_t b) {
+  Frames f;
+  for (std::size_t i = a; i < b; ++i) {
+    agvslam::StereoFrame frame = ds.frame(i);
+    f.left.push_back(frame.left.isContinuous() ? frame.left : frame.left.clone());
+    f.right.push_back(frame.right.isContinuous() ? frame.right : frame.right.clone());
+  }
+  if (o.format == "mjpeg") {
+    // libv4lconvert decodes JPEGs whose size is a multiple of the 16x16 block (as every UVC camera's is): crop.
+    const cv::Rect roi(0, 0, f.left.front().cols & ~15, f.left.front().rows & ~15);
+    if (roi.width != f.left.front().cols || roi.height != f.left.front().rows)
+      spdlog::info("MJPEG: frames cropped to their top-left {}x{} (multiples of 16)", roi.width, roi.height);
+    for (auto& m : f.left) m = m(roi).clone();
+    for (auto& m : f.right) m = m(roi).clone();
+  }
+  return f;
+}
+
+// "index left_hash right_hash" per frame, written atomically.
+void write_manifest(const std::string& path, const std::string& dataset_root, const Frames& f, std::size_t a) {
+  const std::string tmp = path + ".tmp";
+  {
+    std::ofstream m(tmp);
+    if (!m) throw InputError(path, "", "expected a writable file");
+    m << "# agvslam-v4l2-feed manifest: index left_fnv1a64 right_fnv1a64; dataset " << dataset_root << " "
+      << f.left.front().cols << "x" << f.left.front().rows << "\n";
+    for (std::size_t k = 0; k < f.left.size(); ++k)
+      m << (a + k) << " " << hex(v4l2::image_hash(f.left[k])) << " " << hex(v4l2::image_hash(f.right[k])) << "\n";
+  }
+  std::filesystem::rename(tmp, path);
+}
+
+// MJPEG: every frame encoded once before playing (3 channels of the grey value, OpenCV's 4:2:0 sampling); side by
+// side, the pairs go into `left` alone.
+struct Jpegs {
+  std::vector<std::vector<uint8_t>> left, right;
+};
+
+Jpegs encode_jpegs(const Options& o, const Frames& f) {
+  Jpegs out;
+  cv::Mat bgr, both;
+  auto encode = [&](const cv::Mat& grey, std::vector<std::vector<uint8_t>>& to) {
+    cv::cvtColor(grey, bgr, cv::COLOR_GRAY2BGR);
+    to.emplace_back();
+    cv::imencode(".jpg", bgr, to.back(), {cv::IMWRITE_JPEG_QUALITY, o.jpeg_quality});
+  };
+  for (std::size_t k = 0; k < f.left.size(); ++k) {
+    if (o.side_by_side) {
+      cv::hconcat(f.left[k], f.right[k], both);
+      encode(both, out.left);
+    } else {
+      encode(f.left[k], out.left);
+      encode(f.right[k], out.right);
+    }
+  }
+  return out;
+}
+
+// The output devices, opened and announced (readers can open them); side by side only `left`.
+struct Outputs {
+  std::unique_ptr<v4l2::V4l2Output> left, right;
+};
+
+Outputs open_outputs(const Options& o, int width, int height) {
+  const auto pf = o.format == "mjpeg" ? v4l2::PixelFormat::kMjpeg : v4l2::PixelFormat::kGrey;
+  const auto mode = o.stamp == "write" ? v4l2::V4l2Output::Mode::kWrite : v4l2::V4l2Output::Mode::kQueue;
+  Outputs out;
+  if (o.side_by_side) {
+    out.left = std::make_unique<v4l2::V4l2Output>(o.left, 2 * width, height, mode, pf);
+  } else {
+    out.left = std::make_unique<v4l2::V4l2Output>(o.left, width, height, mode, pf);
+    out.right = std::make_unique<v4l2::V4l2Output>(o.right, width, height, mode, pf);
+  }
+  out.left->announce();
+  if (out.right) out.right->announce();
+  spdlog::info("devices announced {}x{} {}", o.side_by_side ? 2 * width : width, height,
+               o.format == "mjpeg" ? "MJPEG" : "GREY");
+  return out;
+}
+
+// Waits for --wait-file; false when it did not appear in time.
+bool wait_for_reader(const Options& o) {
+  if (o.wait_file.empty()) return true;
+  const auto until = std::chrono::steady_clock::now() + std::chrono::duration<double>(o.wait_timeout_s);
+  while (!std::filesystem::exists(o.wait_file)) {
+    if (std::chrono::steady_clock::now() > until) {
+      spdlog::error("{} did not appear within {} s (no reader streaming)", o.wait_file, o.wait_timeout_s);
+      return false;
+    }
+    std::this_thread::sleep_for(std::chrono::milliseconds(20));
+  }
+  return true;
+}
+
+struct PlayStats {
+  agvslam::Series write_ms;  // per pair
+  std::size_t late = 0;      // pairs started more than half a period late
+};
+
+// One pair per period on an absolute schedule, each stamped with its due time.
+PlayStats play(const Options& o, const Frames& f, const Jpegs& jpegs, Outputs& out, double rate_hz) {
+  PlayStats st;
+  cv::Mat sbs;
+  const auto period_ns = static_cast<int64_t>(1e9 / rate_hz);
+  const int64_t t0 = v4l2::monotonic_now_ns() + 1000000;
+  for (std::size_t k = 0; k < f.left.size(); ++k) {
+    const int64_t due = t0 + static_cast<int64_t>(k) * period_ns;
+    timespec ts{static_cast<time_t>(due / 1000000000LL), static_cast<long>(due % 1000000000LL)};
+    clock_nanosleep(CLOCK_MONOTONIC, TIMER_ABSTIME, &ts, nullptr);
+    const int64_t start = v4l2::monotonic_now_ns();
+    if (start - due > period_ns / 2) ++st.late;
+    if (o.format == "mjpeg") {
+      out.left->write_bytes(jpegs.left[k].data(), jpegs.left[k].size(), due);
+      if (out.right) out.right->write_bytes(jpegs.right[k].data(), jpegs.right[k].size(), due);
+    } else if (o.side_by_side) {
+      cv::hconcat(f.left[k], f.right[k], sbs);
+      out.left->write(sbs, due);
+    } else {
+      out.left->write(f.left[k], due);
+      out.right->write(f.right[k], due);
+    }
+    st.write_ms.add(static_cast<double>(v4l2::monotonic_now_ns() - start) / 1e6);
+  }
+  return st;
+}
+
+void report(const Options& o, std::size_t frames, double rate_hz, const PlayStats& st) {
+  spdlog::info("sent {} frames at {} Hz; {} started more than half a period late; write per pair median {:.2f} ms, "
+               "p95 {:.2f} ms, max {:.2f} ms",
+               frames, rate_hz, st.late, st.write_ms.median(), st.write_ms.quantile(0.95), st.write_ms.max());
+  std::printf("SENT %zu LATE %zu\n", frames, st.late);
+  if (!o.json.empty()) {
+    nlohmann::json j = {{"frames", frames}, {"rate_hz", rate_hz}, {"late", st.late},
+                        {"write_ms", {{"median", st.write_ms.median()}, {"p95", st.write_ms.quantile(0.95)},
+                                      {"max", st.write_ms.max()}}}};
+    std::ofstream(o.json) << j.dump(2) << "\n";
+  }
 }
 
 int run(const Options& o) {
+  check_options(o);
   const auto ds = agvslam::io::open_dataset(o.dataset);
   std::size_t a = 0, b = 0;
   parse_range(o.frames, ds->size(), a, b);
@@ -84,114 +234,14 @@ int run(const Options& o) {
                o.manifest.empty() ? "-" : o.manifest, o.wait_file.empty() ? "-" : o.wait_file, o.wait_timeout_s,
                o.start_delay_s, o.stamp, o.format, o.jpeg_quality);
 
-  std::vector<cv::Mat> left, right;
-  for (std::size_t i = a; i < b; ++i) {
-    agvslam::StereoFrame f = ds->frame(i);
-    left.push_back(f.left.isContinuous() ? f.left : f.left.clone());
-    right.push_back(f.right.isContinuous() ? f.right : f.right.clone());
-  }
-  if (o.format == "mjpeg") {
-    // libv4lconvert decodes JPEGs whose size is a multiple of the 16x16 block (as every UVC camera's is): crop.
-    const cv::Rect roi(0, 0, left.front().cols & ~15, left.front().rows & ~15);
-    if (roi.width != left.front().cols || roi.height != left.front().rows)
-      spdlog::info("MJPEG: frames cropped to their top-left {}x{} (multiples of 16)", roi.width, roi.height);
-    for (auto& m : left) m = m(roi).clone();
-    for (auto& m : right) m = m(roi).clone();
-  }
-  const int w = left.front().cols, h = left.front().rows;
-  if (!o.manifest.empty()) {
-    const std::string tmp = o.manifest + ".tmp";
-    {
-      std::ofstream m(tmp);
-      if (!m) throw InputError(o.manifest, "", "expected a writable file");
-      m << "# agvslam-v4l2-feed manifest: index left_fnv1a64 right_fnv1a64; dataset " << ds->root() << " " << w << "x"
-        << h << "\n";
-      for (std::size_t k = 0; k < left.size(); ++k)
-        m << (a + k) << " " << hex(v4l2::image_hash(left[k])) << " " << hex(v4l2::image_hash(right[k])) << "\n";
-    }
-    std::filesystem::rename(tmp, o.manifest);
-  }
+  const Frames frames = load_frames(o, *ds, a, b);
+  if (!o.manifest.empty()) write_manifest(o.manifest, ds->root(), frames, a);
   if (o.dry_run) return 0;
-
-  const bool mjpeg = o.format == "mjpeg";
-  const auto pf = mjpeg ? v4l2::PixelFormat::kMjpeg : v4l2::PixelFormat::kGrey;
-  // MJPEG: every frame encoded once before playing (3 channels of the grey value, OpenCV's 4:2:0 sampling).
-  std::vector<std::vector<uint8_t>> jpeg_l, jpeg_r;
-  if (mjpeg) {
-    cv::Mat bgr, both;
-    for (std::size_t k = 0; k < left.size(); ++k) {
-      auto encode = [&](const cv::Mat& g, std::vector<std::vector<uint8_t>>& out) {
-        cv::cvtColor(g, bgr, cv::COLOR_GRAY2BGR);
-        out.emplace_back();
-        cv::imencode(".jpg", bgr, out.back(), {cv::IMWRITE_JPEG_QUALITY, o.jpeg_quality});
-      };
-      if (o.side_by_side) {
-        cv::hconcat(left[k], right[k], both);
-        encode(both, jpeg_l);
-      } else {
-        encode(left[k], jpeg_l);
-        encode(right[k], jpeg_r);
-      }
-    }
-  }
-  const auto mode = o.stamp == "write" ? v4l2::V4l2Output::Mode::kWrite : v4l2::V4l2Output::Mode::kQueue;
-  std::unique_ptr<v4l2::V4l2Output> out_l, out_r;
-  if (o.side_by_side) {
-    out_l = std::make_unique<v4l2::V4l2Output>(o.left, 2 * w, h, mode, pf);
-  } else {
-    out_l = std::make_unique<v4l2::V4l2Output>(o.left, w, h, mode, pf);
-    out_r = std::make_unique<v4l2::V4l2Output>(o.right, w, h, mode, pf);
-  }
-  out_l->announce();
-  if (out_r) out_r->announce();
-  spdlog::info("devices announced {}x{} {}", o.side_by_side ? 2 * w : w, h, mjpeg ? "MJPEG" : "GREY");
-
-  if (!o.wait_file.empty()) {
-    const auto until = std::chrono::steady_clock::now() + std::chrono::duration<double>(o.wait_timeout_s);
-    while (!std::filesystem::exists(o.wait_file)) {
-      if (std::chrono::steady_clock::now() > until) {
-        spdlog::error("{} did not appear within {} s (no reader streaming)", o.wait_file, o.wait_timeout_s);
-        return 1;
-      }
-      std::this_thread::sleep_for(std::chrono::milliseconds(20));
-    }
-  }
+  const Jpegs jpegs = o.format == "mjpeg" ? encode_jpegs(o, frames) : Jpegs{};
+  Outputs out = open_outputs(o, frames.left.front().cols, frames.left.front().rows);
+  if (!wait_for_reader(o)) return 1;
   if (o.start_delay_s > 0) std::this_thread::sleep_for(std::chrono::duration<double>(o.start_delay_s));
-
-  cv::Mat sbs;
-  std::vector<double> write_ms;
-  std::size_t late = 0;
-  const int64_t period_ns = static_cast<int64_t>(1e9 / rate);
-  const int64_t t0 = v4l2::monotonic_now_ns() + 1000000;
-  for (std::size_t k = 0; k < left.size(); ++k) {
-    const int64_t due = t0 + static_cast<int64_t>(k) * period_ns;
-    timespec ts{static_cast<time_t>(due / 1000000000LL), static_cast<long>(due % 1000000000LL)};
-    clock_nanosleep(CLOCK_MONOTONIC, TIMER_ABSTIME, &ts, nullptr);
-    const int64_t start = v4l2::monotonic_now_ns();
-    if (start - due > period_ns / 2) ++late;
-    if (mjpeg) {
-      out_l->write_bytes(jpeg_l[k].data(), jpeg_l[k].size(), due);
-      if (out_r) out_r->write_bytes(jpeg_r[k].data(), jpeg_r[k].size(), due);
-    } else if (o.side_by_side) {
-      cv::hconcat(left[k], right[k], sbs);
-      out_l->write(sbs, due);
-    } else {
-      out_l->write(left[k], due);
-      out_r->write(right[k], due);
-    }
-    write_ms.push_back(static_cast<double>(v4l2::monotonic_now_ns() - start) / 1e6);
-  }
-  spdlog::info("sent {} frames at {} Hz; {} started more than half a period late; write per pair median {:.2f} ms, "
-               "p95 {:.2f} ms, max {:.2f} ms",
-               left.size(), rate, late, percentile(write_ms, 0.5), percentile(write_ms, 0.95),
-               percentile(write_ms, 1.0));
-  std::printf("SENT %zu LATE %zu\n", left.size(), late);
-  if (!o.json.empty()) {
-    nlohmann::json j = {{"frames", left.size()}, {"rate_hz", rate}, {"late", late},
-                        {"write_ms", {{"median", percentile(write_ms, 0.5)}, {"p95", percentile(write_ms, 0.95)},
-                                      {"max", percentile(write_ms, 1.0)}}}};
-    std::ofstream(o.json) << j.dump(2) << "\n";
-  }
+  report(o, frames.left.size(), rate, play(o, frames, jpegs, out, rate));
   return 0;
 }
 
@@ -220,23 +270,9 @@ int main(int argc, char** argv) {
       ->check(CLI::IsMember({"grey", "mjpeg"}));
   app.add_option("--jpeg-quality", o.jpeg_quality, "JPEG quality for --format mjpeg (1..100)")->check(CLI::Range(1, 100));
   app.add_option("--json", o.json, "write statistics as JSON");
-  try {
-    app.parse(argc, argv);
-    if (!o.dry_run && o.left.empty()) throw InputError("--left", "", "expected an output device");
-    if (!o.dry_run && !o.side_by_side && o.right.empty())
-      throw InputError("--right", "", "expected an output device (or --side-by-side)");
-    if (o.rate_hz < 0) throw InputError("--rate-hz", "", "expected a rate > 0");
-    return run(o);
-  } catch (const CLI::ParseError& e) {
-    return app.exit(e) == 0 ? 0 : 2;
-  } catch (const InputError& e) {
-    spdlog::error("{}", e.what());
-    return 2;
-  } catch (const v4l2::V4l2Error& e) {
-    spdlog::error("{}", e.what());
-    return e.configuration() ? 2 : 1;
-  } catch (const std::exception& e) {
-    spdlog::error("{}", e.what());
-    return 1;
-  }
+  // A device that refuses the configuration (not an output device, size or format refused) is bad input.
+  return agvslam::apps::parse_and_run(app, argc, argv, [&] { return run(o); }, [](const std::exception& e) {
+    const auto* device = dynamic_cast<const v4l2::V4l2Error*>(&e);
+    return device != nullptr && device->configuration();
+  });
 }

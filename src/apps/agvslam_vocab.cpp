@@ -43,9 +43,9 @@
 #include <opencv2/core/utility.hpp>
 #include <opencv2/imgcodecs.hpp>
 #include <random>
-#include <thread>
 
 #include "agvslam/core/error.h"
+#include "agvslam/core/parallel_for.h"
 #include "agvslam/features/features_config.h"
 #include "agvslam/features/orb_extractor.h"
 #include "agvslam/io/dataset.h"
@@ -54,6 +54,7 @@
 #include "agvslam/place/vocabulary.h"
 #include "agvslam/sim/sim_config.h"
 #include "agvslam/sim/simulator.h"
+#include "tool_main.h"
 
 namespace {
 
@@ -144,52 +145,48 @@ std::vector<ImageItem> dataset_items(const std::string& dir, int step) {
   return items;
 }
 
+// A seeded subset of `max_features` rows of d (the same for any thread count).
+cv::Mat subset_rows(const cv::Mat& d, int max_features, uint64_t seed, std::size_t item) {
+  std::vector<int> rows(std::size_t(d.rows));
+  for (int r = 0; r < d.rows; ++r) rows[std::size_t(r)] = r;
+  std::mt19937_64 rng(seed * 0x9E3779B97F4A7C15ULL + item);
+  for (int r = 0; r < max_features; ++r)
+    std::swap(rows[std::size_t(r)], rows[std::size_t(r) + std::size_t(rng() % uint64_t(d.rows - r))]);
+  std::sort(rows.begin(), rows.begin() + max_features);
+  cv::Mat sub(max_features, d.cols, d.type());
+  for (int r = 0; r < max_features; ++r) d.row(rows[std::size_t(r)]).copyTo(sub.row(r));
+  return sub;
+}
+
 // Extracts ORB descriptors of every item with `threads` extractors; out[i] for items[i].
 void extract_all(const std::vector<ImageItem>& items, const agvslam::features::OrbExtractorConfig& orb, int threads,
                  int max_features, uint64_t seed, std::vector<cv::Mat>& out, std::vector<double>* times_ms = nullptr) {
   out.assign(items.size(), cv::Mat());
   std::vector<double> times(items.size(), 0.0);
-  std::atomic<std::size_t> next{0}, done{0};
+  struct Extractor {
+    agvslam::features::OrbExtractor orb;
+    agvslam::features::KeypointSet keypoints;
+  };
+  std::vector<std::unique_ptr<Extractor>> extractors(std::size_t(std::max(1, threads)));  // one per worker
+  std::atomic<std::size_t> done{0};
   std::mutex log_mutex;
-  std::exception_ptr error;
-  auto worker = [&] {
-    agvslam::features::OrbExtractor extractor(orb);
-    agvslam::features::KeypointSet kps;
-    for (std::size_t i; (i = next.fetch_add(1)) < items.size();) {
-      try {
-        const cv::Mat image = items[i].load();
-        const auto t0 = Clock::now();
-        extractor.extract(image, cv::Mat(), kps);
-        times[i] = ms_since(t0);
-        cv::Mat d = kps.descriptors;
-        if (max_features > 0 && d.rows > max_features) {  // seeded subset, same for any thread count
-          std::vector<int> rows(std::size_t(d.rows));
-          for (int r = 0; r < d.rows; ++r) rows[std::size_t(r)] = r;
-          std::mt19937_64 rng(seed * 0x9E3779B97F4A7C15ULL + i);
-          for (int r = 0; r < max_features; ++r)
-            std::swap(rows[std::size_t(r)], rows[std::size_t(r) + std::size_t(rng() % uint64_t(d.rows - r))]);
-          std::sort(rows.begin(), rows.begin() + max_features);
-          cv::Mat sub(max_features, d.cols, d.type());
-          for (int r = 0; r < max_features; ++r) d.row(rows[std::size_t(r)]).copyTo(sub.row(r));
-          d = sub;
-        }
-        out[i] = d.clone();
-      } catch (...) {
-        std::lock_guard lock(log_mutex);
-        if (!error) error = std::current_exception();
-        next = items.size();
-      }
+  agvslam::parallel_for(threads, items.size(), 1, [&](std::size_t begin, std::size_t end, int worker) {
+    auto& extractor = extractors[std::size_t(worker)];
+    if (!extractor) extractor = std::make_unique<Extractor>(Extractor{agvslam::features::OrbExtractor(orb), {}});
+    for (std::size_t i = begin; i < end; ++i) {
+      const cv::Mat image = items[i].load();
+      const auto t0 = Clock::now();
+      extractor->orb.extract(image, cv::Mat(), extractor->keypoints);
+      times[i] = ms_since(t0);
+      const cv::Mat& d = extractor->keypoints.descriptors;
+      out[i] = max_features > 0 && d.rows > max_features ? subset_rows(d, max_features, seed, i) : d.clone();
       const std::size_t n = ++done;
       if (n % std::max<std::size_t>(1, items.size() / 20) == 0 || n == items.size()) {
         std::lock_guard lock(log_mutex);
         spdlog::info("features: {}/{} images", n, items.size());
       }
     }
-  };
-  std::vector<std::thread> pool;
-  for (int t = 0; t < std::max(1, threads); ++t) pool.emplace_back(worker);
-  for (auto& th : pool) th.join();
-  if (error) std::rethrow_exception(error);
+  });
   if (times_ms) *times_ms = times;
 }
 
@@ -492,23 +489,12 @@ int main(int argc, char** argv) {
   app.add_option("--threshold", o.threshold, "score threshold reported with its precision and recall")->capture_default_str();
   app.add_option("--params-sim", o.params_sim, "simulator settings the --map/--query folders were rendered with");
   app.add_option("--info", o.info, "print a vocabulary file's header and description");
-  try {
-    app.parse(argc, argv);
-  } catch (const CLI::ParseError& e) {
-    return app.exit(e) == 0 ? 0 : 2;
-  }
-  if (o.params_features.empty() && fs::exists("params/features.yaml")) o.params_features = "params/features.yaml";
-  try {
+  return agvslam::apps::parse_and_run(app, argc, argv, [&] {
+    if (o.params_features.empty() && fs::exists("params/features.yaml")) o.params_features = "params/features.yaml";
     if (!o.info.empty()) return info(o);
     if (o.evaluate) return evaluate(o);
     if (o.images.empty() && o.datasets.empty())
       throw InputError("--images/--datasets", "", "expected folders to train on (or --evaluate, or --info FILE)");
     return train(o);
-  } catch (const InputError& e) {
-    spdlog::error("{}", e.what());
-    return 2;
-  } catch (const std::exception& e) {
-    spdlog::error("agvslam-vocab failed: {}", e.what());
-    return 1;
-  }
+  });
 }

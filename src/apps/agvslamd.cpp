@@ -78,53 +78,37 @@ nlohmann::json stats_json(const daemon::PipelineStats& s, double run_s) {
                    {"last_error", s.outputs.can_last_error}}}};
 }
 
-int run(const Options& o) {
-  // Signals: blocked in every thread (the pipeline's, Cyclone's) and taken by the main thread with sigtimedwait.
+// Signals: blocked in every thread (the pipeline's, Cyclone's) and taken by the main thread with sigtimedwait.
+sigset_t block_stop_signals() {
   sigset_t signals;
   sigemptyset(&signals);
   sigaddset(&signals, SIGTERM);
   sigaddset(&signals, SIGINT);
   sigaddset(&signals, SIGHUP);
   pthread_sigmask(SIG_BLOCK, &signals, nullptr);
+  return signals;
+}
 
-  const daemon::DaemonConfig config = daemon::load_daemon_config(o.config);
-  const daemon::SourceSetup setup = daemon::prepare_source(config);
-  const auto log_file = daemon::setup_logging(config.log.file, config.log.level, config.path);
-  spdlog::info("agvslamd: configuration {}", config.path);
-  for (const auto& line : config.describe()) spdlog::info("  {}", line);
-  spdlog::info("  source: {}", setup.summary);
-  spdlog::info("  SLAM frame rate {:.2f} Hz", setup.slam_rate_hz);
-  if (o.check) {
-    spdlog::info("agvslamd: configuration OK (--check)");
-    std::printf("CONFIG OK %s\n", config.path.c_str());
-    return 0;
-  }
-
-  cv::setNumThreads(config.pipeline.opencv_threads);
-  daemon::SystemdNotifier notifier;
-  spdlog::info("  systemd: notify socket {}, watchdog {}", notifier.enabled() ? "set" : "not set (run by hand)",
-               notifier.watchdog_interval().count() > 0
-                   ? std::to_string(notifier.watchdog_interval().count() / 1000) + " ms"
-                   : std::string("off"));
-
-  std::unique_ptr<daemon::FrameSource> source;
+std::unique_ptr<daemon::FrameSource> open_source(const daemon::SourceSetup& setup, const daemon::DaemonConfig& config) {
   try {
-    source = daemon::make_frame_source(setup, config);
+    return daemon::make_frame_source(setup, config);
   } catch (const agvslam::drivers::v4l2::V4l2Error& e) {
     if (e.configuration()) throw InputError(config.path, "camera", e.what());
     throw;
   }
-  daemon::Pipeline pipeline(config, setup, std::move(source));
-  // Watchdog from the processing loop, only while every loop of the pipeline turns.
-  const auto max_age = std::max(std::chrono::milliseconds(1000),
-                                std::chrono::duration_cast<std::chrono::milliseconds>(notifier.watchdog_interval() / 2));
-  pipeline.set_processing_hook([&pipeline, &notifier, max_age] {
-    if (pipeline.alive(max_age)) notifier.watchdog();
-  });
-  const auto t_start = Clock::now();
-  pipeline.start();
-  spdlog::info("agvslamd: running");
+}
 
+// Why the daemon stops, and with which exit status.
+struct StopReason {
+  std::string text = "end of the dataset";
+  int exit_code = 0;
+};
+
+// The main thread while the pipeline runs: signals (SIGTERM / SIGINT stop, SIGHUP reopens the log), READY=1,
+// STATUS= once a second and the periodic statistics line, until a stop signal, a failure or the dataset's end.
+StopReason supervise(const daemon::DaemonConfig& config, const sigset_t& signals, daemon::Pipeline& pipeline,
+                     daemon::SystemdNotifier& notifier, const std::shared_ptr<daemon::ReopenableFileSink>& log_file,
+                     Clock::time_point t_start) {
   bool ready = false;
   if (config.systemd.ready == daemon::ReadyWhen::kStartup) {
     notifier.ready("started, waiting for frames");
@@ -132,15 +116,10 @@ int run(const Options& o) {
   }
   auto last_status = Clock::now();
   auto last_stats_log = Clock::now();
-  int exit_code = 0;
-  std::string stop_reason = "end of the dataset";
   for (;;) {
     timespec wait{0, 200 * 1000 * 1000};
     const int sig = sigtimedwait(&signals, nullptr, &wait);
-    if (sig == SIGTERM || sig == SIGINT) {
-      stop_reason = sig == SIGTERM ? "SIGTERM" : "SIGINT";
-      break;
-    }
+    if (sig == SIGTERM || sig == SIGINT) return {sig == SIGTERM ? "SIGTERM" : "SIGINT", 0};
     if (sig == SIGHUP) {
       if (log_file) {
         const bool ok = log_file->reopen();
@@ -149,12 +128,8 @@ int run(const Options& o) {
         spdlog::info("agvslamd: SIGHUP: no log file to reopen (log.file not set)");
       }
     }
-    if (pipeline.failed()) {
-      stop_reason = "failure: " + pipeline.error();
-      exit_code = 1;
-      break;
-    }
-    if (pipeline.finished()) break;
+    if (pipeline.failed()) return {"failure: " + pipeline.error(), 1};
+    if (pipeline.finished()) return {};
     const auto now = Clock::now();
     if (!ready) {
       const bool waited = now - t_start >= std::chrono::duration<double>(config.systemd.ready_timeout_s);
@@ -177,11 +152,10 @@ int run(const Options& o) {
       last_stats_log = now;
     }
   }
+}
 
-  spdlog::info("agvslamd: stopping ({})", stop_reason);
-  notifier.stopping("stopping: " + stop_reason);
-  pipeline.request_stop();
-  pipeline.wait();
+// Saves the map (mapping mode); false when it could not be written.
+bool save_map(const daemon::DaemonConfig& config, daemon::Pipeline& pipeline) {
   try {
     const auto saved = pipeline.save_map();
     if (saved) {
@@ -190,14 +164,17 @@ int run(const Options& o) {
       std::printf("MAP_SAVED %s KEYFRAMES %zu MAP_POINTS %zu BYTES %zu\n", config.map.file.c_str(), saved->keyframes,
                   saved->map_points, saved->bytes);
     }
+    return true;
   } catch (const std::exception& e) {
     // The previous map file is intact (written to a temporary file, renamed only when complete).
     spdlog::error("agvslamd: the map could not be saved ({}); the previous file {} is unchanged", e.what(),
                   config.map.file);
-    exit_code = 1;
+    return false;
   }
-  const double run_s = std::chrono::duration<double>(Clock::now() - t_start).count();
-  const daemon::PipelineStats st = pipeline.stats();
+}
+
+// The FRAMES line and --json.
+void report(const Options& o, const daemon::PipelineStats& st, double run_s, const std::string& stop_reason) {
   spdlog::info("agvslamd: stopped after {:.1f} s: {}", run_s, st.one_line());
   std::printf("FRAMES %llu TRACKED %llu LOST %llu DROPPED %llu PUBLISHED %llu LATENCY_P50_MS %.2f LATENCY_P99_MS %.2f\n",
               static_cast<unsigned long long>(st.processed), static_cast<unsigned long long>(st.tracked),
@@ -210,8 +187,49 @@ int run(const Options& o) {
     j["stop_reason"] = stop_reason;
     agvslam::io::write_file_atomically(o.json, j.dump(1) + "\n");
   }
-  if (pipeline.failed() && exit_code == 0) exit_code = 1;
-  return exit_code;
+}
+
+int run(const Options& o) {
+  const sigset_t signals = block_stop_signals();
+  const daemon::DaemonConfig config = daemon::load_daemon_config(o.config);
+  const daemon::SourceSetup setup = daemon::prepare_source(config);
+  const auto log_file = daemon::setup_logging(config.log.file, config.log.level, config.path);
+  spdlog::info("agvslamd: configuration {}", config.path);
+  for (const auto& line : config.describe()) spdlog::info("  {}", line);
+  spdlog::info("  source: {}", setup.summary);
+  spdlog::info("  SLAM frame rate {:.2f} Hz", setup.slam_rate_hz);
+  if (o.check) {
+    spdlog::info("agvslamd: configuration OK (--check)");
+    std::printf("CONFIG OK %s\n", config.path.c_str());
+    return 0;
+  }
+
+  cv::setNumThreads(config.pipeline.opencv_threads);
+  daemon::SystemdNotifier notifier;
+  spdlog::info("  systemd: notify socket {}, watchdog {}", notifier.enabled() ? "set" : "not set (run by hand)",
+               notifier.watchdog_interval().count() > 0
+                   ? std::to_string(notifier.watchdog_interval().count() / 1000) + " ms"
+                   : std::string("off"));
+  daemon::Pipeline pipeline(config, setup, open_source(setup, config));
+  // Watchdog from the processing loop, only while every loop of the pipeline turns.
+  const auto max_age = std::max(std::chrono::milliseconds(1000),
+                                std::chrono::duration_cast<std::chrono::milliseconds>(notifier.watchdog_interval() / 2));
+  pipeline.set_processing_hook([&pipeline, &notifier, max_age] {
+    if (pipeline.alive(max_age)) notifier.watchdog();
+  });
+  const auto t_start = Clock::now();
+  pipeline.start();
+  spdlog::info("agvslamd: running");
+  StopReason stop = supervise(config, signals, pipeline, notifier, log_file, t_start);
+
+  spdlog::info("agvslamd: stopping ({})", stop.text);
+  notifier.stopping("stopping: " + stop.text);
+  pipeline.request_stop();
+  pipeline.wait();
+  if (!save_map(config, pipeline)) stop.exit_code = 1;
+  report(o, pipeline.stats(), std::chrono::duration<double>(Clock::now() - t_start).count(), stop.text);
+  if (pipeline.failed() && stop.exit_code == 0) stop.exit_code = 1;
+  return stop.exit_code;
 }
 
 }  // namespace

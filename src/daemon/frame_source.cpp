@@ -23,6 +23,20 @@ std::string rate_text(double hz) {
 
 }  // namespace
 
+SourceSetup dataset_setup(std::shared_ptr<const io::StereoDataset> dataset, std::size_t first, std::size_t last) {
+  SourceSetup s;
+  s.dataset = std::move(dataset);
+  s.first = first;
+  s.last = last;
+  s.calibration = s.dataset->calibration();
+  s.rate_hz = s.dataset->rate_hz();
+  s.slam_rate_hz = s.rate_hz;
+  s.summary = s.dataset->kind() + " dataset " + s.dataset->root() + ": " + std::to_string(s.dataset->size()) +
+              " frames at " + rate_text(s.rate_hz) + ", playing " + std::to_string(s.first) + ".." +
+              std::to_string(s.last) + "; calibration " + s.calibration.summary();
+  return s;
+}
+
 SourceSetup prepare_source(const DaemonConfig& config) {
   SourceSetup s;
   if (config.source.type == SourceType::kDataset) {
@@ -36,12 +50,9 @@ SourceSetup prepare_source(const DaemonConfig& config) {
                                          : "expected a dataset folder (KITTI layout, agvslam-sim output or EuRoC ASL): ") +
                            e.what());
     }
-    io::parse_frame_range(config.source.frames, s.dataset->size(), config.path, "source.frames", s.first, s.last);
-    s.calibration = s.dataset->calibration();
-    s.rate_hz = s.dataset->rate_hz();
-    s.summary = s.dataset->kind() + " dataset " + s.dataset->root() + ": " + std::to_string(s.dataset->size()) +
-                " frames at " + rate_text(s.rate_hz) + ", playing " + std::to_string(s.first) + ".." +
-                std::to_string(s.last) + "; calibration " + s.calibration.summary();
+    std::size_t first = 0, last = 0;
+    io::parse_frame_range(config.source.frames, s.dataset->size(), config.path, "source.frames", first, last);
+    s = dataset_setup(s.dataset, first, last);
   } else {
     const cv::Size size(config.camera.width, config.camera.height);
     try {
@@ -71,24 +82,47 @@ SourceSetup prepare_source(const DaemonConfig& config) {
 // ---------------------------------------------------------------------------------------------------------------
 // Dataset
 
-DatasetSource::DatasetSource(const SourceSetup& setup, const SourceConfig& config)
+int64_t lap_duration_ns(const io::StereoDataset& dataset, std::size_t first, std::size_t last) {
+  const auto period_ns = static_cast<int64_t>(1e9 / dataset.rate_hz());
+  return last > first ? dataset.timestamp_ns(last) - dataset.timestamp_ns(first) + period_ns : period_ns;
+}
+
+DatasetSource::DatasetSource(const SourceSetup& setup, const SourceConfig& config, const DatasetPlayback& playback)
     : dataset_(setup.dataset),
       first_(setup.first),
       last_(setup.last),
       loop_(config.loop),
+      playback_(playback),
+      lap_ns_(0),
       period_ns_(0),
       next_index_(setup.first) {
   if (!dataset_) throw std::logic_error("DatasetSource without a dataset");
+  if (playback_.laps < 1) throw std::logic_error("DatasetSource: laps must be at least 1");
+  if (playback_.laps > 1) lap_ns_ = lap_duration_ns(*dataset_, first_, last_);
   const double hz = config.rate_hz > 0 ? config.rate_hz : config.rate * setup.rate_hz;
   if (hz > 0) period_ns_ = static_cast<int64_t>(1e9 / hz + 0.5);
 }
 
 bool DatasetSource::load_next() {
   if (next_index_ > last_) {
-    if (!loop_) return false;
+    if (lap_ + 1 < playback_.laps) {
+      ++lap_;
+    } else if (!loop_) {
+      return false;
+    }
     next_index_ = first_;
   }
+  const auto t0 = std::chrono::steady_clock::now();
   pending_.frame = dataset_->frame(next_index_);  // rectified, CV_8UC1
+  pending_.frame.t_ns += lap_ * lap_ns_;
+  pending_.blank = playback_.blank && next_index_ >= playback_.blank->first && next_index_ <= playback_.blank->second;
+  if (pending_.blank) {
+    pending_.frame.left = cv::Mat::zeros(pending_.frame.left.size(), pending_.frame.left.type());
+    pending_.frame.right = cv::Mat::zeros(pending_.frame.right.size(), pending_.frame.right.type());
+  }
+  pending_.read_ms = std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - t0).count();
+  pending_.ground_truth_mask = playback_.ground_truth_masks ? dataset_->ground_truth_mask(next_index_) : cv::Mat();
+  pending_.lap = lap_;
   pending_.source_index = static_cast<int64_t>(next_index_);
   pending_.source_t_ns = dataset_->timestamp_ns(next_index_);
   ++next_index_;
@@ -131,6 +165,7 @@ SourceStats DatasetSource::stats() const {
 std::string DatasetSource::describe() const {
   return "dataset " + dataset_->root() + " frames " + std::to_string(first_) + ".." + std::to_string(last_) + ", " +
          (period_ns_ > 0 ? rate_text(1e9 / static_cast<double>(period_ns_)) : std::string("as fast as taken")) +
+         (playback_.laps > 1 ? ", " + std::to_string(playback_.laps) + " laps" : std::string()) +
          (loop_ ? ", looped" : ", once");
 }
 

@@ -29,29 +29,6 @@ constexpr std::size_t kFpsRing = 512;
 
 // ---------------------------------------------------------------------------------------------------------------
 
-RollingStats::RollingStats(std::size_t capacity) : values_(capacity, 0.0), scratch_(capacity, 0.0) {}
-
-void RollingStats::add(double value) {
-  values_[next_] = value;
-  next_ = (next_ + 1) % values_.size();
-  filled_ = std::min(filled_ + 1, values_.size());
-  ++total_;
-}
-
-double RollingStats::quantile(double q) const {
-  if (filled_ == 0) return 0;
-  std::copy(values_.begin(), values_.begin() + static_cast<std::ptrdiff_t>(filled_), scratch_.begin());
-  const auto k = std::min(filled_ - 1, static_cast<std::size_t>(std::floor(q * static_cast<double>(filled_ - 1) + 0.5)));
-  std::nth_element(scratch_.begin(), scratch_.begin() + static_cast<std::ptrdiff_t>(k),
-                   scratch_.begin() + static_cast<std::ptrdiff_t>(filled_));
-  return scratch_[k];
-}
-
-double RollingStats::max() const {
-  if (filled_ == 0) return 0;
-  return *std::max_element(values_.begin(), values_.begin() + static_cast<std::ptrdiff_t>(filled_));
-}
-
 std::string PipelineStats::one_line() const {
   char buf[512];
   std::snprintf(buf, sizeof buf,
@@ -77,9 +54,11 @@ struct Pipeline::DetectedFrame {
   int64_t detected_mono_ns = 0;
 };
 
-Pipeline::Pipeline(const DaemonConfig& config, const SourceSetup& setup, std::unique_ptr<FrameSource> source)
+Pipeline::Pipeline(const DaemonConfig& config, const SourceSetup& setup, std::unique_ptr<FrameSource> source,
+                   PipelineOptions options)
     : config_(config),
       setup_(setup),
+      options_(std::move(options)),
       source_(std::move(source)),
       builder_(config.base_link.T_base_cam() * setup.calibration.T_cam0_rect, config.covariance),
       capture_queue_(static_cast<std::size_t>(config.pipeline.capture_queue),
@@ -162,6 +141,7 @@ void Pipeline::wait() {
     if (t->joinable()) t->join();
   }
   if (!system_) return;
+  if (options_.settle_mapping) system_->wait_for_mapping();
   if (!final_written_ && !config_.trajectory.final_file.empty()) {
     final_written_ = true;
     try {
@@ -305,7 +285,7 @@ void Pipeline::detector_loop() {
       d.detected_mono_ns = monotonic_now_ns();
       d.mask = result.mask.image.clone();  // travels with the frame while the detector moves on
       d.captured = std::move(*f);
-      if (!detected_queue_->push(std::move(d))) break;  // closed: a later stage failed
+      if (detected_queue_->push(std::move(d)) == PushResult::kClosed) break;  // a later stage failed
     }
   } catch (const std::exception& e) {
     fail("detector", e);
@@ -343,9 +323,10 @@ void Pipeline::tracking_loop() {
       OutputItem item;
       item.times = d->times;
       if (d->detected_mono_ns > 0) item.times.detected_queue_ms = static_cast<double>(monotonic_now_ns() - d->detected_mono_ns) * 1e-6;
+      const cv::Mat& mask = options_.ground_truth_masks ? c.ground_truth_mask : d->mask;
       const auto t0 = Clock::now();
       const double cpu0 = slam::thread_cpu_ms();
-      const slam::TrackResult r = system_->track_stereo(slam_t_ns, c.frame.left, c.frame.right, d->mask);
+      const slam::TrackResult r = system_->track_stereo(slam_t_ns, c.frame.left, c.frame.right, mask);
       item.times.tracking_cpu_ms = slam::thread_cpu_ms() - cpu0;
       const double tracking_ms = ms_since(t0);
       item.times.tracking_ms = tracking_ms;
@@ -359,8 +340,7 @@ void Pipeline::tracking_loop() {
       s.frame_index = c.frame.index;
       s.frames_processed = processed;
       const double area = static_cast<double>(c.frame.left.total());
-      s.dynamic_pixel_fraction = d->mask.empty() || area <= 0 ? 0.0F
-                                                              : static_cast<float>(cv::countNonZero(d->mask) / area);
+      s.dynamic_pixel_fraction = mask.empty() || area <= 0 ? 0.0F : static_cast<float>(cv::countNonZero(mask) / area);
       {
         std::lock_guard<std::mutex> lock(stats_mutex_);
         const int64_t now = monotonic_now_ns();
@@ -377,6 +357,7 @@ void Pipeline::tracking_loop() {
         tracking_ms_.add(tracking_ms);
         if (d->times.detector_ms >= 0) detector_ms_.add(d->times.detector_ms);
       }
+      if (options_.on_tracked) options_.on_tracked(TrackedFrame{c, mask, item.times, r});
       item.times.tracked_mono_ns = monotonic_now_ns();
       output_queue_.push(std::move(item));
     }

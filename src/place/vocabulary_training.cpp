@@ -1,14 +1,13 @@
 // Hierarchical k-medians training of the vocabulary tree (see vocabulary.h).
 #include <algorithm>
 #include <array>
-#include <atomic>
 #include <chrono>
 #include <cmath>
 #include <cstring>
 #include <exception>
 #include <stdexcept>
-#include <thread>
 
+#include "agvslam/core/parallel_for.h"
 #include "agvslam/place/vocabulary.h"
 #include "hamming.h"
 
@@ -33,38 +32,20 @@ class Rng {
   uint64_t state_;
 };
 
-// Runs f(begin, end) over `threads` contiguous chunks of [0, n) (inline when one thread suffices).
+// Runs f(begin, end, worker) over [0, n) in about `threads` contiguous blocks (worker < threads); per-worker
+// partial results must be sums, since a worker may take more than one block.
 template <class F>
-void for_chunks(int threads, std::size_t n, F&& f) {
-  if (threads <= 1 || n < 2) {
-    f(std::size_t(0), n, 0);
-    return;
-  }
-  const auto t = static_cast<std::size_t>(std::min<std::size_t>(std::size_t(threads), n));
-  std::vector<std::thread> pool;
-  std::vector<std::exception_ptr> errors(t);
-  for (std::size_t i = 0; i < t; ++i) {
-    pool.emplace_back([&, i] {
-      try {
-        f(n * i / t, n * (i + 1) / t, int(i));
-      } catch (...) {
-        errors[i] = std::current_exception();
-      }
-    });
-  }
-  for (auto& th : pool) th.join();
-  for (auto& e : errors)
-    if (e) std::rethrow_exception(e);
+void for_blocks(int threads, std::size_t n, F&& f) {
+  const std::size_t workers = static_cast<std::size_t>(std::max(threads, 1));
+  parallel_for(threads, n, (n + workers - 1) / workers, f);
 }
 
-// Runs f(i, thread) for i in [0, n), handing out indices dynamically.
+// Runs f(i, worker) for i in [0, n), handing out indices one by one.
 template <class F>
 void for_each_index(int threads, std::size_t n, F&& f) {
-  std::atomic<std::size_t> next{0};
-  for_chunks(std::min<int>(threads, int(std::min<std::size_t>(n, 256))), std::max<std::size_t>(n, 1),
-             [&](std::size_t, std::size_t, int t) {
-               for (std::size_t i; (i = next.fetch_add(1)) < n;) f(i, t);
-             });
+  parallel_for(threads, n, 1, [&](std::size_t begin, std::size_t end, int worker) {
+    for (std::size_t i = begin; i < end; ++i) f(i, worker);
+  });
 }
 
 // spread[b]: byte j is bit j of b, so adding spread[d[j]] counts 8 bits of a descriptor byte at once.
@@ -164,7 +145,7 @@ std::vector<Cluster> cluster_node(const uint8_t* data, const std::vector<uint32_
   add_centre(members[rng.next() % n]);
   for (int c = 1;; ++c) {
     const uint8_t* centre = centres.data() + std::size_t(c - 1) * kDescriptorBytes;
-    for_chunks(threads, n, [&](std::size_t b, std::size_t e, int) {
+    for_blocks(threads, n, [&](std::size_t b, std::size_t e, int) {
       kernels.update_min_distance(data, members.data() + b, e - b, centre, min_dist.data() + b);
     });
     if (c == k) break;
@@ -203,12 +184,12 @@ std::vector<Cluster> cluster_node(const uint8_t* data, const std::vector<uint32_
   std::vector<std::vector<BitCounter>> counters(std::size_t(std::max(n_threads, 1)));
   const SpreadTable& s = spread();
   for (int iteration = 0;; ++iteration) {
-    for_chunks(threads, n, [&](std::size_t b, std::size_t e, int) {
+    for_blocks(threads, n, [&](std::size_t b, std::size_t e, int) {
       kernels.assign(data, members.data() + b, e - b, centres.data(), kc, assignment.data() + b);
     });
     if (assignment == previous || iteration == max_iterations) break;
     for (auto& c : counters) c.assign(std::size_t(kc), BitCounter{});
-    for_chunks(threads, n, [&](std::size_t b, std::size_t e, int t) {
+    for_blocks(threads, n, [&](std::size_t b, std::size_t e, int t) {
       auto& mine = counters[std::size_t(t)];
       for (std::size_t i = b; i < e; ++i) mine[assignment[i]].add(data + std::size_t(members[i]) * kDescriptorBytes, s);
     });
@@ -339,14 +320,13 @@ Vocabulary VocabularyBuilder::build(const DescriptorSet& set, const VocabularyTr
   // IDF: log(N / N_w), N = training images with descriptors, N_w = those with a descriptor of word w.
   const auto t0 = std::chrono::steady_clock::now();
   const std::size_t words = v.word_count();
-  const int threads = std::max(1, config.threads);
-  std::vector<std::vector<uint32_t>> df(static_cast<std::size_t>(threads));
-  std::vector<std::vector<uint32_t>> last(static_cast<std::size_t>(threads));
-  for_chunks(threads, set.image_count(), [&](std::size_t b, std::size_t e, int t) {
+  // One table pair per worker that can run (a worker takes whole images, so its counts add up).
+  const int threads = static_cast<int>(std::clamp<std::size_t>(set.image_count(), 1, std::size_t(std::max(1, config.threads))));
+  std::vector<std::vector<uint32_t>> df(static_cast<std::size_t>(threads), std::vector<uint32_t>(words, 0));
+  std::vector<std::vector<uint32_t>> last(static_cast<std::size_t>(threads), std::vector<uint32_t>(words, UINT32_MAX));
+  for_blocks(threads, set.image_count(), [&](std::size_t b, std::size_t e, int t) {
     auto& my_df = df[std::size_t(t)];
     auto& my_last = last[std::size_t(t)];
-    my_df.assign(words, 0);
-    my_last.assign(words, UINT32_MAX);
     for (std::size_t img = b; img < e; ++img)
       for (std::size_t i = set.image_begin(img); i < set.image_end(img); ++i) {
         const WordId w = v.word(set.descriptor(i));

@@ -1,40 +1,26 @@
 #include "agvslam/sim/renderer.h"
 
 #include <algorithm>
-#include <atomic>
 #include <cmath>
-#include <thread>
 
 #include <opencv2/imgproc.hpp>
 
+#include "agvslam/core/parallel_for.h"
 #include "agvslam/sim/cpu_dispatch.h"
 #include "agvslam/sim/texture.h"
 
 namespace agvslam::sim {
 namespace {
 
-// Runs f(row) for every row, split over `threads` workers (blocks of rows handed out dynamically; every row is
-// computed the same way whichever worker takes it).
+// Runs f(row) for every row, split over `threads` workers in blocks of 4 rows (every row is computed the same way
+// whichever worker takes it); small images in the caller's thread.
 template <typename F>
 void for_each_row(int rows, int threads, const F& f) {
-  if (threads <= 1 || rows < 16) {
-    for (int v = 0; v < rows; ++v) f(v);
-    return;
-  }
-  std::atomic<int> next{0};
-  constexpr int kBlock = 4;
-  auto worker = [&]() {
-    for (;;) {
-      const int v0 = next.fetch_add(kBlock);
-      if (v0 >= rows) break;
-      for (int v = v0; v < std::min(rows, v0 + kBlock); ++v) f(v);
-    }
-  };
-  std::vector<std::thread> pool;
-  pool.reserve(static_cast<std::size_t>(threads - 1));
-  for (int i = 1; i < threads; ++i) pool.emplace_back(worker);
-  worker();
-  for (auto& t : pool) t.join();
+  constexpr std::size_t kBlockRows = 4;
+  parallel_for(rows < 16 ? 1 : threads, static_cast<std::size_t>(std::max(rows, 0)), kBlockRows,
+               [&](std::size_t begin, std::size_t end, int) {
+                 for (std::size_t v = begin; v < end; ++v) f(static_cast<int>(v));
+               });
 }
 
 int32_t surface_key(const RayHit& hit) {

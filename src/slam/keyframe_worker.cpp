@@ -1,89 +1,63 @@
 #include "agvslam/slam/keyframe_worker.h"
 
-#include <stdexcept>
 #include <utility>
 
 namespace agvslam::slam {
 
 KeyframeWorker::KeyframeWorker(std::size_t capacity, WhenFull when_full, std::function<void(const KeyFramePtr&)> work)
-    : capacity_(capacity), when_full_(when_full), work_(std::move(work)) {
-  if (capacity_ == 0) throw std::invalid_argument("KeyframeWorker: the queue capacity must be at least 1");
-}
+    : work_(std::move(work)),
+      queue_(capacity, when_full == WhenFull::kRefuseNew ? QueuePolicy::kRefuseNew : QueuePolicy::kNewestWins) {}
 
 KeyframeWorker::~KeyframeWorker() { stop(); }
 
 void KeyframeWorker::start() {
   if (thread_.joinable()) return;
-  {
-    std::lock_guard<std::mutex> lock(queue_mutex_);
-    stop_ = false;
-  }
+  stop_.store(false);
   thread_ = std::thread([this] { run(); });
 }
 
 void KeyframeWorker::stop() {
   {
-    std::lock_guard<std::mutex> lock(queue_mutex_);
-    stop_ = true;
+    std::lock_guard<std::mutex> lock(pending_mutex_);
+    stop_.store(true);
   }
-  queue_cv_.notify_all();
+  idle_cv_.notify_all();
+  queue_.wake();
   if (thread_.joinable()) thread_.join();
 }
 
 KeyframeWorker::Pushed KeyframeWorker::push(const KeyFramePtr& kf) {
-  Pushed result = Pushed::kQueued;
-  {
-    std::lock_guard<std::mutex> lock(queue_mutex_);
-    if (queue_.size() >= capacity_) {
-      if (when_full_ == WhenFull::kRefuseNew) return Pushed::kRefused;
-      queue_.pop_front();
-      result = Pushed::kQueuedDroppedOldest;
-    }
-    queue_.push_back(kf);
+  std::lock_guard<std::mutex> lock(pending_mutex_);
+  switch (queue_.push(kf)) {
+    case PushResult::kQueued:
+      ++pending_;
+      return Pushed::kQueued;
+    case PushResult::kQueuedDroppedOldest:  // one queued keyframe replaced by another
+      return Pushed::kQueuedDroppedOldest;
+    case PushResult::kRefused:
+    case PushResult::kClosed:
+      break;
   }
-  queue_cv_.notify_one();
-  return result;
-}
-
-std::size_t KeyframeWorker::size() const {
-  std::lock_guard<std::mutex> lock(queue_mutex_);
-  return queue_.size();
+  return Pushed::kRefused;
 }
 
 bool KeyframeWorker::idle() const {
-  std::lock_guard<std::mutex> lock(queue_mutex_);
-  return !busy_ && queue_.empty();
+  std::lock_guard<std::mutex> lock(pending_mutex_);
+  return pending_ == 0;
 }
 
-KeyFramePtr KeyframeWorker::take_locked() {
-  if (queue_.empty()) return nullptr;
-  KeyFramePtr kf = std::move(queue_.front());
-  queue_.pop_front();
-  busy_ = true;
-  return kf;
-}
-
-void KeyframeWorker::done() {
-  std::lock_guard<std::mutex> lock(queue_mutex_);
-  busy_ = false;
-  if (queue_.empty()) idle_cv_.notify_all();
+void KeyframeWorker::process(const KeyFramePtr& kf) {
+  {
+    std::lock_guard<std::mutex> work(work_mutex_);
+    work_(kf);
+  }
+  std::lock_guard<std::mutex> lock(pending_mutex_);
+  if (--pending_ == 0) idle_cv_.notify_all();
 }
 
 void KeyframeWorker::process_pending() {
   if (thread_.joinable()) return;
-  for (;;) {
-    KeyFramePtr kf;
-    {
-      std::lock_guard<std::mutex> lock(queue_mutex_);
-      kf = take_locked();
-    }
-    if (!kf) return;
-    {
-      std::lock_guard<std::mutex> work(work_mutex_);
-      work_(kf);
-    }
-    done();
-  }
+  while (std::optional<KeyFramePtr> kf = queue_.try_pop()) process(*kf);
 }
 
 void KeyframeWorker::wait_until_idle() {
@@ -91,34 +65,18 @@ void KeyframeWorker::wait_until_idle() {
     process_pending();
     return;
   }
-  std::unique_lock<std::mutex> lock(queue_mutex_);
-  idle_cv_.wait(lock, [&] { return (!busy_ && queue_.empty()) || stop_; });
+  std::unique_lock<std::mutex> lock(pending_mutex_);
+  idle_cv_.wait(lock, [&] { return pending_ == 0 || stop_.load(); });
 }
 
 void KeyframeWorker::clear() {
-  std::lock_guard<std::mutex> lock(queue_mutex_);
-  queue_.clear();
+  std::lock_guard<std::mutex> lock(pending_mutex_);
+  pending_ -= queue_.clear();
+  if (pending_ == 0) idle_cv_.notify_all();
 }
 
 void KeyframeWorker::run() {
-  for (;;) {
-    KeyFramePtr kf;
-    {
-      std::unique_lock<std::mutex> lock(queue_mutex_);
-      queue_cv_.wait(lock, [&] { return stop_ || !queue_.empty(); });
-      if (stop_) {
-        busy_ = false;
-        idle_cv_.notify_all();
-        return;
-      }
-      kf = take_locked();
-    }
-    {
-      std::lock_guard<std::mutex> work(work_mutex_);
-      work_(kf);
-    }
-    done();
-  }
+  while (std::optional<KeyFramePtr> kf = queue_.pop_unless([this] { return stop_.load(); })) process(*kf);
 }
 
 }  // namespace agvslam::slam

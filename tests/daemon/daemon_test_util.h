@@ -10,11 +10,14 @@
 #include <unistd.h>
 
 #include <chrono>
+#include <cstdio>
 #include <cstdlib>
 #include <filesystem>
 #include <fstream>
 #include <map>
 #include <nlohmann/json.hpp>
+#include <opencv2/core.hpp>
+#include <opencv2/imgcodecs.hpp>
 #include <sstream>
 #include <string>
 #include <thread>
@@ -60,6 +63,31 @@ inline std::size_t count_data_lines(const std::string& path) {
 
 // scene2 of the simulator (the straight aisle, a person crossing), seed 11, 80 frames at 20 Hz, 752x480: rendered
 // once into <build>/test-data/daemon_scene2 and reused (the first test that needs it pays ~10 s).
+// A KITTI-layout folder of n 64x48 frames at 20 Hz; left image i is filled with 10 * i, the right with 10 * i + 1.
+// With masks, mask_0/ marks column i of frame i as moving.
+inline std::string tiny_dataset(int n, bool with_masks = false) {
+  const std::string dir = make_temp_dir("agvslamd-source");
+  for (const char* sub : {"/image_0", "/image_1", "/mask_0"}) {
+    if (with_masks || std::string(sub) != "/mask_0") std::filesystem::create_directories(dir + sub);
+  }
+  std::string times;
+  for (int i = 0; i < n; ++i) {
+    char name[32];
+    std::snprintf(name, sizeof name, "/%06d.png", i);
+    cv::imwrite(dir + "/image_0" + name, cv::Mat(48, 64, CV_8UC1, cv::Scalar(10 * i)));
+    cv::imwrite(dir + "/image_1" + name, cv::Mat(48, 64, CV_8UC1, cv::Scalar(10 * i + 1)));
+    if (with_masks) {
+      cv::Mat mask(48, 64, CV_8UC1, cv::Scalar(0));
+      mask.col(i).setTo(255);
+      cv::imwrite(dir + "/mask_0" + name, mask);
+    }
+    times += std::to_string(0.05 * i) + "\n";
+  }
+  write_text(dir + "/times.txt", times);
+  write_text(dir + "/calib.txt", "P0: 50 0 32 0 0 50 24 0 0 0 1 0\nP1: 50 0 32 -5 0 50 24 0 0 0 1 0\n");
+  return dir;
+}
+
 inline std::string daemon_sim_sequence() {
   namespace fs = std::filesystem;
   const fs::path dir = fs::path(binary_dir()) / "test-data" / "daemon_scene2_s11_80";

@@ -1,5 +1,6 @@
 // Frame sources: a dataset played like a camera (order, range, loop, pacing on an absolute schedule, lossless at
-// rate 0, capture stamps on CLOCK_REALTIME), what prepare_source() checks, and a camera that is not there.
+// rate 0, capture stamps on CLOCK_REALTIME; agvslam-run's laps, black frames and ground-truth masks), what
+// prepare_source() checks, and a camera that is not there.
 #include "agvslam/daemon/frame_source.h"
 
 #include <gtest/gtest.h>
@@ -23,23 +24,7 @@ int64_t realtime_ns() {
   return static_cast<int64_t>(ts.tv_sec) * 1000000000LL + ts.tv_nsec;
 }
 
-// A KITTI-layout folder of n 64x48 frames; left image i is filled with 10 * i, the right with 10 * i + 1.
-std::string tiny_dataset(int n) {
-  const std::string dir = test::make_temp_dir("agvslamd-source");
-  fs::create_directories(dir + "/image_0");
-  fs::create_directories(dir + "/image_1");
-  std::string times;
-  for (int i = 0; i < n; ++i) {
-    char name[32];
-    std::snprintf(name, sizeof name, "/%06d.png", i);
-    cv::imwrite(dir + "/image_0" + name, cv::Mat(48, 64, CV_8UC1, cv::Scalar(10 * i)));
-    cv::imwrite(dir + "/image_1" + name, cv::Mat(48, 64, CV_8UC1, cv::Scalar(10 * i + 1)));
-    times += std::to_string(0.05 * i) + "\n";
-  }
-  test::write_text(dir + "/times.txt", times);
-  test::write_text(dir + "/calib.txt", "P0: 50 0 32 0 0 50 24 0 0 0 1 0\nP1: 50 0 32 -5 0 50 24 0 0 0 1 0\n");
-  return dir;
-}
+using test::tiny_dataset;
 
 DaemonConfig dataset_config(const std::string& dir, double rate, bool loop = false, const std::string& frames = "") {
   DaemonConfig c;
@@ -113,6 +98,55 @@ TEST(DatasetSource, ReleasesFramesOnAnAbsoluteScheduleAndReturnsWithinTheTimeout
   EXPECT_GT(no_frame, 0);
   // Frame k is released no earlier than k periods after the first (a loaded machine only delays it).
   for (std::size_t k = 1; k < stamps.size(); ++k) EXPECT_GE(stamps[k] - stamps[0], static_cast<int64_t>(k) * 40000000LL - 1000000);
+  fs::remove_all(dir);
+}
+
+TEST(DatasetSource, PlaysLapsWithContinuingStampsBlackFramesAndGroundTruthMasks) {
+  const std::string dir = tiny_dataset(5, /*with_masks=*/true);
+  const DaemonConfig c = dataset_config(dir, 0, false, "1:3");
+  const SourceSetup setup = prepare_source(c);
+  DatasetPlayback playback;
+  playback.laps = 2;
+  playback.blank = std::make_pair(std::size_t(2), std::size_t(2));
+  playback.ground_truth_masks = true;
+  // One lap: frames 1..3 at 20 Hz, 0.1 s from the first stamp to the last, plus one period.
+  EXPECT_EQ(lap_duration_ns(*setup.dataset, 1, 3), 150000000LL);
+  DatasetSource source(setup, c.source, playback);
+  CapturedFrame f;
+  std::vector<int64_t> index, t_ns;
+  for (int k = 0; k < 6; ++k) {
+    ASSERT_EQ(source.grab(f, 100), FrameSource::Grab::kFrame) << k;
+    index.push_back(f.source_index);
+    t_ns.push_back(f.frame.t_ns);
+    EXPECT_EQ(f.lap, k / 3);
+    EXPECT_EQ(f.source_t_ns, 50000000LL * f.source_index);  // the dataset's own stamp, whatever the lap
+    EXPECT_EQ(f.blank, f.source_index == 2);
+    EXPECT_EQ(f.frame.left.at<uint8_t>(10, 10), f.blank ? 0 : 10 * f.source_index);
+    EXPECT_EQ(f.frame.right.at<uint8_t>(10, 10), f.blank ? 0 : 10 * f.source_index + 1);
+    ASSERT_FALSE(f.ground_truth_mask.empty());
+    EXPECT_EQ(cv::countNonZero(f.ground_truth_mask.col(static_cast<int>(f.source_index))), 48);
+    EXPECT_EQ(cv::countNonZero(f.ground_truth_mask), 48);
+  }
+  EXPECT_EQ(source.grab(f, 100), FrameSource::Grab::kEnd);
+  EXPECT_EQ(index, (std::vector<int64_t>{1, 2, 3, 1, 2, 3}));
+  EXPECT_EQ(t_ns, (std::vector<int64_t>{50000000, 100000000, 150000000, 200000000, 250000000, 300000000}));
+  fs::remove_all(dir);
+}
+
+TEST(DatasetSource, PacedPlayIsLosslessWhenAskedAndMasksOnlyWhenAsked) {
+  const std::string dir = tiny_dataset(2);
+  const DaemonConfig c = dataset_config(dir, 1.0);
+  const SourceSetup setup = prepare_source(c);
+  EXPECT_FALSE(DatasetSource(setup, c.source).lossless());
+  DatasetPlayback playback;
+  playback.lossless = true;
+  DatasetSource source(setup, c.source, playback);
+  EXPECT_TRUE(source.lossless());
+  CapturedFrame f;
+  ASSERT_EQ(source.grab(f, 100), FrameSource::Grab::kFrame);
+  EXPECT_TRUE(f.ground_truth_mask.empty());
+  EXPECT_FALSE(f.blank);
+  EXPECT_EQ(f.lap, 0);
   fs::remove_all(dir);
 }
 

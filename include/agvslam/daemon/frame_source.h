@@ -8,12 +8,15 @@
 //   dataset  frame k is decoded (and rectified) ahead of time, then released at its due time on an absolute
 //            schedule (rate x the dataset's rate, or rate_hz); its capture stamp is CLOCK_REALTIME at release,
 //            as if the camera had just delivered it. rate 0: released as soon as the pipeline takes it (lossless).
+//            agvslam-run adds laps, blacked-out frames, ground-truth masks and lossless paced play (DatasetPlayback).
 //
 // grab() never waits longer than its timeout, so the capture loop stays responsive to stop requests.
 
 #include <cstdint>
 #include <memory>
+#include <optional>
 #include <string>
+#include <utility>
 
 #include "agvslam/core/camera.h"
 #include "agvslam/core/stereo_frame.h"
@@ -36,6 +39,10 @@ struct SourceSetup {
   std::string summary;                               // one line for the start-up echo
 };
 
+// The setup of a dataset source playing frames first..last (inclusive) of `dataset`; slam_rate_hz is the dataset's
+// rate.
+SourceSetup dataset_setup(std::shared_ptr<const io::StereoDataset> dataset, std::size_t first, std::size_t last);
+
 // Opens the dataset index or loads the calibration file (no device is touched). Throws InputError naming the
 // daemon's config file and the field (source.dataset, source.frames, calibration.file, pipeline.frame_rate_hz)
 // for what cannot be read or does not fit (calibration size != camera.width x camera.height; no frame rate known).
@@ -47,6 +54,11 @@ struct CapturedFrame {
   int64_t source_index = -1;    // dataset: index of the frame in the dataset; V4L2: -1
   int64_t source_t_ns = 0;      // dataset: the frame's own time stamp; V4L2: CLOCK_MONOTONIC stamp of the left image
   int64_t queued_mono_ns = 0;   // CLOCK_MONOTONIC when the capture thread queued it (stage timing)
+  // Dataset only:
+  int lap = 0;                  // DatasetPlayback::laps: which play of the range (frame.t_ns continues over laps)
+  bool blank = false;           // DatasetPlayback::blank: the images were replaced by black ones
+  cv::Mat ground_truth_mask;    // DatasetPlayback::ground_truth_masks: the dataset's moving-object mask (255)
+  double read_ms = 0;           // decoding (and rectifying) the frame
 };
 
 struct SourceStats {
@@ -70,12 +82,27 @@ class FrameSource {
   virtual std::string describe() const = 0;
 };
 
+// How a dataset is played besides its rate and range (agvslam-run's --repeat, --blank, --dynamic gt, --speed).
+struct DatasetPlayback {
+  // Play the range this many times in a row; the stamps of lap n are shifted by n * lap_duration_ns (laps of a
+  // loop sequence that ends where it starts).
+  int laps = 1;
+  // Dataset indices first..last (inclusive) delivered as black images (a covered camera).
+  std::optional<std::pair<std::size_t, std::size_t>> blank;
+  bool ground_truth_masks = false;  // deliver the dataset's ground-truth mask with every frame
+  // Paced play (rate > 0) whose frames must all be processed: the pipeline then waits instead of dropping.
+  bool lossless = false;
+};
+
+// One lap of frames first..last: from the first stamp to the last plus one frame period (ns).
+int64_t lap_duration_ns(const io::StereoDataset& dataset, std::size_t first, std::size_t last);
+
 // Plays setup.dataset (see above).
 class DatasetSource final : public FrameSource {
  public:
-  DatasetSource(const SourceSetup& setup, const SourceConfig& config);
+  DatasetSource(const SourceSetup& setup, const SourceConfig& config, const DatasetPlayback& playback = {});
   Grab grab(CapturedFrame& out, int timeout_ms) override;
-  bool lossless() const override { return period_ns_ == 0; }
+  bool lossless() const override { return period_ns_ == 0 || playback_.lossless; }
   SourceStats stats() const override;
   std::string describe() const override;
 
@@ -85,8 +112,11 @@ class DatasetSource final : public FrameSource {
   std::shared_ptr<const io::StereoDataset> dataset_;
   std::size_t first_, last_;
   bool loop_;
+  DatasetPlayback playback_;
+  int64_t lap_ns_;          // stamp shift per lap
   int64_t period_ns_;       // 0: as fast as taken
   std::size_t next_index_;  // dataset index of the frame to load next
+  int lap_ = 0;
   bool have_pending_ = false, ended_ = false;
   CapturedFrame pending_;   // decoded, waiting for its due time
   int64_t start_mono_ns_ = -1;

@@ -3,9 +3,9 @@
 //
 //   capture   FrameSource::grab -> CapturedFrame
 //      |      capture queue (pipeline.capture_queue frames; newest wins, drops counted; lossless for a dataset at
-//      v      rate 0)
+//      v      rate 0 or played losslessly)
 //   detector  DynamicDetector on the frame (pipeline.dynamic detector; skipped with off), one frame ahead of
-//      |      tracking as in agvslam-run
+//      |      tracking
 //      |      detected queue (1 frame, waits: the capture queue is where frames are dropped)
 //      v
 //   tracking  slam::System::track_stereo -> PoseSampleBuilder -> OutputItem; the processing loop whose
@@ -18,6 +18,9 @@
 // Every loop waits with a time-out (pipeline.poll_ms) and stamps a heartbeat, so alive() tells whether all of
 // them still turn. stop() closes the capture queue: what was captured is processed and published (drain), then
 // the threads end; the source is closed, files flushed.
+//
+// agvslam-run drives the same pipeline over a dataset (its outputs disabled): PipelineOptions adds tracking with
+// the dataset's ground-truth masks, a hook that sees every tracked frame, and letting mapping finish at the end.
 
 #include <atomic>
 #include <chrono>
@@ -30,7 +33,8 @@
 #include <thread>
 #include <vector>
 
-#include "agvslam/daemon/bounded_queue.h"
+#include "agvslam/core/bounded_queue.h"
+#include "agvslam/core/stats.h"
 #include "agvslam/daemon/daemon_config.h"
 #include "agvslam/daemon/frame_source.h"
 #include "agvslam/daemon/pose_builder.h"
@@ -38,23 +42,6 @@
 #include "agvslam/dynamic/detector.h"
 
 namespace agvslam::daemon {
-
-// Quantiles over a window of the last `capacity` values (allocated once).
-class RollingStats {
- public:
-  explicit RollingStats(std::size_t capacity = 4096);
-  void add(double value);
-  std::size_t count() const { return filled_; }
-  uint64_t total() const { return total_; }
-  double quantile(double q) const;  // 0 when empty
-  double max() const;
-
- private:
-  std::vector<double> values_;
-  mutable std::vector<double> scratch_;
-  std::size_t next_ = 0, filled_ = 0;
-  uint64_t total_ = 0;
-};
 
 struct PipelineStats {
   uint64_t captured = 0;           // frames the source delivered
@@ -77,10 +64,32 @@ struct PipelineStats {
   std::string one_line() const;  // systemd STATUS= and the periodic log line
 };
 
+// One frame as tracking left it, for a caller that follows every frame (agvslam-run's statistics).
+struct TrackedFrame {
+  const CapturedFrame& captured;
+  const cv::Mat& mask;  // the dynamic mask tracking used (detector or ground truth; empty: none)
+  const StageTimes& times;
+  const slam::TrackResult& result;
+};
+
+// What a caller other than agvslamd changes; the defaults are agvslamd's behaviour.
+struct PipelineOptions {
+  // Track with the frames' ground-truth masks (CapturedFrame::ground_truth_mask) instead of a detector's
+  // (pipeline.dynamic off).
+  bool ground_truth_masks = false;
+  // Called in the tracking thread after every frame, before its sample goes to the outputs.
+  std::function<void(const TrackedFrame&)> on_tracked;
+  // wait(): local mapping and loop closing finish every queued keyframe before the SLAM stops, so the final map
+  // and trajectory include them.
+  bool settle_mapping = false;
+};
+
 class Pipeline {
  public:
   // Builds the SLAM system, detector and outputs (no thread yet). Throws on an output that cannot be opened.
-  Pipeline(const DaemonConfig& config, const SourceSetup& setup, std::unique_ptr<FrameSource> source);
+  // `config` must outlive the pipeline.
+  Pipeline(const DaemonConfig& config, const SourceSetup& setup, std::unique_ptr<FrameSource> source,
+           PipelineOptions options = {});
   ~Pipeline();
   Pipeline(const Pipeline&) = delete;
   Pipeline& operator=(const Pipeline&) = delete;
@@ -104,7 +113,8 @@ class Pipeline {
   // Samples of processed frames (not heartbeats) handed to the outputs so far (READY=1 waits for the first).
   uint64_t frames_published() const { return frames_published_.load(); }
   PipelineStats stats() const;
-  PoseOutputs& outputs() { return *outputs_; }
+  // The SLAM (agvslam-run loads a map into it before start() and reads its results after wait()).
+  slam::System& system() { return *system_; }
   // Called from the tracking loop after every frame and every poll time-out (the systemd watchdog hook).
   void set_processing_hook(std::function<void()> hook) { processing_hook_ = std::move(hook); }
 
@@ -120,6 +130,7 @@ class Pipeline {
 
   const DaemonConfig& config_;
   SourceSetup setup_;
+  PipelineOptions options_;
   std::unique_ptr<FrameSource> source_;
   std::unique_ptr<slam::System> system_;
   std::unique_ptr<dynamic::DynamicDetector> detector_;  // used by the detector thread only
@@ -140,7 +151,7 @@ class Pipeline {
 
   mutable std::mutex stats_mutex_;
   PipelineStats stats_;
-  RollingStats latency_ms_, detector_ms_, tracking_ms_;
+  RollingSeries latency_ms_, detector_ms_, tracking_ms_;  // the last 4096 frames
   std::vector<int64_t> recent_frames_mono_ns_;  // ring of processing times for fps
   std::size_t recent_next_ = 0;
   std::string error_;

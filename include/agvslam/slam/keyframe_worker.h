@@ -6,13 +6,14 @@
 // The stage's work function runs with the work mutex held; a stage that must stop the worker between keyframes
 // (LocalMapping::pause, reset) takes that mutex.
 
+#include <atomic>
 #include <condition_variable>
 #include <cstddef>
-#include <deque>
 #include <functional>
 #include <mutex>
 #include <thread>
 
+#include "agvslam/core/bounded_queue.h"
 #include "agvslam/slam/key_frame.h"
 
 namespace agvslam::slam {
@@ -22,6 +23,7 @@ class KeyframeWorker {
   enum class WhenFull { kRefuseNew, kDropOldest };
   enum class Pushed { kQueued, kQueuedDroppedOldest, kRefused };
 
+  // capacity >= 1 (std::invalid_argument otherwise).
   KeyframeWorker(std::size_t capacity, WhenFull when_full, std::function<void(const KeyFramePtr&)> work);
   ~KeyframeWorker();
   KeyframeWorker(const KeyframeWorker&) = delete;
@@ -34,8 +36,8 @@ class KeyframeWorker {
 
   // Never blocks.
   Pushed push(const KeyFramePtr& kf);
-  std::size_t size() const;
-  bool empty() const { return size() == 0; }
+  std::size_t size() const { return queue_.size(); }
+  bool empty() const { return queue_.empty(); }
   // No keyframe queued and none in progress.
   bool idle() const;
   // Without the thread: runs the queued keyframes in the caller's thread (nothing when the thread runs).
@@ -49,19 +51,17 @@ class KeyframeWorker {
 
  private:
   void run();
-  // Takes the next keyframe off the queue and marks the worker busy; null when the queue is empty.
-  KeyFramePtr take_locked();
-  void done();
+  void process(const KeyFramePtr& kf);  // the work under the work mutex, then the keyframe counts as done
 
-  const std::size_t capacity_;
-  const WhenFull when_full_;
   const std::function<void(const KeyFramePtr&)> work_;
+  BoundedQueue<KeyFramePtr> queue_;
 
-  mutable std::mutex queue_mutex_;
-  std::condition_variable queue_cv_, idle_cv_;
-  std::deque<KeyFramePtr> queue_;
-  bool busy_ = false;
-  bool stop_ = false;
+  // Keyframes queued or in progress: idle() is pending_ == 0, which a keyframe taken off the queue but not yet
+  // processed does not satisfy.
+  mutable std::mutex pending_mutex_;
+  std::condition_variable idle_cv_;
+  std::size_t pending_ = 0;
+  std::atomic<bool> stop_{false};
   std::mutex work_mutex_;
   std::thread thread_;
 };

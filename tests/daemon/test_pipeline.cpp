@@ -1,0 +1,74 @@
+// The pipeline as agvslam-run drives it (PipelineOptions): a dataset played losslessly hands every frame, in
+// order, to the frame hook, with the ground-truth mask as the tracking mask when asked (and no mask otherwise), no
+// detector times without a detector, and ends by itself once the source ended (finished, nothing failed).
+#include "agvslam/daemon/pipeline.h"
+
+#include <gtest/gtest.h>
+
+#include <filesystem>
+#include <mutex>
+#include <vector>
+
+#include "daemon_test_util.h"
+
+namespace agvslam::daemon {
+namespace {
+
+// What the hook saw of one frame.
+struct Seen {
+  int64_t source_index;
+  int lap;
+  int64_t t_ns;
+  int mask_pixels;  // -1: no mask
+  double detector_ms;
+};
+
+std::vector<Seen> play(const std::string& dir, bool ground_truth_masks) {
+  DaemonConfig c;
+  c.path = "test.yaml";
+  c.source.type = SourceType::kDataset;
+  c.source.dataset = dir;
+  c.source.rate = 0;
+  c.pipeline.dynamic = DynamicMode::kOff;
+  c.pipeline.mapping = MappingMode::kInline;
+  c.system.threaded_mapping = false;
+  c.outputs.dds_enabled = false;
+  const SourceSetup setup = prepare_source(c);
+  DatasetPlayback playback;
+  playback.laps = 2;
+  playback.ground_truth_masks = true;
+  std::vector<Seen> seen;
+  PipelineOptions options;
+  options.ground_truth_masks = ground_truth_masks;
+  options.settle_mapping = true;
+  options.on_tracked = [&](const TrackedFrame& f) {
+    seen.push_back({f.captured.source_index, f.captured.lap, f.captured.frame.t_ns,
+                    f.mask.empty() ? -1 : cv::countNonZero(f.mask), f.times.detector_ms});
+  };
+  Pipeline pipeline(c, setup, std::make_unique<DatasetSource>(setup, c.source, playback), std::move(options));
+  pipeline.start();
+  pipeline.wait();
+  EXPECT_TRUE(pipeline.finished());
+  EXPECT_FALSE(pipeline.failed()) << pipeline.error();
+  EXPECT_EQ(pipeline.stats().processed, seen.size());
+  return seen;
+}
+
+TEST(Pipeline, PlaysEveryFrameInOrderThroughTheHookWithTheGroundTruthMaskWhenAsked) {
+  const std::string dir = test::tiny_dataset(4, /*with_masks=*/true);
+  for (bool ground_truth_masks : {true, false}) {
+    const std::vector<Seen> seen = play(dir, ground_truth_masks);
+    ASSERT_EQ(seen.size(), 8U);
+    for (std::size_t k = 0; k < seen.size(); ++k) {
+      EXPECT_EQ(seen[k].source_index, static_cast<int64_t>(k % 4)) << k;
+      EXPECT_EQ(seen[k].lap, static_cast<int>(k / 4)) << k;
+      EXPECT_EQ(seen[k].t_ns, static_cast<int64_t>(k) * 50000000) << k;  // laps continue the stamps
+      EXPECT_EQ(seen[k].mask_pixels, ground_truth_masks ? 48 : -1) << k;
+      EXPECT_LT(seen[k].detector_ms, 0.0) << k;
+    }
+  }
+  std::filesystem::remove_all(dir);
+}
+
+}  // namespace
+}  // namespace agvslam::daemon
