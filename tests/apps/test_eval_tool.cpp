@@ -179,6 +179,59 @@ TEST_F(EvalTool, BadInputNamesTheFileLineOrOption) {
   EXPECT_NE(out.find("--gt-format"), std::string::npos) << out;
 }
 
+TEST_F(EvalTool, OdometryCheckReportsAScaleErrorAndAFrozenStretch) {
+  const auto truth = make_path(400);  // 0.5 m per 0.1 s
+  write_tum(path("odometry.tum"), truth);
+  {  // The same motion as a controller's speed / yaw-rate CSV.
+    std::ofstream f(path("odometry.csv"));
+    f << "t_s,speed_mps,yaw_rate_radps\n";
+    f.precision(12);
+    for (std::size_t i = 0; i < truth.size(); ++i) {
+      const std::size_t k = std::min(i, truth.size() - 2);
+      const double yaw0 = std::atan2(-truth[k].T.linear()(2, 0), truth[k].T.linear()(0, 0));
+      const double yaw1 = std::atan2(-truth[k + 1].T.linear()(2, 0), truth[k + 1].T.linear()(0, 0));
+      f << truth[i].t_s << "," << 5.0 << "," << (yaw1 - yaw0) / 0.1 << "\n";
+    }
+  }
+  auto scaled = truth;
+  for (auto& p : scaled) p.T.translation() *= 1.05;
+  write_tum(path("scaled.tum"), scaled);
+  auto frozen = truth;
+  for (std::size_t i = 201; i < 215; ++i) frozen[i].T = frozen[200].T;
+  write_tum(path("frozen.tum"), frozen);
+
+  std::string out;
+  ASSERT_EQ(eval("--est " + path("scaled.tum") + " --odometry " + path("odometry.tum") + " --json " + path("o.json"),
+                 &out),
+            0)
+      << out;
+  EXPECT_EQ(first_line(out).rfind("ODOMETRY_DISTANCE_RATIO 1.05", 0), 0u) << out;
+  EXPECT_NE(out.find("OUTSIDE the 3 % tolerance"), std::string::npos) << out;
+  const nlohmann::json j = nlohmann::json::parse(std::ifstream(path("o.json")));
+  EXPECT_NEAR(j["odometry"]["distance_ratio"].get<double>(), 1.05, 1e-3);
+  EXPECT_FALSE(j["odometry"]["distance_within_tolerance"].get<bool>());
+
+  ASSERT_EQ(eval("--est " + path("frozen.tum") + " --odometry " + path("odometry.csv"), &out), 0) << out;
+  EXPECT_NE(out.find("speed / yaw rate"), std::string::npos) << out;
+  EXPECT_NE(out.find("frames 200-2"), std::string::npos) << out;  // the frozen stretch is listed
+
+  // With ground truth as well: the ATE line comes first.
+  write_times(path("times.txt"), truth);
+  write_kitti(path("gt.txt"), truth);
+  ASSERT_EQ(eval("--gt " + path("gt.txt") + " --times " + path("times.txt") + " --est " + path("odometry.tum") +
+                     " --odometry " + path("odometry.tum"),
+                 &out),
+            0)
+      << out;
+  EXPECT_LT(ate_from_output(out), 1e-9);
+  EXPECT_NE(out.find("ratio 1.0000 (within"), std::string::npos) << out;
+
+  EXPECT_EQ(eval("--est " + path("frozen.tum"), &out), 2);
+  EXPECT_NE(out.find("--odometry"), std::string::npos) << out;
+  EXPECT_EQ(eval("--est " + path("frozen.tum") + " --odometry " + path("odometry.csv") + " --est-axes ros", &out), 2);
+  EXPECT_NE(out.find("--est-axes"), std::string::npos) << out;
+}
+
 TEST_F(EvalTool, RealKittiGroundTruthAgainstItself) {
   AGVSLAM_REQUIRE_SHARED(kitti, "data/kitti06_f000-050");
   std::string out;
