@@ -92,7 +92,7 @@ std::string Range::text() const {
     }
     out += (out.empty() ? "" : " or ") + one;
   }
-  return intervals_.size() > 1 ? "(" + out + ")" : out;
+  return out;
 }
 
 // ---- Text ----------------------------------------------------------------------------------------------------

@@ -52,7 +52,7 @@ class Range {
   Range odd() const;
 
   bool contains(double v) const;
-  // "in [0, 1024]", ">= 0", "(0 or >= 10)", "" for any(); the caller adds the type word.
+  // "in [0, 1024]", ">= 0", ">= 10 or 0", "" for any(); the caller adds the type word.
   std::string text() const;
   bool is_odd() const { return odd_; }
   int step() const { return step_; }
