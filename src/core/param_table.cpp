@@ -232,10 +232,7 @@ void read_sections(const File& file, const std::vector<SectionReader>& sections)
   std::vector<std::string> names;
   for (const SectionReader& s : sections) names.push_back(s.section);
   file.check_sections(names);
-  for (const SectionReader& s : sections) {
-    file.check_keys(s.section, s.keys);
-    s.read(file);
-  }
+  for (const SectionReader& s : sections) s.read(file);
 }
 
 }  // namespace agvslam::params

@@ -230,14 +230,13 @@ class Param {
   std::function<std::string(const C&)> value_;
 };
 
-// A table bound to the struct it fills, for reading several sections of one file (read_sections).
+// One section of a file and what reads it (usually Table::reader(): the table bound to the struct it fills).
 struct SectionReader {
   std::string section;
-  std::vector<std::string> keys;
   std::function<void(const File&)> read;
 };
 
-// Rejects a top-level section the readers do not name, then reads each section.
+// Rejects a top-level section the readers do not name, then runs the readers in their order.
 void read_sections(const File& file, const std::vector<SectionReader>& sections);
 
 template <class C>
@@ -255,17 +254,15 @@ class Table {
     return *this;
   }
   // The settings of a member struct, written in this table's section (e.g. the daemon's `dds` section: its own
-  // `enabled` plus every DdsConfig key). Validated with sub's rules, under sub's section name, only while `when`
-  // (when given) is true. `sub` must outlive this table.
+  // `enabled` plus every DdsConfig key), validated with sub's rules under sub's section name. `sub` must outlive
+  // this table.
   template <class S>
-  Table& include(S C::*member, const Table<S>& sub, bool C::*when = nullptr) {
+  Table& include(S C::*member, const Table<S>& sub) {
     const Table<S>* t = &sub;
     Include inc;
     inc.keys = t->keys();
     inc.read = [member, t](const File& f, const std::string& s, C& c) { t->read_values(f, s, c.*member); };
-    inc.validate = [member, t, when](const std::string& source, const C& c) {
-      if (when == nullptr || c.*when) t->validate(source, c.*member);
-    };
+    inc.validate = [member, t](const std::string& source, const C& c) { t->validate(source, c.*member); };
     inc.items = [member, t](const C& c) { return t->items(c.*member); };
     includes_.push_back(std::move(inc));
     return *this;
@@ -291,8 +288,9 @@ class Table {
     file.check_keys(section, keys());
     read_values(file, section, c);
   }
+  // This table reading c, for read_sections(); c and the table must outlive the call.
   SectionReader reader(C& c) const {
-    return SectionReader{section_, keys(), [this, &c](const File& f) { read_values(f, section_, c); }};
+    return SectionReader{section_, [this, &c](const File& f) { read(f, c); }};
   }
 
   // Every range, then every rule between settings; the first that fails is an InputError naming `source`.
