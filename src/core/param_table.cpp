@@ -21,6 +21,8 @@ std::string number(double v) { return detail::format_number(v); }
 
 Range Range::any() { return Range{}; }
 
+Range Range::finite() { return open(-kInf, kInf); }
+
 Range Range::closed(double lo, double hi) {
   Range r;
   r.intervals_.push_back({lo, hi, false, false});
@@ -41,9 +43,9 @@ Range Range::right_open(double lo, double hi) {
   r.intervals_.push_back({lo, hi, false, true});
   return r;
 }
-Range Range::at_least(double lo) { return closed(lo, kInf); }
-Range Range::above(double lo) { return left_open(lo, kInf); }
-Range Range::at_most(double hi) { return closed(-kInf, hi); }
+Range Range::at_least(double lo) { return right_open(lo, kInf); }
+Range Range::above(double lo) { return open(lo, kInf); }
+Range Range::at_most(double hi) { return left_open(-kInf, hi); }
 Range Range::value(double v) { return closed(v, v); }
 
 Range Range::operator|(const Range& other) const {
@@ -81,7 +83,9 @@ std::string Range::text() const {
   std::string out;
   for (const Interval& i : intervals_) {
     std::string one;
-    if (i.lo == i.hi) {
+    if (std::isinf(i.lo) && std::isinf(i.hi)) {
+      continue;  // finite(): the type word says it
+    } else if (i.lo == i.hi) {
       one = number(i.lo);
     } else if (std::isinf(i.hi)) {
       one = (i.lo_open ? "> " : ">= ") + number(i.lo);

@@ -215,7 +215,13 @@ TEST_F(ParamsTest, IncludedStructsAreReadInTheSectionAndValidatedUnderTheirOwnNa
 TEST_F(ParamsTest, RangesCoverOpenClosedUnionsStepsAndOddNumbers) {
   EXPECT_TRUE(Range::any().contains(std::nan("")));
   EXPECT_FALSE(Range::at_least(0).contains(std::nan("")));
-  EXPECT_TRUE(Range::at_least(0).contains(INFINITY));
+  EXPECT_FALSE(Range::at_least(0).contains(INFINITY));
+  EXPECT_FALSE(Range::at_most(0).contains(-INFINITY));
+  EXPECT_FALSE(Range::finite().contains(INFINITY));
+  EXPECT_FALSE(Range::finite().contains(-INFINITY));
+  EXPECT_FALSE(Range::finite().contains(std::nan("")));
+  EXPECT_TRUE(Range::finite().contains(-1e300));
+  EXPECT_EQ(detail::number_expectation("a number", Range::finite(), "px", ""), "a number (px)");
   const Range zero_or_ten = Range::at_least(10) | Range::value(0);
   EXPECT_TRUE(zero_or_ten.contains(0));
   EXPECT_FALSE(zero_or_ten.contains(5));

@@ -34,10 +34,11 @@
 namespace agvslam::params {
 
 // The numbers a setting accepts: one interval or the union of several, optionally only odd numbers or multiples
-// of a step. Bounds are doubles, which hold every int exactly. NaN is in no range (but in any()).
+// of a step. Bounds are doubles, which hold every int exactly. NaN and +-inf are in no range but any().
 class Range {
  public:
   static Range any();
+  static Range finite();                          // any number but NaN and +-inf
   static Range closed(double lo, double hi);      // [lo, hi]
   static Range open(double lo, double hi);        // (lo, hi)
   static Range left_open(double lo, double hi);   // (lo, hi]
