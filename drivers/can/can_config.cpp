@@ -21,7 +21,9 @@ const params::Table<CanConfig>& can_params() {
           {"reopen_max_ms", &CanConfig::reopen_max_ms, Range::at_most(600000), "ms"},
       })
           .check("base_id",
-                 [](const CanConfig& c) { return c.base_id + kPoseFdOffset <= (c.extended_ids ? 0x1FFFFFFFU : 0x7FFU); },
+                 [](const CanConfig& c) {
+                   return c.base_id + kPoseFdOffset <= (c.extended_ids ? 0x1FFFFFFFU : 0x7FFU);
+                 },
                  [](const CanConfig& c) {
                    return std::string("an id with base_id + 8 <= ") + (c.extended_ids ? "0x1FFFFFFF" : "0x7FF") +
                           (c.extended_ids ? "" : " (11-bit ids; set can.extended_ids for 29-bit ids)");

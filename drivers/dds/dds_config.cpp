@@ -29,7 +29,8 @@ const params::Table<DdsConfig>& dds_params() {
   using params::Text;
   static const params::Table<DdsConfig> table =
       params::Table<DdsConfig>("dds", {
-          {"domain_id", &DdsConfig::domain_id, Range::closed(0, 232), "", "ROS_DOMAIN_ID; higher ids give ports >= 65536"},
+          {"domain_id", &DdsConfig::domain_id, Range::closed(0, 232), "",
+           "ROS_DOMAIN_ID; higher ids give ports >= 65536"},
           {"network_interface", &DdsConfig::network_interface, Text::any(), "\"\": Cyclone DDS's own choice"},
           {"config_uri", &DdsConfig::config_uri, Text::any(), "Cyclone DDS XML or a file:// URI"},
           {"topic_namespace", &DdsConfig::topic_namespace, Text::non_empty()},
@@ -45,7 +46,8 @@ const params::Table<DdsConfig>& dds_params() {
       })
           .check("topic_namespace", [](const DdsConfig& c) { return valid_ros_namespace(c.topic_namespace); },
                  "a ROS name without leading or trailing '/' (letters, digits, '_', '/'), e.g. agvslam")
-          .check("publish_pose", [](const DdsConfig& c) { return c.publish_pose || c.publish_odom || c.publish_status; },
+          .check("publish_pose",
+                 [](const DdsConfig& c) { return c.publish_pose || c.publish_odom || c.publish_status; },
                  "at least one of publish_pose, publish_odom, publish_status")
           .summary([](const DdsConfig& c) {
             std::string topics;

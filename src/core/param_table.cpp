@@ -23,26 +23,16 @@ Range Range::any() { return Range{}; }
 
 Range Range::finite() { return open(-kInf, kInf); }
 
-Range Range::closed(double lo, double hi) {
+Range Range::interval(double lo, double hi, bool lo_open, bool hi_open) {
   Range r;
-  r.intervals_.push_back({lo, hi, false, false});
+  r.intervals_.push_back({lo, hi, lo_open, hi_open});
   return r;
 }
-Range Range::open(double lo, double hi) {
-  Range r;
-  r.intervals_.push_back({lo, hi, true, true});
-  return r;
-}
-Range Range::left_open(double lo, double hi) {
-  Range r;
-  r.intervals_.push_back({lo, hi, true, false});
-  return r;
-}
-Range Range::right_open(double lo, double hi) {
-  Range r;
-  r.intervals_.push_back({lo, hi, false, true});
-  return r;
-}
+
+Range Range::closed(double lo, double hi) { return interval(lo, hi, false, false); }
+Range Range::open(double lo, double hi) { return interval(lo, hi, true, true); }
+Range Range::left_open(double lo, double hi) { return interval(lo, hi, true, false); }
+Range Range::right_open(double lo, double hi) { return interval(lo, hi, false, true); }
 Range Range::at_least(double lo) { return right_open(lo, kInf); }
 Range Range::above(double lo) { return open(lo, kInf); }
 Range Range::at_most(double hi) { return left_open(-kInf, hi); }
@@ -133,7 +123,9 @@ std::string Text::text() const {
     for (std::size_t i = 0; i < values_.size(); ++i) out += (i == 0 ? "" : ", ") + values_[i];
     return out;
   }
-  if (max_ != std::string::npos) return "a string of " + std::to_string(min_) + " to " + std::to_string(max_) + " characters";
+  if (max_ != std::string::npos) {
+    return "a string of " + std::to_string(min_) + " to " + std::to_string(max_) + " characters";
+  }
   return min_ > 0 ? "a non-empty string" : "a string";
 }
 
@@ -141,12 +133,10 @@ std::string Text::text() const {
 
 namespace detail {
 
-namespace {
 std::string with_reason(std::string text, const char* reason) {
   if (reason != nullptr && *reason != '\0') text += std::string(" (") + reason + ")";
   return text;
 }
-}  // namespace
 
 std::string number_expectation(const char* type, const Range& range, const char* unit, const char* reason) {
   std::string text = type;

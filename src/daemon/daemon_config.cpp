@@ -55,7 +55,9 @@ const params::Table<DaemonConfig>& calibration_params() {
           {"file", &DaemonConfig::calibration_file, Text::any(), "KITTI calib.txt, ORB-SLAM YAML or Kalibr camchain"},
       })
           .check("file",
-                 [](const DaemonConfig& d) { return d.source.type != SourceType::kV4l2 || !d.calibration_file.empty(); },
+                 [](const DaemonConfig& d) {
+                   return d.source.type != SourceType::kV4l2 || !d.calibration_file.empty();
+                 },
                  "a calibration file for the V4L2 camera (source.type v4l2)");
   return table;
 }
@@ -187,7 +189,9 @@ const params::Table<MapConfig>& map_params() {
           {"save_on_stop", &M::save_on_stop},
       })
           .check("file",
-                 [](const M& m) { return m.file.empty() || m.mode != slam::MapMode::kLocalisation || fs::exists(m.file); },
+                 [](const M& m) {
+                   return m.file.empty() || m.mode != slam::MapMode::kLocalisation || fs::exists(m.file);
+                 },
                  [](const M& m) { return "an existing map file in mode localise (" + m.file + " does not exist)"; });
   return table;
 }

@@ -34,8 +34,8 @@ const params::Table<SimConfig>& camera_params() {
           .check("cx", [](const S& c) { return c.cx < c.width; }, "a principal point inside the image (or < 0)")
           .check("cy", [](const S& c) { return c.cy < c.height; }, "a principal point inside the image (or < 0)")
           .summary([](const S& c) {
-            return "fy " + fmt("%.2f", c.fy_px()) + ", cx " + fmt("%.2f", c.cx_px()) + ", cy " + fmt("%.2f", c.cy_px()) +
-                   " px";
+            return "fy " + fmt("%.2f", c.fy_px()) + ", cx " + fmt("%.2f", c.cx_px()) + ", cy " +
+                   fmt("%.2f", c.cy_px()) + " px";
           });
   return table;
 }

@@ -63,6 +63,7 @@ class Range {
     double lo, hi;
     bool lo_open, hi_open;
   };
+  static Range interval(double lo, double hi, bool lo_open, bool hi_open);
   std::vector<Interval> intervals_;  // empty: any value
   int step_ = 0;                     // > 0: multiples of it only
   bool odd_ = false;
@@ -126,6 +127,7 @@ class EnumNames {
 
 // Implementation helpers of Param and Table (param_table.cpp).
 namespace detail {
+std::string with_reason(std::string text, const char* reason);  // text + " (reason)" when there is one
 std::string number_expectation(const char* type, const Range& range, const char* unit, const char* reason);
 std::string text_expectation(const Text& rule, const char* reason);
 std::string enum_expectation(const std::string& names, const char* reason);
@@ -142,34 +144,25 @@ std::string field(const std::string& section, const std::string& key);  // "sect
 std::string item(const std::string& key, const std::string& value, const char* unit);  // "key=value unit"
 }  // namespace detail
 
-template <class C>
-class Table;
-
 // One setting: its key, the member of C it fills, what it accepts and its unit. reason: why the range is what it
 // is, or what a special value means ("< 0 disables the check"), shown in error messages; "" when the range says it.
 template <class C>
 class Param {
  public:
-  Param(const char* key, int C::*member, Range range, const char* unit = "", const char* reason = "")
-      : key_(key), unit_(unit), expectation_(detail::number_expectation("an integer", range, unit, reason)) {
-    read_ = [member, e = expectation_](const File& f, const std::string& s, const std::string& k, C& c) {
-      f.read(s, k, c.*member, e);
-    };
-    validate_ = [member, range](const C& c) { return range.contains(c.*member); };
-    value_ = [member](const C& c) { return std::to_string(c.*member); };
-  }
-  Param(const char* key, double C::*member, Range range, const char* unit = "", const char* reason = "")
-      : key_(key), unit_(unit), expectation_(detail::number_expectation("a number", range, unit, reason)) {
-    read_ = [member, e = expectation_](const File& f, const std::string& s, const std::string& k, C& c) {
-      f.read(s, k, c.*member, e);
-    };
+  // An int or a double.
+  template <class N, std::enable_if_t<std::is_same_v<N, int> || std::is_same_v<N, double>, int> = 0>
+  Param(const char* key, N C::*member, Range range, const char* unit = "", const char* reason = "")
+      : key_(key),
+        unit_(unit),
+        expectation_(detail::number_expectation(std::is_same_v<N, int> ? "an integer" : "a number", range, unit,
+                                                reason)) {
+    read_ = plain_read(member, expectation_);
     validate_ = [member, range](const C& c) { return range.contains(c.*member); };
     value_ = [member](const C& c) { return detail::format_number(c.*member); };
   }
   // An identifier written as a C integer literal (0x300 or 768) up to max_id, echoed in hex.
   Param(const char* key, uint32_t C::*member, uint32_t max_id, const char* reason = "")
-      : key_(key), unit_(""),
-        expectation_(detail::id_expectation(max_id, reason)) {
+      : key_(key), unit_(""), expectation_(detail::id_expectation(max_id, reason)) {
     read_ = [member, max_id, e = expectation_](const File& f, const std::string& s, const std::string& k, C& c) {
       detail::read_id(f, s, k, max_id, c.*member, e);
     };
@@ -177,26 +170,22 @@ class Param {
     value_ = [member](const C& c) { return detail::format_id(c.*member); };
   }
   Param(const char* key, uint64_t C::*member, const char* reason = "")
-      : key_(key), unit_(""), expectation_(detail::number_expectation("an unsigned integer", Range::any(), "", reason)) {
-    read_ = [member, e = expectation_](const File& f, const std::string& s, const std::string& k, C& c) {
-      f.read(s, k, c.*member, e);
-    };
+      : key_(key),
+        unit_(""),
+        expectation_(detail::number_expectation("an unsigned integer", Range::any(), "", reason)) {
+    read_ = plain_read(member, expectation_);
     validate_ = [](const C&) { return true; };
     value_ = [member](const C& c) { return std::to_string(c.*member); };
   }
   Param(const char* key, bool C::*member, const char* reason = "")
-      : key_(key), unit_(""), expectation_(std::string("true or false") + (*reason ? std::string(" (") + reason + ")" : "")) {
-    read_ = [member, e = expectation_](const File& f, const std::string& s, const std::string& k, C& c) {
-      f.read(s, k, c.*member, e);
-    };
+      : key_(key), unit_(""), expectation_(detail::with_reason("true or false", reason)) {
+    read_ = plain_read(member, expectation_);
     validate_ = [](const C&) { return true; };
     value_ = [member](const C& c) { return std::string(c.*member ? "true" : "false"); };
   }
   Param(const char* key, std::string C::*member, Text rule, const char* reason = "")
       : key_(key), unit_(""), expectation_(detail::text_expectation(rule, reason)) {
-    read_ = [member, e = expectation_](const File& f, const std::string& s, const std::string& k, C& c) {
-      f.read(s, k, c.*member, e);
-    };
+    read_ = plain_read(member, expectation_);
     validate_ = [member, rule](const C& c) { return rule.accepts(c.*member); };
     value_ = [member](const C& c) { return detail::format_text(c.*member); };
   }
@@ -207,7 +196,9 @@ class Param {
     const EnumNames<E>* n = &names;
     read_ = [member, n, e = expectation_](const File& f, const std::string& s, const std::string& k, C& c) {
       std::string text;
-      if (f.read(s, k, text, e) && !n->parse(text, c.*member)) detail::fail(f.path(), detail::field(s, k), e, "'" + text + "'");
+      if (f.read(s, k, text, e) && !n->parse(text, c.*member)) {
+        detail::fail(f.path(), detail::field(s, k), e, "'" + text + "'");
+      }
     };
     validate_ = [](const C&) { return true; };
     value_ = [member, n](const C& c) { return std::string(n->name(c.*member)); };
@@ -223,10 +214,19 @@ class Param {
   std::string value(const C& c) const { return value_(c); }
 
  private:
+  using ReadFn = std::function<void(const File&, const std::string&, const std::string&, C&)>;
+  // Reads a type File::read knows into the member.
+  template <class T>
+  static ReadFn plain_read(T C::*member, std::string expectation) {
+    return [member, e = std::move(expectation)](const File& f, const std::string& s, const std::string& k, C& c) {
+      f.read(s, k, c.*member, e);
+    };
+  }
+
   const char* key_;
   const char* unit_;
   std::string expectation_;
-  std::function<void(const File&, const std::string&, const std::string&, C&)> read_;
+  ReadFn read_;
   std::function<bool(const C&)> validate_;
   std::function<std::string(const C&)> value_;
 };
