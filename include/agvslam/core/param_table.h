@@ -78,7 +78,8 @@ class Text {
   static Text one_of(std::vector<std::string> values);
 
   bool accepts(const std::string& value) const;
-  std::string text() const;  // "a string", "a non-empty string", "1 to 15 characters", "one of a, b, c"
+  // "a string", "a non-empty string", "a string of 1 to 15 characters", "one of a, b, c".
+  std::string text() const;
 
  private:
   std::size_t min_ = 0, max_ = std::string::npos;
@@ -115,8 +116,9 @@ class EnumNames {
   std::string list() const {
     std::string out;
     for (std::size_t i = 0; i < names_.size(); ++i) {
-      if (name(names_[i].value) != names_[i].text) continue;  // an alias
-      out += (out.empty() ? "" : ", ") + std::string(names_[i].text);
+      bool alias = false;
+      for (std::size_t j = 0; j < i; ++j) alias = alias || names_[j].value == names_[i].value;
+      if (!alias) out += (out.empty() ? "" : ", ") + std::string(names_[i].text);
     }
     return out;
   }

@@ -1,7 +1,8 @@
 #pragma once
 // Settings of the stereo SLAM back end (tracking, local mapping, optimiser), one struct per stage, loaded from
 // params/slam.yaml. Defaults are ORB-SLAM2's stereo values (paper 004 III.C uses ORB-SLAM2's framework); every
-// value is explained in params/slam.yaml.
+// value is explained in params/slam.yaml. Each section's keys, ranges, units and echo are one table in
+// src/slam/slam_config.cpp (agvslam/core/param_table.h).
 
 #include <string>
 #include <vector>
