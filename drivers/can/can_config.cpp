@@ -10,7 +10,7 @@ const params::Table<CanConfig>& can_params() {
       params::Table<CanConfig>("can", {
           {"interface", &CanConfig::interface, params::Text::length(1, IFNAMSIZ - 1),
            "a network interface name such as can0"},
-          {"base_id", &CanConfig::base_id, 0x1FFFFFFFu, "the frames use base_id .. base_id + 8"},
+          {"base_id", &CanConfig::base_id, params::Id{0x1FFFFFFF}, "the frames use base_id .. base_id + 8"},
           {"extended_ids", &CanConfig::extended_ids},
           {"fd", &CanConfig::fd},
           {"rate_hz", &CanConfig::rate_hz, Range::closed(0, 1000), "Hz", "0: every pose"},

@@ -56,7 +56,7 @@ const Table<Sample>& sample_params() {
           {"enabled", &Sample::enabled},
           {"name", &Sample::name, Text::length(1, 5)},
           {"shape", &Sample::shape, shape_names()},
-          {"id", &Sample::id, 0x7FFu},
+          {"id", &Sample::id, Id{0x7FF}},
           {"seed", &Sample::seed},
           {"low", &Sample::low, Range::at_least(0)},
           {"high", &Sample::high, Range::at_least(0)},

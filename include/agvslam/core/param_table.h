@@ -86,6 +86,12 @@ class Text {
   std::vector<std::string> values_;  // empty: any
 };
 
+// An identifier such as a CAN id: written as a C integer literal (0x300, 768 or 01400), at most `max`, echoed in
+// hex.
+struct Id {
+  uint32_t max;
+};
+
 // The names of an enum's values. The first name given for a value is how it is written (echo, messages); later
 // names for the same value are accepted aliases.
 template <class E>
@@ -162,13 +168,12 @@ class Param {
     validate_ = [member, range](const C& c) { return range.contains(c.*member); };
     value_ = [member](const C& c) { return detail::format_number(c.*member); };
   }
-  // An identifier written as a C integer literal (0x300 or 768) up to max_id, echoed in hex.
-  Param(const char* key, uint32_t C::*member, uint32_t max_id, const char* reason = "")
-      : key_(key), unit_(""), expectation_(detail::id_expectation(max_id, reason)) {
-    read_ = [member, max_id, e = expectation_](const File& f, const std::string& s, const std::string& k, C& c) {
-      detail::read_id(f, s, k, max_id, c.*member, e);
+  Param(const char* key, uint32_t C::*member, Id id, const char* reason = "")
+      : key_(key), unit_(""), expectation_(detail::id_expectation(id.max, reason)) {
+    read_ = [member, id, e = expectation_](const File& f, const std::string& s, const std::string& k, C& c) {
+      detail::read_id(f, s, k, id.max, c.*member, e);
     };
-    validate_ = [member, max_id](const C& c) { return c.*member <= max_id; };
+    validate_ = [member, id](const C& c) { return c.*member <= id.max; };
     value_ = [member](const C& c) { return detail::format_id(c.*member); };
   }
   Param(const char* key, uint64_t C::*member, const char* reason = "")
