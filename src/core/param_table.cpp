@@ -6,6 +6,7 @@
 #include <cstdlib>
 #include <limits>
 #include <stdexcept>
+#include <utility>
 
 #include "agvslam/core/error.h"
 
@@ -72,10 +73,9 @@ bool Range::contains(double v) const {
 std::string Range::text() const {
   std::string out;
   for (const Interval& i : intervals_) {
+    if (std::isinf(i.lo) && std::isinf(i.hi)) continue;  // finite(): the type word says it
     std::string one;
-    if (std::isinf(i.lo) && std::isinf(i.hi)) {
-      continue;  // finite(): the type word says it
-    } else if (i.lo == i.hi) {
+    if (i.lo == i.hi) {
       one = number(i.lo);
     } else if (std::isinf(i.hi)) {
       one = (i.lo_open ? "> " : ">= ") + number(i.lo);
