@@ -1,9 +1,6 @@
 #include "agvslam/drivers/dds/dds_config.h"
 
 #include <cctype>
-#include <sstream>
-
-#include "agvslam/core/error.h"
 
 namespace agvslam::drivers::dds {
 namespace {
@@ -27,40 +24,43 @@ bool valid_ros_namespace(const std::string& ns) {
 
 }  // namespace
 
-void DdsConfig::validate(const std::string& source) const {
-  if (domain_id < 0 || domain_id > 232) throw InputError(source, "dds.domain_id", "expected an integer in 0..232");
-  if (!valid_ros_namespace(topic_namespace)) {
-    throw InputError(source, "dds.topic_namespace",
-                     "expected a ROS name without leading or trailing '/' (letters, digits, '_', '/'), e.g. agvslam");
-  }
-  if (map_frame_id.empty()) throw InputError(source, "dds.map_frame_id", "expected a frame name, e.g. map");
-  if (odom_frame_id.empty()) throw InputError(source, "dds.odom_frame_id", "expected a frame name, e.g. map or odom");
-  if (base_frame_id.empty()) throw InputError(source, "dds.base_frame_id", "expected a frame name, e.g. base_link");
-  if (history_depth < 1 || history_depth > 1000) {
-    throw InputError(source, "dds.history_depth", "expected an integer in 1..1000");
-  }
-  if (max_blocking_ms < 0 || max_blocking_ms > 1000) {
-    throw InputError(source, "dds.max_blocking_ms", "expected an integer in 0..1000 (ms)");
-  }
-  if (queue_capacity < 1 || queue_capacity > 1024) {
-    throw InputError(source, "dds.queue_capacity", "expected an integer in 1..1024");
-  }
-  if (!publish_pose && !publish_odom && !publish_status) {
-    throw InputError(source, "dds.publish_pose", "expected at least one of publish_pose, publish_odom, publish_status");
-  }
+const params::Table<DdsConfig>& dds_params() {
+  using params::Range;
+  using params::Text;
+  static const params::Table<DdsConfig> table =
+      params::Table<DdsConfig>("dds", {
+          {"domain_id", &DdsConfig::domain_id, Range::closed(0, 232), "",
+           "ROS_DOMAIN_ID; higher ids give ports >= 65536"},
+          {"network_interface", &DdsConfig::network_interface, Text::any(), "\"\": Cyclone DDS's own choice"},
+          {"config_uri", &DdsConfig::config_uri, Text::any(), "Cyclone DDS XML or a file:// URI"},
+          {"topic_namespace", &DdsConfig::topic_namespace, Text::non_empty()},
+          {"publish_pose", &DdsConfig::publish_pose},
+          {"publish_odom", &DdsConfig::publish_odom},
+          {"publish_status", &DdsConfig::publish_status},
+          {"map_frame_id", &DdsConfig::map_frame_id, Text::non_empty(), "a frame name, e.g. map"},
+          {"odom_frame_id", &DdsConfig::odom_frame_id, Text::non_empty(), "a frame name, e.g. map or odom"},
+          {"base_frame_id", &DdsConfig::base_frame_id, Text::non_empty(), "a frame name, e.g. base_link"},
+          {"history_depth", &DdsConfig::history_depth, Range::closed(1, 1000), "samples"},
+          {"max_blocking_ms", &DdsConfig::max_blocking_ms, Range::closed(0, 1000), "ms"},
+          {"queue_capacity", &DdsConfig::queue_capacity, Range::closed(1, 1024), "samples"},
+      })
+          .check("topic_namespace", [](const DdsConfig& c) { return valid_ros_namespace(c.topic_namespace); },
+                 "a ROS name without leading or trailing '/' (letters, digits, '_', '/'), e.g. agvslam")
+          .check("publish_pose",
+                 [](const DdsConfig& c) { return c.publish_pose || c.publish_odom || c.publish_status; },
+                 "at least one of publish_pose, publish_odom, publish_status")
+          .summary([](const DdsConfig& c) {
+            std::string topics;
+            if (c.publish_pose) topics += " " + c.pose_topic();
+            if (c.publish_odom) topics += " " + c.odom_topic();
+            if (c.publish_status) topics += " " + c.status_topic();
+            return "topics" + topics;
+          });
+  return table;
 }
 
-std::string DdsConfig::describe() const {
-  std::ostringstream s;
-  s << "dds: domain " << domain_id << ", interface "
-    << (!config_uri.empty() ? "(from config_uri)" : network_interface.empty() ? "(cyclone default)" : network_interface)
-    << ", topics";
-  if (publish_pose) s << ' ' << pose_topic();
-  if (publish_odom) s << ' ' << odom_topic();
-  if (publish_status) s << ' ' << status_topic();
-  s << ", frames " << map_frame_id << "/" << odom_frame_id << " -> " << base_frame_id << ", QoS reliable keep-last "
-    << history_depth << " volatile, max_blocking " << max_blocking_ms << " ms, queue " << queue_capacity;
-  return s.str();
-}
+void DdsConfig::validate(const std::string& source) const { dds_params().validate(source, *this); }
+
+std::string DdsConfig::describe() const { return dds_params().describe(*this); }
 
 }  // namespace agvslam::drivers::dds

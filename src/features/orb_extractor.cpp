@@ -3,12 +3,10 @@
 #include <algorithm>
 #include <chrono>
 #include <cmath>
-#include <cstdio>
 #include <cstring>
 #include <opencv2/features2d.hpp>
 #include <opencv2/imgproc.hpp>
 
-#include "agvslam/core/error.h"
 #include "fast_kernels.h"
 #include "orb_kernels.h"
 
@@ -42,25 +40,6 @@ void prepare_rows(cv::Mat& m, int rows, int cols, int capacity_rows) {
 
 }  // namespace
 
-const char* to_string(LevelAllocation allocation) {
-  switch (allocation) {
-    case LevelAllocation::kArea: return "area";
-    case LevelAllocation::kSide: return "side";
-  }
-  return "?";
-}
-
-bool parse_level_allocation(const std::string& text, LevelAllocation& out) {
-  if (text == "area") {
-    out = LevelAllocation::kArea;
-  } else if (text == "side") {
-    out = LevelAllocation::kSide;
-  } else {
-    return false;
-  }
-  return true;
-}
-
 std::vector<int> OrbExtractorConfig::features_per_level() const {
   // ORB-SLAM2's geometric series: level l wants n * (1 - f) / (1 - f^L) * f^l, the last level the remainder.
   const double side = 1.0 / scale_factor;
@@ -76,33 +55,6 @@ std::vector<int> OrbExtractorConfig::features_per_level() const {
   }
   out.back() = std::max(n_features - sum, 0);
   return out;
-}
-
-void OrbExtractorConfig::validate(const std::string& source) const {
-  auto require = [&](bool ok, const char* field, const char* expected) {
-    if (!ok) throw InputError(source, std::string("orb.") + field, expected);
-  };
-  require(n_features >= 8 && n_features <= 20000, "n_features", "expected an integer in [8, 20000]");
-  require(scale_factor > 1.0 && scale_factor <= 2.0, "scale_factor", "expected a number in (1, 2]");
-  require(n_levels >= 1 && n_levels <= 16, "n_levels", "expected an integer in [1, 16]");
-  require(ini_fast_threshold >= 1 && ini_fast_threshold <= 254, "ini_fast_threshold",
-          "expected an integer in [1, 254] grey levels");
-  require(min_fast_threshold >= 1 && min_fast_threshold <= ini_fast_threshold, "min_fast_threshold",
-          "expected an integer in [1, ini_fast_threshold] grey levels");
-  require(mask_dilation_px >= 0 && mask_dilation_px <= 100, "mask_dilation_px", "expected an integer in [0, 100] px");
-  require(cell_size_px >= 8 && cell_size_px <= 256, "cell_size_px", "expected an integer in [8, 256] px");
-}
-
-std::string OrbExtractorConfig::describe() const {
-  std::string per_level;
-  for (int n : features_per_level()) per_level += (per_level.empty() ? "" : " ") + std::to_string(n);
-  char buf[320];
-  std::snprintf(buf, sizeof(buf),
-                "orb: %d features, %d levels x %.3g (per level by %s: %s), FAST %d (retry %d) in %d px cells, "
-                "mask dilation %d px",
-                n_features, n_levels, scale_factor, to_string(level_allocation), per_level.c_str(), ini_fast_threshold,
-                min_fast_threshold, cell_size_px, mask_dilation_px);
-  return buf;
 }
 
 OrbExtractor::OrbExtractor(const OrbExtractorConfig& config) : config_(config) {

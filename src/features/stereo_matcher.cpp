@@ -4,7 +4,6 @@
 #include <chrono>
 #include <climits>
 #include <cmath>
-#include <cstdio>
 #include <cstdlib>
 #include <opencv2/imgproc.hpp>
 
@@ -16,64 +15,7 @@ namespace agvslam::features {
 namespace {
 using Clock = std::chrono::steady_clock;
 double ms_since(Clock::time_point t0) { return std::chrono::duration<double, std::milli>(Clock::now() - t0).count(); }
-
-// Block-matching window: 2 h + 1 rows, 2 h + 1 columns rounded up to a multiple of 4.
-int window_cols(int half_window) { return (2 * half_window + 1 + 3) / 4 * 4; }
-
 }  // namespace
-
-const char* to_string(StereoMethod method) {
-  switch (method) {
-    case StereoMethod::kBlockMatching: return "block_matching";
-    case StereoMethod::kDescriptor: return "descriptor";
-  }
-  return "?";
-}
-
-bool parse_stereo_method(const std::string& text, StereoMethod& out) {
-  if (text == "block_matching") {
-    out = StereoMethod::kBlockMatching;
-  } else if (text == "descriptor") {
-    out = StereoMethod::kDescriptor;
-  } else {
-    return false;
-  }
-  return true;
-}
-
-void StereoMatcherConfig::validate(const std::string& source) const {
-  auto require = [&](bool ok, const char* field, const char* expected) {
-    if (!ok) throw InputError(source, std::string("stereo_matching.") + field, expected);
-  };
-  require(min_depth_m > 0 && min_depth_m <= 100, "min_depth_m", "expected a number in (0, 100] m");
-  require(max_depth_m > min_depth_m && max_depth_m <= 10000, "max_depth_m",
-          "expected a number in (min_depth_m, 10000] m");
-  require(sad_half_window >= 1 && sad_half_window <= 7, "sad_half_window", "expected an integer in [1, 7] px");
-  require(sad_search_px >= 1 && sad_search_px <= 20, "sad_search_px", "expected an integer in [1, 20] px");
-  require(max_descriptor_distance >= 0 && max_descriptor_distance <= 256, "max_descriptor_distance",
-          "expected an integer in [0, 256] bits");
-  require(uniqueness_ratio > 0 && uniqueness_ratio <= 1, "uniqueness_ratio", "expected a number in (0, 1]");
-  require(min_curvature >= 0 && min_curvature <= 50, "min_curvature", "expected a number in [0, 50] grey levels");
-  require(outlier_factor >= 1 && outlier_factor <= 100, "outlier_factor", "expected a number in [1, 100]");
-}
-
-std::string StereoMatcherConfig::describe() const {
-  char buf[320];
-  if (method == StereoMethod::kBlockMatching) {
-    std::snprintf(buf, sizeof(buf),
-                  "stereo_matching: block_matching at the keypoint's level, SAD %dx%d, depth [%.2f, %.1f] m, "
-                  "uniqueness %.2f, min curvature %.2f DN, outliers > %.2f x median SAD",
-                  window_cols(sad_half_window), 2 * sad_half_window + 1, min_depth_m, max_depth_m, uniqueness_ratio,
-                  min_curvature, outlier_factor);
-  } else {
-    std::snprintf(buf, sizeof(buf),
-                  "stereo_matching: descriptor (ORB-SLAM2), Hamming < %d, SAD %dx%d +-%d px, depth [%.2f, %.1f] m, "
-                  "outliers > %.2f x median SAD",
-                  max_descriptor_distance, 2 * sad_half_window + 1, 2 * sad_half_window + 1, sad_search_px,
-                  min_depth_m, max_depth_m, outlier_factor);
-  }
-  return buf;
-}
 
 StereoMatcher::StereoMatcher(const StereoMatcherConfig& config, const StereoCalibration& calibration)
     : config_(config), calibration_(calibration) {

@@ -2,28 +2,30 @@
 
 #include <filesystem>
 
-#include "agvslam/core/error.h"
-#include "agvslam/stereo/params_reader.h"
+#include "agvslam/core/param_table.h"
 
 namespace agvslam::place {
+namespace {
 
-void PlaceConfig::validate(const std::string& source) const {
-  if (vocabulary_file.empty()) throw InputError(source, "vocabulary.file", "expected the path of a vocabulary file");
-  if (direct_index_level < 1 || direct_index_level > 8)
-    throw InputError(source, "vocabulary.direct_index_level", "expected a tree depth in 1..8 (at most L)");
+const params::Table<PlaceConfig>& place_params() {
+  static const params::Table<PlaceConfig> table("vocabulary", {
+      {"file", &PlaceConfig::vocabulary_file, params::Text::non_empty(),
+       "the vocabulary file, relative to the params file's folder"},
+      {"direct_index_level", &PlaceConfig::direct_index_level, params::Range::closed(1, 8), "",
+       "a depth of the vocabulary tree, which has at most 8 levels"},
+  });
+  return table;
 }
 
-std::string PlaceConfig::describe() const {
-  return "place: vocabulary=" + vocabulary_file + " direct_index_level=" + std::to_string(direct_index_level);
-}
+}  // namespace
+
+void PlaceConfig::validate(const std::string& source) const { place_params().validate(source, *this); }
+
+std::string PlaceConfig::describe() const { return place_params().describe(*this); }
 
 PlaceConfig load_place_config(const std::string& path) {
-  const stereo::ParamsReader in(path);
-  in.check_sections({"vocabulary"});
-  in.check_keys("vocabulary", {"file", "direct_index_level"});
   PlaceConfig c;
-  in.read("vocabulary", "file", c.vocabulary_file, "a file path (relative to this file's folder)");
-  in.read("vocabulary", "direct_index_level", c.direct_index_level, "an integer tree depth (1..L)");
+  params::read_sections(params::File(path), {place_params().reader(c)});
   const std::filesystem::path file(c.vocabulary_file);
   if (!file.empty() && file.is_relative())
     c.vocabulary_file = (std::filesystem::path(path).parent_path() / file).lexically_normal().string();

@@ -5,7 +5,7 @@
 #include <cstdio>
 #include <stdexcept>
 
-#include "agvslam/core/error.h"
+#include "agvslam/core/param_table.h"
 #include "hamming.h"
 #include "hash.h"
 
@@ -38,21 +38,34 @@ void DescriptorSet::clear() {
 
 // ---- VocabularyTrainingConfig -----------------------------------------------------------------------------
 
-void VocabularyTrainingConfig::validate(const std::string& source) const {
-  if (branching < 2 || branching > 64) throw InputError(source, "branching", "expected k in 2..64");
-  if (levels < 1 || levels > 8) throw InputError(source, "levels", "expected L in 1..8");
-  if (std::pow(double(branching), double(levels)) > 4.0e9)
-    throw InputError(source, "levels", "expected k^L <= 4e9 words (word ids are 32-bit)");
-  if (max_iterations < 1 || max_iterations > 1000)
-    throw InputError(source, "max_iterations", "expected 1..1000 k-medians iterations");
-  if (threads < 1 || threads > 256) throw InputError(source, "threads", "expected 1..256 threads");
+namespace {
+
+const params::Table<VocabularyTrainingConfig>& training_params() {
+  using params::Range;
+  static const params::Table<VocabularyTrainingConfig> table =
+      params::Table<VocabularyTrainingConfig>("vocabulary_training", {
+          {"branching", &VocabularyTrainingConfig::branching, Range::closed(2, 64), "children per node"},
+          {"levels", &VocabularyTrainingConfig::levels, Range::closed(1, 8), "", "the file format's limit"},
+          {"max_iterations", &VocabularyTrainingConfig::max_iterations, Range::closed(1, 1000), "per node"},
+          {"seed", &VocabularyTrainingConfig::seed},
+          {"threads", &VocabularyTrainingConfig::threads, Range::closed(1, 256)},
+      })
+          .check("levels",
+                 [](const VocabularyTrainingConfig& c) {
+                   return std::pow(double(c.branching), double(c.levels)) <= 4.0e9;
+                 },
+                 "branching^levels <= 4e9 words (word ids are 32-bit)")
+          .summary([](const VocabularyTrainingConfig&) {
+            return std::string("hierarchical k-medians, k-means++ seeding, Hamming, TF-IDF");
+          });
+  return table;
 }
 
-std::string VocabularyTrainingConfig::describe() const {
-  return "vocabulary training: k=" + std::to_string(branching) + " L=" + std::to_string(levels) +
-         " max_iterations=" + std::to_string(max_iterations) + " seed=" + std::to_string(seed) +
-         " threads=" + std::to_string(threads) + " (hierarchical k-medians, k-means++ seeding, Hamming, TF-IDF)";
-}
+}  // namespace
+
+void VocabularyTrainingConfig::validate(const std::string& source) const { training_params().validate(source, *this); }
+
+std::string VocabularyTrainingConfig::describe() const { return training_params().describe(*this); }
 
 // ---- Vocabulary ---------------------------------------------------------------------------------------------
 

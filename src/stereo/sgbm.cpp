@@ -1,60 +1,9 @@
 #include "agvslam/stereo/sgbm.h"
 
 #include <algorithm>
-#include <cstdio>
 #include <opencv2/imgproc.hpp>
 
-#include "agvslam/core/error.h"
-
 namespace agvslam::stereo {
-
-std::string to_string(SgbmMode mode) {
-  switch (mode) {
-    case SgbmMode::kSgbm: return "sgbm";
-    case SgbmMode::kHh: return "hh";
-    case SgbmMode::kSgbm3Way: return "sgbm_3way";
-    case SgbmMode::kHh4: return "hh4";
-  }
-  return "sgbm";
-}
-
-bool parse_sgbm_mode(const std::string& text, SgbmMode& mode) {
-  for (SgbmMode m : {SgbmMode::kSgbm, SgbmMode::kHh, SgbmMode::kSgbm3Way, SgbmMode::kHh4}) {
-    if (text == to_string(m)) {
-      mode = m;
-      return true;
-    }
-  }
-  return false;
-}
-
-void SgbmConfig::validate(const std::string& source) const {
-  auto require = [&](bool ok, const char* field, const char* expected) {
-    if (!ok) throw InputError(source, std::string("sgbm.") + field, expected);
-  };
-  require(min_disparity >= 0 && min_disparity <= 1024, "min_disparity", "expected an integer in [0, 1024] px");
-  require(num_disparities >= 16 && num_disparities <= 1024 && num_disparities % 16 == 0, "num_disparities",
-          "expected a positive multiple of 16 (at most 1024)");
-  require(block_size >= 1 && block_size <= 11 && block_size % 2 == 1, "block_size", "expected an odd integer in [1, 11]");
-  require(p1 <= 0 || p2 <= 0 || p2 > p1, "p2", "expected p2 > p1 (or <= 0 for the default)");
-  require(disp12_max_diff <= 64, "disp12_max_diff", "expected at most 64 px (< 0 disables the check)");
-  require(pre_filter_cap >= 1 && pre_filter_cap <= 63, "pre_filter_cap", "expected an integer in [1, 63]");
-  require(uniqueness_ratio >= 0 && uniqueness_ratio <= 100, "uniqueness_ratio", "expected a percentage in [0, 100]");
-  require(speckle_window_size >= 0, "speckle_window_size", "expected an integer >= 0 (0 disables speckle filtering)");
-  require(speckle_range >= 0 && speckle_range <= 64, "speckle_range", "expected an integer in [0, 64] px");
-  require(roi_margin_px >= 0 && roi_margin_px <= 256, "roi_margin_px", "expected an integer in [0, 256] px");
-}
-
-std::string SgbmConfig::describe() const {
-  char buf[320];
-  std::snprintf(buf, sizeof(buf),
-                "sgbm: mode %s, disparities [%d, %d] px, block %d, P1 %d P2 %d (grey), lr-check %d px, "
-                "prefilter cap %d, uniqueness %d %%, speckle window %d range %d px, ROI margin %d px",
-                to_string(mode).c_str(), min_disparity, max_disparity(), block_size, effective_p1(1),
-                effective_p2(1), disp12_max_diff, pre_filter_cap, uniqueness_ratio, speckle_window_size,
-                speckle_range, roi_margin_px);
-  return buf;
-}
 
 void sgbm_raw_to_px(const cv::Mat& raw_16s, int min_disparity, cv::Mat& disparity_px) {
   CV_Assert(raw_16s.type() == CV_16SC1);

@@ -2,11 +2,8 @@
 
 #include <algorithm>
 #include <cmath>
-#include <cstdio>
 #include <cstdlib>
 #include <limits>
-
-#include "agvslam/core/error.h"
 
 namespace agvslam::stereo {
 
@@ -41,30 +38,6 @@ int32_t range_min(const int32_t* c, int lo, int hi) {
   return mn;
 }
 }  // namespace
-
-void SparseStereoConfig::validate(const std::string& source) const {
-  auto require = [&](bool ok, const char* field, const char* expected) {
-    if (!ok) throw InputError(source, std::string("sparse.") + field, expected);
-  };
-  require(half_window >= 1 && half_window <= 10, "half_window", "expected an integer in [1, 10] px");
-  require(min_disparity >= 0 && min_disparity <= 1024, "min_disparity", "expected an integer in [0, 1024] px");
-  require(num_disparities >= 4 && num_disparities <= 1024, "num_disparities", "expected an integer in [4, 1024]");
-  require(uniqueness_margin >= 0 && uniqueness_margin <= 2, "uniqueness_margin", "expected a number in [0, 2]");
-  require(max_mean_cost > 0 && max_mean_cost <= 255, "max_mean_cost", "expected a number in (0, 255] grey levels");
-  require(max_cost_ratio > 0 && max_cost_ratio <= 10, "max_cost_ratio", "expected a number in (0, 10]");
-  require(min_texture >= 0 && min_texture <= 128, "min_texture", "expected a number in [0, 128] grey levels");
-  require(lr_max_diff_px <= 16, "lr_max_diff_px", "expected at most 16 px (< 0 disables the check)");
-}
-
-std::string SparseStereoConfig::describe() const {
-  char buf[256];
-  std::snprintf(buf, sizeof(buf),
-                "sparse: ZSAD %dx%d, disparities [%d, %d] px, uniqueness margin %.2f, max mean cost %.1f DN and "
-                "%.2f x texture, min texture %.1f DN, lr-check %d px, subpixel %s",
-                2 * half_window + 1, 2 * half_window + 1, min_disparity, max_disparity(), uniqueness_margin,
-                max_mean_cost, max_cost_ratio, min_texture, lr_max_diff_px, subpixel ? "on" : "off");
-  return buf;
-}
 
 const char* to_string(SparseMatchStatus status) {
   switch (status) {

@@ -36,8 +36,9 @@ TEST(DaemonConfig, ShippedVehicleConfigLoadsWithTheStageFiles) {
   // Every section is echoed.
   std::string all;
   for (const auto& line : c.describe()) all += line + "\n";
-  for (const char* what : {"source: v4l2", "camera:", "calibration:", "stages:", "pipeline:", "base_link:",
-                           "covariance", "dds:", "can:", "trajectory:", "log:", "systemd:", "tracking:", "orb:", "sgbm"}) {
+  for (const char* what : {"source: type=v4l2", "camera:", "calibration:", "stages:", "vocabulary:", "map:",
+                           "pipeline:", "base_link:", "covariance:", "dds:", "can:", "trajectory:", "log:", "systemd:",
+                           "tracking:", "orb:", "sgbm:"}) {
     EXPECT_NE(all.find(what), std::string::npos) << what << " missing from\n" << all;
   }
 }

@@ -94,7 +94,7 @@ TEST(CanPublisher, FdNeedsAnFdInterface) {
 TEST(CanConfig, ValidatesAndDescribes) {
   CanConfig c;
   EXPECT_NO_THROW(c.validate("agvslamd.yaml"));
-  EXPECT_NE(c.describe().find("base id 0x300"), std::string::npos) << c.describe();
+  EXPECT_NE(c.describe().find("base_id=0x300, extended_ids=false"), std::string::npos) << c.describe();
   c.base_id = 0x7FC;  // + 8 exceeds 11 bits
   try {
     c.validate("agvslamd.yaml");

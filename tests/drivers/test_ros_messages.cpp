@@ -138,7 +138,9 @@ TEST(DdsConfig, ValidatesDescribesAndBuildsCycloneXml) {
   EXPECT_EQ(c.pose_topic(), "rt/agvslam/pose");
   EXPECT_EQ(c.odom_topic(), "rt/agvslam/odom");
   EXPECT_EQ(c.status_topic(), "rt/agvslam/status");
-  EXPECT_NE(c.describe().find("reliable keep-last 10 volatile"), std::string::npos) << c.describe();
+  EXPECT_NE(c.describe().find("history_depth=10"), std::string::npos) << c.describe();
+  EXPECT_NE(c.describe().find("topics rt/agvslam/pose rt/agvslam/odom rt/agvslam/status"), std::string::npos)
+      << c.describe();
   EXPECT_EQ(cyclone_config_xml(c), "");
   c.network_interface = "lo";
   EXPECT_NE(cyclone_config_xml(c).find("<NetworkInterface name=\"lo\"/>"), std::string::npos);

@@ -23,12 +23,12 @@ std::string field_of_error(const v4l2::V4l2CameraConfig& c) {
 TEST(V4l2CameraConfig, DefaultsAreValidAndDescribed) {
   v4l2::V4l2CameraConfig c;
   EXPECT_NO_THROW(c.validate("defaults"));
-  EXPECT_NE(c.describe().find("/dev/video0"), std::string::npos);
+  EXPECT_NE(c.describe().find("left_device=/dev/video0"), std::string::npos) << c.describe();
   EXPECT_EQ(c.devices().size(), 2u);
   c.side_by_side = true;
   EXPECT_EQ(c.devices().size(), 1u);
   EXPECT_EQ(c.device_width(), 2 * c.width);
-  EXPECT_NE(c.describe().find("side-by-side"), std::string::npos);
+  EXPECT_NE(c.describe().find("side_by_side=true"), std::string::npos) << c.describe();
 }
 
 TEST(V4l2CameraConfig, ValidateNamesTheField) {

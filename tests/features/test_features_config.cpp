@@ -66,7 +66,7 @@ TEST(FeaturesConfig, ShippedParamsFileLoadsAndMatchesTheDefaults) {
   EXPECT_DOUBLE_EQ(c.stereo_matching.outlier_factor, d.stereo_matching.outlier_factor);
   const auto lines = c.describe();
   ASSERT_EQ(lines.size(), 2u);
-  EXPECT_NE(lines[0].find("1200 features"), std::string::npos) << lines[0];
+  EXPECT_NE(lines[0].find("n_features=1200 per image"), std::string::npos) << lines[0];
   EXPECT_NE(lines[0].find("388 269"), std::string::npos) << lines[0];
   EXPECT_NE(lines[1].find("block_matching"), std::string::npos) << lines[1];
 }

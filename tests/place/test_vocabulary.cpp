@@ -149,11 +149,22 @@ TEST(VocabularyTraining, RejectsBadSettingsAndEmptyInput) {
   try {
     cfg.validate("cli");
   } catch (const InputError& e) {
-    EXPECT_EQ(e.where(), "branching");
+    EXPECT_EQ(e.where(), "vocabulary_training.branching");
   }
   cfg = {};
   cfg.levels = 0;
   EXPECT_THROW(cfg.validate("cli"), InputError);
+  cfg = {};
+  cfg.branching = 64;
+  cfg.levels = 6;  // 2^36 words: more than 32-bit ids can number
+  try {
+    cfg.validate("cli");
+    ADD_FAILURE() << "k^L above 4e9 must be rejected";
+  } catch (const InputError& e) {
+    EXPECT_EQ(e.where(), "vocabulary_training.levels");
+  }
+  cfg.levels = 5;  // 2^30 words
+  EXPECT_NO_THROW(cfg.validate("cli"));
   cfg = {};
   cfg.threads = 0;
   EXPECT_THROW(cfg.validate("cli"), InputError);

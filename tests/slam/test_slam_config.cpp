@@ -49,8 +49,22 @@ TEST(SlamConfig, OutOfRangeNamesTheFieldAndTheRange) {
     FAIL() << "expected InputError";
   } catch (const InputError& e) {
     EXPECT_EQ(e.where(), "optimizer.motion_robust_rounds");
+    EXPECT_NE(std::string(e.what()).find("expected at most motion_rounds, got 7"), std::string::npos) << e.what();
   }
-  EXPECT_THROW(load_slam_config(write_temp("d.yaml", "mapping:\n  keyframe_redundancy: two\n")), InputError);
+  try {
+    load_slam_config(write_temp("e.yaml", "mapping:\n  max_keyframes: 5\n"));
+    FAIL() << "expected InputError";
+  } catch (const InputError& e) {
+    EXPECT_EQ(e.where(), "mapping.max_keyframes");
+    EXPECT_NE(std::string(e.what()).find("expected an integer >= 10 or 0 (0: no cap), got 5"), std::string::npos)
+        << e.what();
+  }
+  try {
+    load_slam_config(write_temp("d.yaml", "mapping:\n  keyframe_redundancy: two\n"));
+    FAIL() << "expected InputError";
+  } catch (const InputError& e) {
+    EXPECT_EQ(e.where(), "mapping.keyframe_redundancy");
+  }
   EXPECT_THROW(load_slam_config("/nonexistent/slam.yaml"), InputError);
 }
 

@@ -18,7 +18,8 @@
 //
 // load_daemon_config() reads the file and every file it names (stage params, calibration, the dataset's index)
 // and validates everything: a bad value is an InputError naming the file, the field ("source.rate") and what was
-// expected, before anything is opened or started.
+// expected, before anything is opened or started. Each section's keys, ranges, units and echo are one table in
+// src/daemon/daemon_config.cpp (camera, dds and can: the drivers' tables).
 
 #include <cstdint>
 #include <optional>

@@ -1,6 +1,7 @@
 #pragma once
 // The feature stage's configuration (params/features.yaml): sections `orb` (OrbExtractorConfig) and
-// `stereo_matching` (StereoMatcherConfig).
+// `stereo_matching` (StereoMatcherConfig). Each section's keys, ranges, units and echo are one table in
+// src/features/features_config.cpp (agvslam/core/param_table.h).
 
 #include <string>
 #include <vector>

@@ -43,8 +43,10 @@ struct OrbExtractorConfig {
   // Features wanted on each level (n_levels values summing to n_features).
   std::vector<int> features_per_level() const;
 
-  void validate(const std::string& source) const;  // InputError(source, "orb.<field>", expected) when out of range
-  std::string describe() const;                     // one line for the start-up echo
+  // InputError(source, "orb.<field>", expected) when out of range; one line for the start-up echo. Both from the
+  // table of params/features.yaml's settings (features_config.cpp).
+  void validate(const std::string& source) const;
+  std::string describe() const;
 };
 
 // Features of one image. Coordinates are level-0 pixels of the rectified image.

@@ -45,6 +45,8 @@ struct StereoMatcherConfig {
   double min_curvature = 1.0;      // block matching: SAD rise 1 px off the minimum, per window pixel (grey levels)
   double outlier_factor = 2.1;     // reject SAD > factor * median SAD of the image's matches (ORB-SLAM2 1.5 * 1.4)
 
+  // InputError(source, "stereo_matching.<field>", expected) when out of range; both from the table of
+  // params/features.yaml's settings (features_config.cpp).
   void validate(const std::string& source) const;
   std::string describe() const;
 };

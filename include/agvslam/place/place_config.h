@@ -1,5 +1,6 @@
 #pragma once
-// The place module's configuration (params/place.yaml, section `vocabulary`).
+// The place module's configuration (params/place.yaml, section `vocabulary`); its table is in
+// src/place/place_config.cpp (agvslam/core/param_table.h).
 
 #include <string>
 

@@ -64,7 +64,8 @@ struct VocabularyTrainingConfig {
   uint64_t seed = 1;         // k-means++ seeding (per node, derived from this and the node)
   int threads = 1;           // the result does not depend on it
 
-  // InputError(source, "<field>", expected) for an out-of-range value (k in 2..64, L in 1..8, k^L <= 2^32 ...).
+  // InputError(source, "vocabulary_training.<field>", expected) for an out-of-range value (k in 2..64, L in 1..8,
+  // k^L <= 4e9 ...); the table in vocabulary.cpp.
   void validate(const std::string& source) const;
   std::string describe() const;
 };

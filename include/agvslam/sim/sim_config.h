@@ -7,7 +7,8 @@
 //   rendering: max_depth_m, antialias_edges, haze_distance_m, png_compression
 //   vehicle:   vibration_deg
 //
-// fy <= 0 means fy = fx; cx, cy < 0 mean the image centre ((width - 1) / 2, (height - 1) / 2).
+// fy <= 0 means fy = fx; cx, cy < 0 mean the image centre ((width - 1) / 2, (height - 1) / 2). Each section's
+// keys, ranges, units and echo are one table in src/sim/sim_config.cpp (agvslam/core/param_table.h).
 
 #include <string>
 #include <vector>

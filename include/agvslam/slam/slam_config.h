@@ -1,7 +1,8 @@
 #pragma once
 // Settings of the stereo SLAM back end (tracking, local mapping, optimiser), one struct per stage, loaded from
 // params/slam.yaml. Defaults are ORB-SLAM2's stereo values (paper 004 III.C uses ORB-SLAM2's framework); every
-// value is explained in params/slam.yaml.
+// value is explained in params/slam.yaml. Each section's keys, ranges, units and echo are one table in
+// src/slam/slam_config.cpp (agvslam/core/param_table.h).
 
 #include <string>
 #include <vector>
@@ -57,7 +58,7 @@ struct LocalMappingConfig {
   int queue_capacity = 3;                // keyframes waiting for the local mapper (tracking skips a keyframe when full)
   int triangulation_neighbours = 10;     // covisible keyframes searched for new map points
   bool triangulation_bow = false;        // true: candidate pairs from the vocabulary's direct index (ORB-SLAM2);
-                                         // false: epipolar-segment search (KITTI 06 0-50: ATE 0.047 m vs 0.059 m)
+                                         // false: epipolar-segment search (more accurate: params/slam.yaml)
   int fusion_neighbours = 10;            // first-order neighbours for duplicate fusion (+ 5 second-order each)
   int fusion_second_order = 5;
   double fusion_radius = 3.0;            // search window factor (x scale) for duplicate fusion

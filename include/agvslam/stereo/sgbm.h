@@ -36,7 +36,8 @@ struct SgbmConfig {
   int effective_p2(int channels) const { return p2 > 0 ? p2 : 32 * channels * block_size * block_size; }
   int max_disparity() const { return min_disparity + num_disparities - 1; }
 
-  // Throws InputError(source, "sgbm.<field>", expectation) for an invalid value.
+  // Throws InputError(source, "sgbm.<field>", expectation) for an invalid value. Both from the table of
+  // params/stereo.yaml's settings (stereo_config.cpp).
   void validate(const std::string& source) const;
   std::string describe() const;
 };

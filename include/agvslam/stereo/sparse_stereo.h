@@ -23,6 +23,8 @@ struct SparseStereoConfig {
   bool subpixel = true;              // parabola fit through the costs at d-1, d, d+1
 
   int max_disparity() const { return min_disparity + num_disparities - 1; }
+  // InputError(source, "sparse.<field>", expectation) for an invalid value; both from the table of
+  // params/stereo.yaml's settings (stereo_config.cpp).
   void validate(const std::string& source) const;
   std::string describe() const;
 };

@@ -1,5 +1,6 @@
 #pragma once
-// The stereo module's configuration (params/stereo.yaml): sections `sgbm` and `sparse`.
+// The stereo module's configuration (params/stereo.yaml): sections `sgbm` and `sparse`. Each section's keys,
+// ranges, units and echo are one table in src/stereo/stereo_config.cpp (agvslam/core/param_table.h).
 
 #include <string>
 #include <vector>

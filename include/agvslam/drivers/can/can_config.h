@@ -4,6 +4,7 @@
 #include <cstdint>
 #include <string>
 
+#include "agvslam/core/param_table.h"
 #include "agvslam/drivers/can/pose_frames.h"
 
 namespace agvslam::drivers::can {
@@ -30,5 +31,8 @@ struct CanConfig {
   void validate(const std::string& source) const;
   std::string describe() const;
 };
+
+// The settings of the `can` section (every field above, named alike; base_id as 0x300 or 768).
+const params::Table<CanConfig>& can_params();
 
 }  // namespace agvslam::drivers::can

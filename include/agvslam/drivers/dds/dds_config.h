@@ -3,6 +3,8 @@
 
 #include <string>
 
+#include "agvslam/core/param_table.h"
+
 namespace agvslam::drivers::dds {
 
 struct DdsConfig {
@@ -42,5 +44,8 @@ struct DdsConfig {
   std::string odom_topic() const { return "rt/" + topic_namespace + "/odom"; }
   std::string status_topic() const { return "rt/" + topic_namespace + "/status"; }
 };
+
+// The settings of the `dds` section (every field above, named alike).
+const params::Table<DdsConfig>& dds_params();
 
 }  // namespace agvslam::drivers::dds

@@ -13,6 +13,8 @@
 #include <string>
 #include <vector>
 
+#include "agvslam/core/param_table.h"
+
 namespace agvslam::drivers::v4l2 {
 
 // What the camera is asked to send. Every format ends up as 8-bit grey (CV_8UC1):
@@ -53,8 +55,12 @@ struct V4l2CameraConfig {
   int device_width() const { return side_by_side ? 2 * width : width; }
 };
 
-// Reads section `section` (default "camera") of a params YAML file with the keys named like the fields above
-// (pixel_format as grey|yuyv|mjpeg); an unknown key or a bad value is an InputError naming "section.key".
+// The settings of section `camera` (the daemon's file and params/camera_v4l2.yaml): keys named like the fields
+// above, pixel_format as grey|yuyv|mjpeg.
+const params::Table<V4l2CameraConfig>& camera_params();
+
+// Reads section `section` (default "camera") of a params YAML file; a missing section, an unknown key or a bad value
+// is an InputError naming "section.key". Other sections of the file are not looked at.
 V4l2CameraConfig load_v4l2_camera_config(const std::string& path, const std::string& section = "camera");
 
 }  // namespace agvslam::drivers::v4l2
