@@ -634,7 +634,7 @@ int run(const Options& o) {
       if (result.band_driving_seeds > 0) {
         jf["band_driving"] = {{"seeds", result.band_driving_seeds}, {"dynamic", result.band_driving_dynamic}};
       }
-      jf["unconfirmed_objects"] = result.unconfirmed_objects;  // found, not reported (detector.confirm_min_box_iou)
+      jf["unconfirmed_objects"] = result.unconfirmed_objects;  // found, not reported (confirm.min_box_iou)
       unconfirmed_total += result.unconfirmed_objects;
       jf["dynamic_points"] = result.dynamic_point_count();
       {
