@@ -12,6 +12,7 @@ namespace agvslam::dynamic {
 namespace {
 using Clock = std::chrono::steady_clock;
 double ms_since(Clock::time_point t0) { return std::chrono::duration<double, std::milli>(Clock::now() - t0).count(); }
+}  // namespace
 
 PointTracksConfig point_tracks_config(const DynamicDetectorConfig& c) {
   PointTracksConfig p;
@@ -54,7 +55,6 @@ RoiOutlinerContext roi_outliner_context(const DynamicDetectorConfig& c) {
   r.split_side_by_side = c.detector.split_side_by_side;
   return r;
 }
-}  // namespace
 
 void DetectorOptions::validate(const std::string& source) const {
   auto require = [&](bool ok, const char* field, const char* expected) {
@@ -114,7 +114,6 @@ DynamicDetector::DynamicDetector(const StereoCalibration& calibration, const Dyn
                                  const stereo::StereoConfig& stereo_config)
     : calibration_(calibration),
       config_(config),
-      stereo_config_(stereo_config),
       tracks_(point_tracks_config(config), calibration, stereo_config.sparse),
       densifier_(config.densify, densifier_context(config), calibration),
       objects_(config.objects, config.regions.mask_mode == MaskMode::kDisparity),
@@ -122,7 +121,7 @@ DynamicDetector::DynamicDetector(const StereoCalibration& calibration, const Dyn
       outliner_(config.roi, roi_outliner_context(config), calibration, stereo_config.sgbm),
       confirmer_(config.confirm) {
   config_.validate("DynamicDetectorConfig");
-  stereo_config_.validate("StereoConfig");
+  stereo_config.validate("StereoConfig");
   if (config_.detector.use_depth_test && !(calibration_.bf() > 0)) {
     throw InputError("StereoCalibration", "baseline_m", "expected a positive focal length and baseline for the depth test");
   }

@@ -167,15 +167,6 @@ TEST(DynamicDetector, ResetAndSizeChangeStartOver) {
   EXPECT_EQ(r.mask.image.size(), cv::Size(376, 240));
 }
 
-// A 0.5 x 0.9 m box 5 m away, a little left of and above the optical axis (~46 x 83 px).
-CorridorScene small_far_box_scene() {
-  CorridorScene scene;
-  scene.box.origin = {-0.4, -0.4, 5.0};
-  scene.box.width_m = 0.5;
-  scene.box.height_m = 0.9;
-  return scene;
-}
-
 TEST(DynamicDetector, SmallFarObjectIsFoundThroughDensification) {
   // A 0.5 x 0.9 m box 5 m away (~46 x 83 px) with 120 quadtree points (~55 px apart): two or three points
   // fall on it, fewer than the five a ROI needs; the tracks added around them make it a ROI.
@@ -410,22 +401,6 @@ TEST(DynamicDetector, ANearObjectFarOffTheEgoMotionIsReportedAtOnce) {
     EXPECT_GE(waits[1].unconfirmed_objects, 1);
     EXPECT_GE(iou(waits[2].mask.image, gt[2]), 0.7) << summary(waits[2]);
   }
-}
-
-TEST(DynamicDetector, AFragmentLiesHalfInsideAnotherObjectsBox) {
-  // confirm.near_*: an arm outlined apart from its person is not reported at once.
-  const std::vector<cv::Rect> boxes = {cv::Rect(),                   // instance 0: none
-                                       cv::Rect(0, 0, 276, 428),     // a person
-                                       cv::Rect(101, 282, 52, 99),   // an arm inside its box
-                                       cv::Rect(250, 100, 52, 100),  // half of it inside (26 of 52 columns)
-                                       cv::Rect(251, 0, 52, 90),     // just under half inside (25 columns)
-                                       cv::Rect(400, 0, 100, 300)};  // a person apart
-  EXPECT_FALSE(lies_half_inside_another(boxes, 1));  // the arm inside it does not make the person a fragment
-  EXPECT_TRUE(lies_half_inside_another(boxes, 2));
-  EXPECT_TRUE(lies_half_inside_another(boxes, 3));
-  EXPECT_FALSE(lies_half_inside_another(boxes, 4));
-  EXPECT_FALSE(lies_half_inside_another(boxes, 5));
-  EXPECT_FALSE(lies_half_inside_another({cv::Rect(0, 0, 10, 10)}, 0));
 }
 
 TEST(DynamicDetector, ACoastedObjectMustShowItsMotion) {
@@ -791,61 +766,3 @@ TEST(DynamicDetector, AnOutlineOffTheMultiFrameReferenceMovesTogether) {
 }  // namespace
 }  // namespace agvslam::dynamic
 
-TEST(DynamicDetector, AnOutlineThatFloodedASurfaceIsCutToTheObjectsLastPixelsMoved) {
-  // objects.growth_max_ratio: the object (a 40 x 100 px block) was at (200, 100) in the previous frame and moved
-  // by (+6, -2); this frame's outline, in a ROI whose top-left is (150, 60), holds it and a 120 x 60 px slab of
-  // racking beside and above it at its depth. Cut to the last pixels moved and grown by (4, 8), only the block and
-  // the margin around it remain.
-  cv::Mat last = cv::Mat::zeros(100, 40, CV_8UC1);
-  last.setTo(255);
-  const cv::Point last_origin(200, 100), shift(6, -2), roi_origin(150, 60);
-  cv::Mat outline = cv::Mat::zeros(200, 200, CV_8UC1);
-  const cv::Rect object_now = cv::Rect(last_origin + shift - roi_origin, last.size());
-  outline(object_now).setTo(255);
-  const cv::Rect slab(0, 0, 120, 60);  // ROI coordinates: left of and above the object, touching it
-  outline(slab).setTo(255);
-  ASSERT_GT((slab & object_now).area(), 0);
-  const int before = cv::countNonZero(outline);
-  const int kept = agvslam::dynamic::cut_to_moved_pixels(outline, roi_origin, last, last_origin, shift, cv::Size(4, 8));
-  EXPECT_EQ(kept, cv::countNonZero(outline));
-  EXPECT_LT(kept, before);
-  // The object is kept whole, nothing farther than the margin from it is.
-  EXPECT_EQ(cv::countNonZero(outline(object_now)), object_now.area());
-  const cv::Rect allowed(object_now.x - 4, object_now.y - 8, object_now.width + 8, object_now.height + 16);
-  EXPECT_EQ(kept, cv::countNonZero(outline(allowed & cv::Rect(0, 0, outline.cols, outline.rows))));
-  EXPECT_EQ(cv::countNonZero(outline(cv::Rect(0, 0, allowed.x, outline.rows))), 0);
-  // Last pixels that moved out of the ROI altogether leave nothing.
-  cv::Mat far_outline = cv::Mat::zeros(50, 50, CV_8UC1);
-  far_outline.setTo(255);
-  EXPECT_EQ(agvslam::dynamic::cut_to_moved_pixels(far_outline, cv::Point(600, 400), last, last_origin, shift, cv::Size(4, 8)), 0);
-}
-
-TEST(DynamicDetector, ACarvedOutlineLosesTheCellsOfItsStaticTracks) {
-  // static_carve.min_tracks: a ROI at (100, 50) whose outline holds a person (a 40 x 120 px block, dynamic points
-  // down its middle) and, right of it, a 60 x 120 px rack face at its depth with two clearly static tracks. The
-  // Voronoi split between the two sets of points puts the boundary halfway between them: the person stays whole,
-  // the rack face beyond the halfway line goes.
-  const cv::Point roi_origin(100, 50);
-  cv::Mat outline = cv::Mat::zeros(140, 120, CV_8UC1);
-  const cv::Rect person(10, 10, 40, 120), rack(50, 10, 60, 120);  // ROI coordinates, side by side
-  outline(person).setTo(255);
-  outline(rack).setTo(255);
-  std::vector<cv::Point2f> object_px, static_px;
-  for (int y = 30; y <= 110; y += 20) object_px.emplace_back(static_cast<float>(roi_origin.x + 30), static_cast<float>(roi_origin.y + y));
-  static_px.emplace_back(static_cast<float>(roi_origin.x + 90), static_cast<float>(roi_origin.y + 40));
-  static_px.emplace_back(static_cast<float>(roi_origin.x + 90), static_cast<float>(roi_origin.y + 100));
-  const int kept = agvslam::dynamic::carve_static_cells(outline, roi_origin, object_px, static_px);
-  EXPECT_EQ(kept, cv::countNonZero(outline));
-  EXPECT_EQ(cv::countNonZero(outline(person)), person.area());
-  // Columns x >= 80 (ROI) lie within 10 columns and 30 rows of a static track (squared distance <= 1000) and 50
-  // columns from the object's points (>= 2500): all carved. Columns 50-54 lie 20-24 columns and <= 20 rows from an
-  // object point (<= 976) and >= 36 columns from the static tracks (>= 1296): all kept.
-  EXPECT_EQ(cv::countNonZero(outline(cv::Rect(80, 0, outline.cols - 80, outline.rows))), 0);
-  EXPECT_EQ(cv::countNonZero(outline(cv::Rect(50, 10, 5, 120))), 5 * 120);
-  EXPECT_LT(kept, person.area() + rack.area() / 2);
-  // Without static tracks (or without object points) nothing is carved.
-  cv::Mat untouched = cv::Mat::zeros(140, 120, CV_8UC1);
-  untouched(rack).setTo(255);
-  EXPECT_EQ(agvslam::dynamic::carve_static_cells(untouched, roi_origin, object_px, {}), rack.area());
-  EXPECT_EQ(agvslam::dynamic::carve_static_cells(untouched, roi_origin, {}, static_px), rack.area());
-}

@@ -64,7 +64,6 @@ struct DensifierContext {
 class Densifier {
  public:
   Densifier(const DensifyOptions& options, const DensifierContext& context, const StereoCalibration& calibration);
-  const DensifyOptions& options() const { return options_; }
 
   // Adds the densified points of `frame` (prev_left / prev_right: the previous frame) to result.points and to the
   // tracks' histories; the dynamic ones to `dynamic`. The seeds are `dynamic` on entry.

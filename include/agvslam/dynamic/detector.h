@@ -112,6 +112,11 @@ struct DynamicDetectorConfig {
 // wrong type or out of range.
 DynamicDetectorConfig load_dynamic_config(const std::string& path);
 
+// What each part reads of the configuration beside its own section.
+PointTracksConfig point_tracks_config(const DynamicDetectorConfig& config);
+DensifierContext densifier_context(const DynamicDetectorConfig& config);
+RoiOutlinerContext roi_outliner_context(const DynamicDetectorConfig& config);
+
 class DynamicDetector {
  public:
   // calibration: of the rectified frames that detect() receives. Validates both configurations
@@ -120,7 +125,6 @@ class DynamicDetector {
                            const stereo::StereoConfig& stereo_config = {});
 
   const DynamicDetectorConfig& config() const { return config_; }
-  const stereo::StereoConfig& stereo_config() const { return stereo_config_; }
 
   // Runs the pipeline on the next frame (CV_8UC1 left/right of the calibration's size). The previous frame is
   // kept internally.
@@ -152,7 +156,6 @@ class DynamicDetector {
 
   StereoCalibration calibration_;
   DynamicDetectorConfig config_;
-  stereo::StereoConfig stereo_config_;
   PointTracks tracks_;
   Densifier densifier_;
   ObjectTracker objects_;

@@ -42,7 +42,6 @@ class LeftBand {
   // (outline.min_pixels).
   LeftBand(const BandSegmenterConfig& band, const BandCarryOptions& carry, int min_region_pixels,
            const StereoCalibration& calibration);
-  const BandCarryOptions& carry_options() const { return carry_; }
   // The band segmenter is enabled (band.enabled): driving seeds and segmented regions.
   bool enabled() const { return band_config_.enabled; }
 

@@ -42,7 +42,6 @@ bool lies_half_inside_another(const std::vector<cv::Rect>& boxes, std::size_t k)
 class ObjectConfirmer {
  public:
   explicit ObjectConfirmer(const ConfirmOptions& options = {});
-  const ConfirmOptions& options() const { return options_; }
   // Forgets the previous frame's boxes.
   void reset() { prev_boxes_.clear(); }
 

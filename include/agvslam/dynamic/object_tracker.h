@@ -74,7 +74,6 @@ class ObjectTracker {
  public:
   // disparity_outlines: regions.mask_mode is disparity (the other modes have no objects over frames).
   ObjectTracker(const ObjectTrackerOptions& options, bool disparity_outlines);
-  const ObjectTrackerOptions& options() const { return options_; }
   // Objects are followed: enabled, with disparity outlines.
   bool enabled() const { return options_.enabled && disparity_outlines_; }
   // Forgets every object (ids keep counting).

@@ -98,7 +98,6 @@ class RoiOutliner {
  public:
   RoiOutliner(const RoiOptions& options, const RoiOutlinerContext& context, const StereoCalibration& calibration,
               const stereo::SgbmConfig& sgbm);
-  const RoiOptions& options() const { return options_; }
 
   // Starts a frame (forgets the frame's static offset median).
   void begin_frame() { static_offset_median_px_ = -1; }
