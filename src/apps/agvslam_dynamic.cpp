@@ -717,7 +717,7 @@ void add_detected_frame(const Options& o, std::size_t i, std::size_t first, cons
   if (result.band_driving_seeds > 0) {
     jf["band_driving"] = {{"seeds", result.band_driving_seeds}, {"dynamic", result.band_driving_dynamic}};
   }
-  jf["unconfirmed_objects"] = result.unconfirmed_objects;  // found, not reported (detector.confirm_min_box_iou)
+  jf["unconfirmed_objects"] = result.unconfirmed_objects;  // found, not reported (confirm.min_box_iou)
   totals.unconfirmed += result.unconfirmed_objects;
   jf["dynamic_points"] = result.dynamic_point_count();
   add_points_json(o, result, truth.mask, jf);

@@ -177,27 +177,22 @@ bool BandSegmenter::driving_seeds(const cv::Mat& cur_left, const std::vector<cv:
   return true;
 }
 
-void BandSegmenter::segment(const cv::Mat& cur_left, const cv::Mat& prev_left, const std::vector<cv::Mat>& cur_pyramid,
-                            const std::vector<cv::Mat>& prev_pyramid, LkTracker& tracker, int lk_levels,
-                            const PinholeCamera& camera, double bf_px_m, const SE3d& T_cur_prev,
-                            const cv::Mat& masked, const std::vector<cv::Point2f>& track_prev,
-                            const std::vector<cv::Point2f>& track_cur, BandResult& out) {
-  CV_Assert(track_prev.size() == track_cur.size());
-  out = BandResult{};
+namespace {
+// The previous image at (x, y) by bilinear interpolation; -1 outside it.
+float sample_previous(const cv::Mat& prev_left, double x, double y) {
+  const double max_x = prev_left.cols - 1, max_y = prev_left.rows - 1;
+  return (x >= 0 && y >= 0 && x < max_x && y < max_y) ? static_cast<float>(bilinear_u8(prev_left, x, y)) : -1.0f;
+}
+}  // namespace
+
+void BandSegmenter::collect_seeds(const cv::Mat& cur_left, const std::vector<cv::Mat>& cur_pyramid,
+                                  const std::vector<cv::Mat>& prev_pyramid, LkTracker& tracker, int lk_levels,
+                                  const PinholeCamera& camera, double bf_px_m, const SE3d& T_cur_prev,
+                                  const cv::Mat& masked, const std::vector<cv::Point2f>& track_prev,
+                                  const std::vector<cv::Point2f>& track_cur, BandResult& out) {
   const BandSegmenterConfig& c = config_;
-  if (!c.enabled || cur_left.empty() || prev_left.empty()) return;
-  CV_Assert(cur_left.type() == CV_8UC1 && prev_left.type() == CV_8UC1 && cur_left.size() == prev_left.size());
-  CV_Assert(masked.empty() || (masked.type() == CV_8UC1 && masked.size() == cur_left.size()));
   const int w = cur_left.cols, h = cur_left.rows;
   const int strip = std::min(c.strip_px, w);
-  if (strip <= 2 * c.border_px || h <= 2 * c.border_px) return;
-
-  // The test is sharp only where a static point's previous position hardly depends on its depth.
-  const double longest = longest_static_segment(camera, bf_px_m, T_cur_prev, cur_left.size());
-  out.static_segment_px = longest;
-  if (!(longest <= c.max_static_segment_px)) return;
-  out.ran = true;
-
   // The caller's tracks in the strip are tested as they are; FAST corners (the strongest per cell, none on masked
   // pixels) of the cells that hold no track are tracked back into the previous image and tested.
   auto masked_at = [&](const cv::Point2f& p) {
@@ -222,43 +217,44 @@ void BandSegmenter::segment(const cv::Mat& cur_left, const cv::Mat& prev_left, c
       if (ok_[i]) test(corners_[i], back_[i]);
     }
   }
-  if (static_cast<int>(out.seeds.size()) < c.min_seeds) return;
   if (static_cast<int>(out.seeds.size()) > c.max_seeds) {
     std::nth_element(out.seeds.begin(), out.seeds.begin() + c.max_seeds, out.seeds.end(),
                      [](const BandSeed& a, const BandSeed& b) { return a.offset_px > b.offset_px; });
     out.seeds.resize(static_cast<std::size_t>(c.max_seeds));
   }
+}
 
-  // The area searched: the strip (and the closing's reach beyond it) over the rows the seeds' motions reach.
+cv::Rect BandSegmenter::search_area(const std::vector<BandSeed>& seeds, cv::Size image) {
+  // The strip (and the closing's reach beyond it) over the rows the seeds' motions reach.
+  const BandSegmenterConfig& c = config_;
+  const int w = image.width, h = image.height;
   float seed_y0 = static_cast<float>(h), seed_y1 = 0;
-  for (const BandSeed& s : out.seeds) {
+  for (const BandSeed& s : seeds) {
     seed_y0 = std::min(seed_y0, s.cur_px.y);
     seed_y1 = std::max(seed_y1, s.cur_px.y);
   }
   const int margin = c.reach_px + c.close_px;
   const int y0 = std::max(0, static_cast<int>(seed_y0) - margin);
   const int y1 = std::min(h, static_cast<int>(seed_y1) + 1 + margin);
-  const cv::Rect area(0, y0, std::min(w, strip + c.close_px), y1 - y0);
-  // The seeds' motions.
-  const std::size_t n_seeds = out.seeds.size();
-  std::vector<cv::Point2f> flows;
-  std::vector<int> flow_of(n_seeds, -1);
-  for (std::size_t j = 0; j < n_seeds; ++j) {
-    const cv::Point2f f = out.seeds[j].prev_px - out.seeds[j].cur_px;
+  // The seeds' motions, each distinct one (to a quarter pixel) once.
+  flows_.clear();
+  flow_of_.assign(seeds.size(), -1);
+  for (std::size_t j = 0; j < seeds.size(); ++j) {
+    const cv::Point2f f = seeds[j].prev_px - seeds[j].cur_px;
     const cv::Point2f q(std::round(4.0f * f.x) / 4.0f, std::round(4.0f * f.y) / 4.0f);
-    auto it = std::find(flows.begin(), flows.end(), q);
-    flow_of[j] = static_cast<int>(it - flows.begin());
-    if (it == flows.end()) flows.push_back(q);
+    auto it = std::find(flows_.begin(), flows_.end(), q);
+    flow_of_[j] = static_cast<int>(it - flows_.begin());
+    if (it == flows_.end()) flows_.push_back(q);
   }
-  const StaticWarp warp(camera, bf_px_m, T_cur_prev);
-  const double max_x = w - 1, max_y = h - 1;
-  auto sample = [&](double x, double y) {
-    return (x >= 0 && y >= 0 && x < max_x && y < max_y) ? static_cast<float>(bilinear_u8(prev_left, x, y)) : -1.0f;
-  };
-  diff_.create(area.size(), CV_32F);
+  return cv::Rect(0, y0, std::min(w, std::min(c.strip_px, w) + c.close_px), y1 - y0);
+}
 
-  // The static hypothesis: the least error over the segment's samples.
-  // (A segment shorter than a step is one sample: the camera stood or turned on the spot.)
+void BandSegmenter::static_hypothesis(const cv::Mat& cur_left, const cv::Mat& prev_left, const PinholeCamera& camera,
+                                      double bf_px_m, const SE3d& T_cur_prev, const cv::Rect& area, double longest) {
+  // The least error over the segment's samples. (A segment shorter than a step is one sample: the camera stood or
+  // turned on the spot.)
+  const BandSegmenterConfig& c = config_;
+  const StaticWarp warp(camera, bf_px_m, T_cur_prev);
   const int samples = longest < c.segment_step_px ? 1 : std::clamp(static_cast<int>(std::ceil(longest / c.segment_step_px)) + 1, 2, 64);
   static_error_.create(area.size(), CV_32F);
   static_error_.setTo(kInvalid);
@@ -271,7 +267,7 @@ void BandSegmenter::segment(const cv::Mat& cur_left, const cv::Mat& prev_left, c
         double pu, pv;
         float v = kInvalid;
         if (warp.at(x + area.x, y + area.y, d, pu, pv)) {
-          const float prev = sample(pu, pv);
+          const float prev = sample_previous(prev_left, pu, pv);
           if (prev >= 0) v = std::abs(static_cast<float>(cur[x]) - prev);
         }
         dst[x] = v;
@@ -280,22 +276,25 @@ void BandSegmenter::segment(const cv::Mat& cur_left, const cv::Mat& prev_left, c
     cv::blur(diff_, blurred_, cv::Size(5, 5), cv::Point(-1, -1), cv::BORDER_REPLICATE);
     cv::min(static_error_, blurred_, static_error_);
   }
+}
 
-  // The object hypotheses: the seeds' own image motions (seeds of one mover share theirs: each distinct motion, to
-  // a quarter pixel, is one error image), each within reach_px of its seeds.
-  seed_error_.resize(flows.size());
-  for (std::size_t j = 0; j < flows.size(); ++j) {
-    const cv::Point2f f = flows[j];
-    float fx0 = static_cast<float>(w), fy0 = static_cast<float>(h), fx1 = 0, fy1 = 0;
-    for (std::size_t k = 0; k < n_seeds; ++k) {
-      if (flow_of[k] != static_cast<int>(j)) continue;
-      fx0 = std::min(fx0, out.seeds[k].cur_px.x);
-      fy0 = std::min(fy0, out.seeds[k].cur_px.y);
-      fx1 = std::max(fx1, out.seeds[k].cur_px.x);
-      fy1 = std::max(fy1, out.seeds[k].cur_px.y);
+void BandSegmenter::seed_hypotheses(const cv::Mat& cur_left, const cv::Mat& prev_left, const cv::Rect& area,
+                                    const std::vector<BandSeed>& seeds) {
+  // Each distinct seed motion's error image, within reach_px of its seeds.
+  const int reach = config_.reach_px;
+  seed_error_.resize(flows_.size());
+  for (std::size_t j = 0; j < flows_.size(); ++j) {
+    const cv::Point2f f = flows_[j];
+    float fx0 = static_cast<float>(cur_left.cols), fy0 = static_cast<float>(cur_left.rows), fx1 = 0, fy1 = 0;
+    for (std::size_t k = 0; k < seeds.size(); ++k) {
+      if (flow_of_[k] != static_cast<int>(j)) continue;
+      fx0 = std::min(fx0, seeds[k].cur_px.x);
+      fy0 = std::min(fy0, seeds[k].cur_px.y);
+      fx1 = std::max(fx1, seeds[k].cur_px.x);
+      fy1 = std::max(fy1, seeds[k].cur_px.y);
     }
-    const cv::Rect box = cv::Rect(cv::Point(static_cast<int>(fx0) - c.reach_px, static_cast<int>(fy0) - c.reach_px),
-                                  cv::Point(static_cast<int>(fx1) + c.reach_px + 1, static_cast<int>(fy1) + c.reach_px + 1)) & area;
+    const cv::Rect box = cv::Rect(cv::Point(static_cast<int>(fx0) - reach, static_cast<int>(fy0) - reach),
+                                  cv::Point(static_cast<int>(fx1) + reach + 1, static_cast<int>(fy1) + reach + 1)) & area;
     seed_error_[j].create(area.size(), CV_32F);
     seed_error_[j].setTo(kInvalid);
     if (box.empty()) continue;
@@ -304,39 +303,42 @@ void BandSegmenter::segment(const cv::Mat& cur_left, const cv::Mat& prev_left, c
       const uint8_t* cur = cur_left.ptr<uint8_t>(y + area.y) + area.x;
       float* dst = diff_.ptr<float>(y);
       for (int x = local.x; x < local.br().x; ++x) {
-        const float prev = sample(x + area.x + f.x, y + area.y + f.y);
+        const float prev = sample_previous(prev_left, x + area.x + f.x, y + area.y + f.y);
         dst[x] = prev >= 0 ? std::abs(static_cast<float>(cur[x]) - prev) : kInvalid;
       }
     }
     cv::blur(diff_(local), seed_error_[j](local), cv::Size(5, 5), cv::Point(-1, -1), cv::BORDER_REPLICATE);
   }
+}
+
+void BandSegmenter::evidence(const cv::Rect& area, const std::vector<BandSeed>& seeds) {
   // Each pixel's object error: the least over the motions of its nearest seeds (found per 4x4 block, at its
   // centre); the evidence: static minus object error.
   constexpr int kBlock = 4;
-  const int nearest = std::min<int>(c.nearest_seeds, static_cast<int>(n_seeds));
-  const float max_object_error = static_cast<float>(c.max_object_error_dn);
-  std::vector<std::pair<float, int>> by_distance(n_seeds);
-  std::vector<int> block_flows;
+  const std::size_t n_seeds = seeds.size();
+  const int nearest = std::min<int>(config_.nearest_seeds, static_cast<int>(n_seeds));
+  const float max_object_error = static_cast<float>(config_.max_object_error_dn);
+  by_distance_.resize(n_seeds);
   evidence_.create(area.size(), CV_32F);
   for (int by = 0; by < area.height; by += kBlock) {
     for (int bx = 0; bx < area.width; bx += kBlock) {
       const float cx_px = static_cast<float>(area.x + bx) + 0.5f * kBlock, cy_px = static_cast<float>(area.y + by) + 0.5f * kBlock;
       for (std::size_t j = 0; j < n_seeds; ++j) {
-        const float dx = out.seeds[j].cur_px.x - cx_px, dy = out.seeds[j].cur_px.y - cy_px;
-        by_distance[j] = {dx * dx + dy * dy, flow_of[j]};
+        const float dx = seeds[j].cur_px.x - cx_px, dy = seeds[j].cur_px.y - cy_px;
+        by_distance_[j] = {dx * dx + dy * dy, flow_of_[j]};
       }
-      std::partial_sort(by_distance.begin(), by_distance.begin() + nearest, by_distance.end());
-      block_flows.clear();
+      std::partial_sort(by_distance_.begin(), by_distance_.begin() + nearest, by_distance_.end());
+      block_flows_.clear();
       for (int q = 0; q < nearest; ++q) {
-        const int f = by_distance[static_cast<std::size_t>(q)].second;
-        if (std::find(block_flows.begin(), block_flows.end(), f) == block_flows.end()) block_flows.push_back(f);
+        const int f = by_distance_[static_cast<std::size_t>(q)].second;
+        if (std::find(block_flows_.begin(), block_flows_.end(), f) == block_flows_.end()) block_flows_.push_back(f);
       }
       for (int y = by; y < std::min(by + kBlock, area.height); ++y) {
         const float* se = static_error_.ptr<float>(y);
         float* ev = evidence_.ptr<float>(y);
         for (int x = bx; x < std::min(bx + kBlock, area.width); ++x) {
           float oe = kInvalid;
-          for (int f : block_flows) oe = std::min(oe, seed_error_[static_cast<std::size_t>(f)].ptr<float>(y)[x]);
+          for (int f : block_flows_) oe = std::min(oe, seed_error_[static_cast<std::size_t>(f)].ptr<float>(y)[x]);
           // A pixel no seed's motion explains (uncovered background, or another surface) gets no evidence for it.
           ev[x] = (se[x] >= kInvalidMean || oe >= kInvalidMean) ? 0.0f
                   : oe > max_object_error ? std::min(0.0f, se[x] - oe) : se[x] - oe;
@@ -344,6 +346,10 @@ void BandSegmenter::segment(const cv::Mat& cur_left, const cv::Mat& prev_left, c
       }
     }
   }
+}
+
+void BandSegmenter::binarize(const cv::Rect& area, int strip, const cv::Mat& masked) {
+  const BandSegmenterConfig& c = config_;
   cv::blur(evidence_, blurred_, cv::Size(5, 5), cv::Point(-1, -1), cv::BORDER_REPLICATE);
   cv::compare(blurred_, c.evidence_dn, binary_, cv::CMP_GT);
   // Closing with a disc of diameter close_px by two distance transforms (linear in the area, where a morphological
@@ -373,12 +379,14 @@ void BandSegmenter::segment(const cv::Mat& cur_left, const cv::Mat& prev_left, c
       if (!free || !free[x]) row[x] = 255;
     }
   }
+}
 
+void BandSegmenter::seeded_regions(const cv::Rect& area, BandResult& out) {
   // The connected parts that hold a seed.
   cv::Mat stats, centroids;
   const int n = cv::connectedComponentsWithStats(binary_, labels_, stats, centroids, 8, CV_32S);
   std::vector<int> region_of(static_cast<std::size_t>(n), -1);
-  for (std::size_t j = 0; j < n_seeds; ++j) {
+  for (std::size_t j = 0; j < out.seeds.size(); ++j) {
     const cv::Point q(cvRound(out.seeds[j].cur_px.x) - area.x, cvRound(out.seeds[j].cur_px.y) - area.y);
     if (q.x < 0 || q.y < 0 || q.x >= area.width || q.y >= area.height) continue;
     const int l = labels_.at<int32_t>(q);
@@ -394,6 +402,38 @@ void BandSegmenter::segment(const cv::Mat& cur_left, const cv::Mat& prev_left, c
     }
     out.regions[static_cast<std::size_t>(region_of[static_cast<std::size_t>(l)])].seeds.push_back(static_cast<int>(j));
   }
+}
+
+void BandSegmenter::segment(const cv::Mat& cur_left, const cv::Mat& prev_left, const std::vector<cv::Mat>& cur_pyramid,
+                            const std::vector<cv::Mat>& prev_pyramid, LkTracker& tracker, int lk_levels,
+                            const PinholeCamera& camera, double bf_px_m, const SE3d& T_cur_prev,
+                            const cv::Mat& masked, const std::vector<cv::Point2f>& track_prev,
+                            const std::vector<cv::Point2f>& track_cur, BandResult& out) {
+  CV_Assert(track_prev.size() == track_cur.size());
+  out = BandResult{};
+  const BandSegmenterConfig& c = config_;
+  if (!c.enabled || cur_left.empty() || prev_left.empty()) return;
+  CV_Assert(cur_left.type() == CV_8UC1 && prev_left.type() == CV_8UC1 && cur_left.size() == prev_left.size());
+  CV_Assert(masked.empty() || (masked.type() == CV_8UC1 && masked.size() == cur_left.size()));
+  const int strip = std::min(c.strip_px, cur_left.cols);
+  if (strip <= 2 * c.border_px || cur_left.rows <= 2 * c.border_px) return;
+  // The test is sharp only where a static point's previous position hardly depends on its depth.
+  const double longest = longest_static_segment(camera, bf_px_m, T_cur_prev, cur_left.size());
+  out.static_segment_px = longest;
+  if (!(longest <= c.max_static_segment_px)) return;
+  out.ran = true;
+  collect_seeds(cur_left, cur_pyramid, prev_pyramid, tracker, lk_levels, camera, bf_px_m, T_cur_prev, masked,
+                track_prev, track_cur, out);
+  if (static_cast<int>(out.seeds.size()) < c.min_seeds) return;
+  const cv::Rect area = search_area(out.seeds, cur_left.size());
+  diff_.create(area.size(), CV_32F);
+  // The static hypothesis against the object hypotheses: the seeds' own image motions (seeds of one mover share
+  // theirs).
+  static_hypothesis(cur_left, prev_left, camera, bf_px_m, T_cur_prev, area, longest);
+  seed_hypotheses(cur_left, prev_left, area, out.seeds);
+  evidence(area, out.seeds);
+  binarize(area, strip, masked);
+  seeded_regions(area, out);
 }
 
 }  // namespace agvslam::dynamic

@@ -8,7 +8,8 @@ namespace agvslam::dynamic {
 DynamicDetectorConfig load_dynamic_config(const std::string& path) {
   const stereo::ParamsReader in(path);
   in.check_sections({"features", "tracking", "epipolar", "depth_test", "multiframe", "grouping", "slic", "planes", "boundaries",
-                     "regions", "outline", "edge_refine", "photometric", "motion_carve", "band", "detector"});
+                     "regions", "outline", "edge_refine", "photometric", "motion_carve", "band", "detector", "roi", "densify",
+                     "objects", "band_carry", "static_carve", "confirm"});
   DynamicDetectorConfig c;
   const char* px = "a number (px)";
   const char* num = "a number";
@@ -265,68 +266,83 @@ DynamicDetectorConfig load_dynamic_config(const std::string& path) {
   in.read("band", "driving_cell_px", b.driving_cell_px, "an integer (px)");
 
   in.check_keys("detector", {"use_epipolar_test", "use_depth_test", "full_frame_disparity", "max_rois",
-                             "roi_disparity_margin_px", "roi_scale", "roi_row_step", "roi_row_step_min_area_px",
-                             "extend_max_rounds", "extend_min_rows", "extend_step_m", "extend_static_guard_px", "half_scale_min_area_px", "half_scale_erode_px", "extend_to_floor", "extend_to_height_m", "split_side_by_side", "mask_dilation_px", "densify",
-                             "densify_radius_px",
-                             "densify_radius_disparity_factor", "densify_max_points", "densify_min_distance_px",
-                             "densify_min_seeds", "densify_depth_seed_factor", "densify_extra_tracks", "densify_keep_static", "densify_multiframe_levels", "densify_multiframe_agreement", "densify_multiframe_factor",
-                             "track_objects", "continue_min_points", "coast_max_frames", "coast_min_detections",
-                             "coast_min_tracks", "coast_min_area_ratio", "band_carry_max_frames", "band_carry_min_tracks", "band_carry_min_dynamic", "growth_max_ratio", "growth_margin", "carve_min_tracks", "carve_max_offset_px", "carve_max_multiframe_px", "carve_min_distance_px", "confirm_min_box_iou", "confirm_below_px", "confirm_near_min_disparity_px", "confirm_near_min_offset_px", "confirm_near_min_px", "confirm_near_min_roi_fill",
-                             "pad_left_border", "roi_speckle_filter", "merge_stacked_regions"});
+                             "merge_stacked_regions", "split_side_by_side", "mask_dilation_px"});
   in.read("detector", "use_epipolar_test", c.detector.use_epipolar_test, flag);
   in.read("detector", "use_depth_test", c.detector.use_depth_test, flag);
   in.read("detector", "full_frame_disparity", c.detector.full_frame_disparity, flag);
   in.read("detector", "max_rois", c.detector.max_rois, integer);
-  in.read("detector", "roi_disparity_margin_px", c.detector.roi_disparity_margin_px, px);
-  in.read("detector", "extend_max_rounds", c.detector.extend_max_rounds, integer);
-  in.read("detector", "extend_min_rows", c.detector.extend_min_rows, integer);
-  in.read("detector", "extend_step_m", c.detector.extend_step_m, "a number (m)");
-  in.read("detector", "extend_static_guard_px", c.detector.extend_static_guard_px, "an integer (px)");
-  in.read("detector", "roi_scale", c.detector.roi_scale, "1 or 0.5");
-  in.read("detector", "roi_row_step", c.detector.roi_row_step, "1 or 2");
-  in.read("detector", "roi_row_step_min_area_px", c.detector.roi_row_step_min_area_px, "an integer (px)");
-  in.read("detector", "half_scale_min_area_px", c.detector.half_scale_min_area_px, "an integer (px)");
-  in.read("detector", "half_scale_erode_px", c.detector.half_scale_erode_px, "an integer (px)");
-  in.read("detector", "extend_to_floor", c.detector.extend_to_floor, flag);
-  in.read("detector", "extend_to_height_m", c.detector.extend_to_height_m, "a number (m)");
+  in.read("detector", "merge_stacked_regions", c.detector.merge_stacked_regions, flag);
   in.read("detector", "split_side_by_side", c.detector.split_side_by_side, flag);
   in.read("detector", "mask_dilation_px", c.detector.mask_dilation_px, "an integer (px)");
-  in.read("detector", "densify", c.detector.densify, flag);
-  in.read("detector", "densify_radius_px", c.detector.densify_radius_px, px);
-  in.read("detector", "densify_radius_disparity_factor", c.detector.densify_radius_disparity_factor, num);
-  in.read("detector", "densify_max_points", c.detector.densify_max_points, integer);
-  in.read("detector", "densify_min_distance_px", c.detector.densify_min_distance_px, px);
-  in.read("detector", "densify_min_seeds", c.detector.densify_min_seeds, integer);
-  in.read("detector", "densify_depth_seed_factor", c.detector.densify_depth_seed_factor, "a number");
-  in.read("detector", "densify_extra_tracks", c.detector.densify_extra_tracks, integer);
-  in.read("detector", "densify_keep_static", c.detector.densify_keep_static, flag);
-  in.read("detector", "densify_multiframe_levels", c.detector.densify_multiframe_levels, integer);
-  in.read("detector", "densify_multiframe_agreement", c.detector.densify_multiframe_agreement, num);
-  in.read("detector", "densify_multiframe_factor", c.detector.densify_multiframe_factor, num);
-  in.read("detector", "growth_max_ratio", c.detector.growth_max_ratio, num);
-  in.read("detector", "growth_margin", c.detector.growth_margin, num);
-  in.read("detector", "carve_min_tracks", c.detector.carve_min_tracks, integer);
-  in.read("detector", "carve_max_offset_px", c.detector.carve_max_offset_px, num);
-  in.read("detector", "carve_max_multiframe_px", c.detector.carve_max_multiframe_px, num);
-  in.read("detector", "carve_min_distance_px", c.detector.carve_min_distance_px, num);
-  in.read("detector", "track_objects", c.detector.track_objects, flag);
-  in.read("detector", "continue_min_points", c.detector.continue_min_points, integer);
-  in.read("detector", "coast_max_frames", c.detector.coast_max_frames, "an integer (frames)");
-  in.read("detector", "coast_min_detections", c.detector.coast_min_detections, "an integer (frames)");
-  in.read("detector", "coast_min_tracks", c.detector.coast_min_tracks, integer);
-  in.read("detector", "coast_min_area_ratio", c.detector.coast_min_area_ratio, num);
-  in.read("detector", "band_carry_max_frames", c.detector.band_carry_max_frames, "an integer (frames)");
-  in.read("detector", "band_carry_min_tracks", c.detector.band_carry_min_tracks, "an integer");
-  in.read("detector", "band_carry_min_dynamic", c.detector.band_carry_min_dynamic, "an integer");
-  in.read("detector", "confirm_min_box_iou", c.detector.confirm_min_box_iou, num);
-  in.read("detector", "confirm_below_px", c.detector.confirm_below_px, "an integer (px)");
-  in.read("detector", "confirm_near_min_disparity_px", c.detector.confirm_near_min_disparity_px, num);
-  in.read("detector", "confirm_near_min_offset_px", c.detector.confirm_near_min_offset_px, num);
-  in.read("detector", "confirm_near_min_px", c.detector.confirm_near_min_px, "an integer (px)");
-  in.read("detector", "confirm_near_min_roi_fill", c.detector.confirm_near_min_roi_fill, num);
-  in.read("detector", "pad_left_border", c.detector.pad_left_border, flag);
-  in.read("detector", "roi_speckle_filter", c.detector.roi_speckle_filter, flag);
-  in.read("detector", "merge_stacked_regions", c.detector.merge_stacked_regions, flag);
+
+  in.check_keys("roi", {"disparity_margin_px", "scale", "row_step", "row_step_min_area_px", "half_scale_min_area_px",
+                        "half_scale_erode_px", "pad_left_border", "speckle_filter", "extend_to_floor",
+                        "extend_to_height_m", "extend_max_rounds", "extend_min_rows", "extend_step_m",
+                        "extend_static_guard_px"});
+  RoiOptions& r = c.roi;
+  in.read("roi", "disparity_margin_px", r.disparity_margin_px, px);
+  in.read("roi", "scale", r.scale, "1 or 0.5");
+  in.read("roi", "row_step", r.row_step, "1 or 2");
+  in.read("roi", "row_step_min_area_px", r.row_step_min_area_px, "an integer (px)");
+  in.read("roi", "half_scale_min_area_px", r.half_scale_min_area_px, "an integer (px)");
+  in.read("roi", "half_scale_erode_px", r.half_scale_erode_px, "an integer (px)");
+  in.read("roi", "pad_left_border", r.pad_left_border, flag);
+  in.read("roi", "speckle_filter", r.speckle_filter, flag);
+  in.read("roi", "extend_to_floor", r.extend_to_floor, flag);
+  in.read("roi", "extend_to_height_m", r.extend_to_height_m, "a number (m)");
+  in.read("roi", "extend_max_rounds", r.extend_max_rounds, integer);
+  in.read("roi", "extend_min_rows", r.extend_min_rows, integer);
+  in.read("roi", "extend_step_m", r.extend_step_m, "a number (m)");
+  in.read("roi", "extend_static_guard_px", r.extend_static_guard_px, "an integer (px)");
+
+  in.check_keys("densify", {"enabled", "radius_px", "radius_disparity_factor", "max_points", "min_distance_px",
+                            "min_seeds", "depth_seed_factor", "extra_tracks", "keep_static", "multiframe_levels",
+                            "multiframe_agreement", "multiframe_factor"});
+  DensifyOptions& ds = c.densify;
+  in.read("densify", "enabled", ds.enabled, flag);
+  in.read("densify", "radius_px", ds.radius_px, px);
+  in.read("densify", "radius_disparity_factor", ds.radius_disparity_factor, num);
+  in.read("densify", "max_points", ds.max_points, integer);
+  in.read("densify", "min_distance_px", ds.min_distance_px, px);
+  in.read("densify", "min_seeds", ds.min_seeds, integer);
+  in.read("densify", "depth_seed_factor", ds.depth_seed_factor, num);
+  in.read("densify", "extra_tracks", ds.extra_tracks, integer);
+  in.read("densify", "keep_static", ds.keep_static, flag);
+  in.read("densify", "multiframe_levels", ds.multiframe_levels, integer);
+  in.read("densify", "multiframe_agreement", ds.multiframe_agreement, num);
+  in.read("densify", "multiframe_factor", ds.multiframe_factor, num);
+
+  in.check_keys("objects", {"enabled", "continue_min_points", "coast_max_frames", "coast_min_detections",
+                            "coast_min_tracks", "coast_min_area_ratio", "growth_max_ratio", "growth_margin"});
+  ObjectTrackerOptions& ob = c.objects;
+  in.read("objects", "enabled", ob.enabled, flag);
+  in.read("objects", "continue_min_points", ob.continue_min_points, integer);
+  in.read("objects", "coast_max_frames", ob.coast_max_frames, "an integer (frames)");
+  in.read("objects", "coast_min_detections", ob.coast_min_detections, "an integer (frames)");
+  in.read("objects", "coast_min_tracks", ob.coast_min_tracks, integer);
+  in.read("objects", "coast_min_area_ratio", ob.coast_min_area_ratio, num);
+  in.read("objects", "growth_max_ratio", ob.growth_max_ratio, num);
+  in.read("objects", "growth_margin", ob.growth_margin, num);
+
+  in.check_keys("band_carry", {"max_frames", "min_tracks", "min_dynamic"});
+  in.read("band_carry", "max_frames", c.band_carry.max_frames, "an integer (frames)");
+  in.read("band_carry", "min_tracks", c.band_carry.min_tracks, integer);
+  in.read("band_carry", "min_dynamic", c.band_carry.min_dynamic, integer);
+
+  in.check_keys("static_carve", {"min_tracks", "max_offset_px", "max_multiframe_px", "min_distance_px"});
+  in.read("static_carve", "min_tracks", c.static_carve.min_tracks, integer);
+  in.read("static_carve", "max_offset_px", c.static_carve.max_offset_px, px);
+  in.read("static_carve", "max_multiframe_px", c.static_carve.max_multiframe_px, px);
+  in.read("static_carve", "min_distance_px", c.static_carve.min_distance_px, px);
+
+  in.check_keys("confirm", {"min_box_iou", "below_px", "near_min_disparity_px", "near_min_offset_px", "near_min_px",
+                            "near_min_roi_fill"});
+  in.read("confirm", "min_box_iou", c.confirm.min_box_iou, num);
+  in.read("confirm", "below_px", c.confirm.below_px, "an integer (px)");
+  in.read("confirm", "near_min_disparity_px", c.confirm.near_min_disparity_px, px);
+  in.read("confirm", "near_min_offset_px", c.confirm.near_min_offset_px, px);
+  in.read("confirm", "near_min_px", c.confirm.near_min_px, "an integer (px)");
+  in.read("confirm", "near_min_roi_fill", c.confirm.near_min_roi_fill, num);
 
   c.validate(path);
   return c;

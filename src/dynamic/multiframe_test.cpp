@@ -219,6 +219,116 @@ void MultiFrameTest::add_frame(const SE3d& T_cur_prev, bool valid, const cv::Mat
   }
 }
 
+int MultiFrameTest::held_steps(const TrackHistory& history, std::size_t i) const {
+  // Steps a track's history holds since the reference: those the per-frame depth test passed, or (chain_stereo_only)
+  // those its stereo agreed on.
+  return config_.chain_stereo_only ? history.consistent_steps(i) : history.consistent_steps_strict(i);
+}
+
+int MultiFrameTest::choose_reference(const TrackHistory& history, const std::vector<uint8_t>& usable,
+                                     SE3d& T_ref_cur) const {
+  // Candidate references, newest first: k frames back along the chain.
+  const std::size_t n = history.size();
+  const int h = static_cast<int>(frames_.size());
+  const int max_back = std::min({h - 1, config_.max_frames, history.depth() - 1});
+  const double max_rotation_rad = config_.max_rotation_deg * M_PI / 180.0;
+  const SE3d& T_w_cur = frames_.back().T_w_c;
+  auto count_both = [&](int k) {
+    int count = 0;
+    cv::Point2f p;
+    float d = 0;
+    for (std::size_t i = 0; i < n; ++i) {
+      count += usable[i] && held_steps(history, i) >= k && history.observation(i, k, p, d) &&
+                       d >= config_.min_disparity_px ? 1 : 0;
+    }
+    return count;
+  };
+  int chosen = -1;
+  T_ref_cur = SE3d::Identity();
+  for (int k = config_.min_frames; k <= max_back; ++k) {
+    const SE3d T = frames_[static_cast<std::size_t>(h - 1 - k)].T_w_c.inverse() * T_w_cur;
+    if (rotation_angle_rad(T) > max_rotation_rad) break;  // older ones turned even more (on a turning vehicle)
+    if (count_both(k) < config_.min_points) break;        // older ones share even fewer tracks
+    chosen = k;
+    T_ref_cur = T;
+    if (T.translation().norm() >= config_.min_translation_m) break;
+  }
+  return chosen;
+}
+
+void MultiFrameTest::verify_flagged(const PinholeCamera& camera, double bf_px_m, const TrackHistory& history,
+                                    const std::vector<cv::Mat>& cur_pyramid, const LkTrackerConfig& tracking,
+                                    int chosen, MultiFrameResult& result) {
+  // LK of the current patch straight into the reference image, from the track's own reference position.
+  cand_cur_.clear();
+  cand_ref_.clear();
+  cand_index_.clear();
+  for (std::size_t i = 0; i < history.size(); ++i) {
+    if (!result.test.dynamic[i]) continue;
+    cand_cur_.push_back(cur_px_[i]);
+    cand_ref_.push_back(ref_px_[i]);
+    cand_index_.push_back(static_cast<int>(i));
+  }
+  result.flagged = static_cast<int>(cand_index_.size());
+  if (cand_index_.empty()) return;
+  const cv::Size win(tracking.window_px, tracking.window_px);
+  const cv::TermCriteria crit(cv::TermCriteria::COUNT | cv::TermCriteria::EPS, tracking.max_iterations, tracking.epsilon);
+  const cv::Mat& ref_left = result.reference_left;
+  cv::buildOpticalFlowPyramid(ref_left, ref_pyramid_, win, config_.verify_levels, false);
+  cv::calcOpticalFlowPyrLK(cur_pyramid, ref_pyramid_, cand_cur_, cand_ref_, status_, errors_, win, config_.verify_levels,
+                           crit, cv::OPTFLOW_USE_INITIAL_FLOW, tracking.min_eigen_threshold);
+  cand_back_ = cand_cur_;
+  cv::calcOpticalFlowPyrLK(ref_pyramid_, cur_pyramid, cand_ref_, cand_back_, back_status_, errors_, win,
+                           config_.verify_levels, crit, cv::OPTFLOW_USE_INITIAL_FLOW, tracking.min_eigen_threshold);
+  const float fb2 = static_cast<float>(config_.verify_fb_px * config_.verify_fb_px);
+  const cv::Size size = ref_left.size();
+  for (std::size_t k = 0; k < cand_index_.size(); ++k) {
+    const auto i = static_cast<std::size_t>(cand_index_[k]);
+    result.test.dynamic[i] = 0;
+    const cv::Point2f found = cand_ref_[k];
+    const cv::Point2f fb = cand_back_[k] - cand_cur_[k];
+    if (!status_[k] || !back_status_[k] || fb.dot(fb) > fb2 || !(found.x >= 0 && found.y >= 0 && found.x < size.width &&
+                                                                   found.y < size.height)) {
+      result.test.reprojection_px[i] = -1;  // not verifiable: neither dynamic nor static
+      result.test.disparity_residual_px[i] = -1;
+      continue;
+    }
+    judge_verified(camera, bf_px_m, history, cur_pyramid[0], tracking.window_px / 2, chosen, i, found, result);
+    result.confirmed += result.test.dynamic[i];
+  }
+}
+
+void MultiFrameTest::judge_verified(const PinholeCamera& camera, double bf_px_m, const TrackHistory& history,
+                                    const cv::Mat& cur_left, int half_window_px, int chosen, std::size_t i,
+                                    const cv::Point2f& found, MultiFrameResult& result) const {
+  const float shift2 = static_cast<float>(config_.verify_max_shift_px * config_.verify_max_shift_px);
+  const cv::Point2f shift = found - ref_px_[i];
+  const bool same_point = shift.dot(shift) <= shift2;
+  // The found reference position with the reference disparity, moved into the current camera: how far from
+  // the current position?
+  double offset = -1, r_disp = -1;
+  DepthConsistencyTest::residuals(camera, bf_px_m, result.T_cur_ref, found, ref_d_[i], cur_px_[i], cur_d_[i], offset,
+                                  r_disp);
+  const double d = cur_d_[i] > 0 ? cur_d_[i] : ref_d_[i];
+  const double t_2d = result.test.a_reproj_used_px + config_.b_reproj * d;
+  bool off_2d = offset >= 0 && offset > t_2d;
+  if (off_2d && config_.aperture_ratio > 0 && offset < 1e5) {
+    const double across = offset_across_edge(cur_left, cur_px_[i], half_window_px, camera, bf_px_m, result.T_cur_ref,
+                                             found, ref_d_[i], config_.aperture_ratio);
+    if (across >= 0) off_2d = across > t_2d;
+  }
+  bool off_depth = same_point && r_disp >= 0 && r_disp > result.test.a_disp_used_px + config_.b_disp * d;
+  // A track the per-frame depth test flagged since the reference (chained on stereo alone) must be off by
+  // chain_stereo_factor times the thresholds: noisy static tracks fail the per-frame test now and then too.
+  if (history.consistent_steps_strict(i) < chosen) {
+    off_2d = off_2d && offset > config_.chain_stereo_factor * t_2d;
+    off_depth = off_depth && r_disp > config_.chain_stereo_factor * (result.test.a_disp_used_px + config_.b_disp * d);
+  }
+  result.test.reprojection_px[i] = offset;
+  result.test.disparity_residual_px[i] = same_point ? r_disp : -1;
+  result.test.dynamic[i] = off_2d || off_depth ? 1 : 0;
+}
+
 void MultiFrameTest::run(const PinholeCamera& camera, double bf_px_m, const TrackHistory& history,
                          const std::vector<uint8_t>& usable, const std::vector<cv::Mat>& cur_pyramid,
                          const LkTrackerConfig& tracking, MultiFrameResult& result) {
@@ -239,37 +349,8 @@ void MultiFrameTest::run(const PinholeCamera& camera, double bf_px_m, const Trac
   result.test.dynamic.assign(n, 0);
   if (!config_.enabled || frames_.size() < 2) return;
 
-  // Candidate references, newest first: k frames back along the chain.
-  const int h = static_cast<int>(frames_.size());
-  const int max_back = std::min({h - 1, config_.max_frames, history.depth() - 1});
-  const double max_rotation_rad = config_.max_rotation_deg * M_PI / 180.0;
-  const SE3d& T_w_cur = frames_.back().T_w_c;
-  // Steps a track's history holds since the reference: those the per-frame depth test passed, or (chain_stereo_only)
-  // those its stereo agreed on. (Estimating the motion from the former alone and testing the others against it: seeds
-  // 101-103 +1 true, +10 false regions.)
-  auto steps = [&](std::size_t i) {
-    return config_.chain_stereo_only ? history.consistent_steps(i) : history.consistent_steps_strict(i);
-  };
-  auto count_both = [&](int k) {
-    int count = 0;
-    cv::Point2f p;
-    float d = 0;
-    for (std::size_t i = 0; i < n; ++i) {
-      count += usable[i] && steps(i) >= k && history.observation(i, k, p, d) &&
-                       d >= config_.min_disparity_px ? 1 : 0;
-    }
-    return count;
-  };
-  int chosen = -1;
-  SE3d T_ref_cur = SE3d::Identity();
-  for (int k = config_.min_frames; k <= max_back; ++k) {
-    const SE3d T = frames_[static_cast<std::size_t>(h - 1 - k)].T_w_c.inverse() * T_w_cur;
-    if (rotation_angle_rad(T) > max_rotation_rad) break;  // older ones turned even more (on a turning vehicle)
-    if (count_both(k) < config_.min_points) break;        // older ones share even fewer tracks
-    chosen = k;
-    T_ref_cur = T;
-    if (T.translation().norm() >= config_.min_translation_m) break;
-  }
+  SE3d T_ref_cur;
+  const int chosen = choose_reference(history, usable, T_ref_cur);
   if (chosen < 0) return;
   result.frames_back = chosen;
   result.translation_m = T_ref_cur.translation().norm();
@@ -281,7 +362,7 @@ void MultiFrameTest::run(const PinholeCamera& camera, double bf_px_m, const Trac
   cur_d_.assign(n, 0.0f);
   both_.assign(n, 0);
   for (std::size_t i = 0; i < n; ++i) {
-    if (!usable[i] || steps(i) < chosen) continue;
+    if (!usable[i] || held_steps(history, i) < chosen) continue;
     if (!history.observation(i, chosen, ref_px_[i], ref_d_[i]) || !history.observation(i, 0, cur_px_[i], cur_d_[i])) continue;
     both_[i] = 1;
     result.candidates += ref_d_[i] >= config_.min_disparity_px ? 1 : 0;
@@ -291,72 +372,10 @@ void MultiFrameTest::run(const PinholeCamera& camera, double bf_px_m, const Trac
   test_.run(camera, bf_px_m, ref_px_, ref_d_, cur_px_, cur_d_, both_, result.test, &T_cur_ref_chained);
   if (!result.test.valid) return;
   result.T_cur_ref = result.test.T_cur_prev;
-  result.reference_left = frames_[static_cast<std::size_t>(h - 1 - chosen)].left;
+  result.reference_left = frames_[frames_.size() - 1 - static_cast<std::size_t>(chosen)].left;
   result.valid = true;
-
-  // Verification of the flagged tracks: LK of the current patch straight into the reference image, from the
-  // track's own reference position.
-  cand_cur_.clear();
-  cand_ref_.clear();
-  cand_index_.clear();
-  for (std::size_t i = 0; i < n; ++i) {
-    if (!result.test.dynamic[i]) continue;
-    cand_cur_.push_back(cur_px_[i]);
-    cand_ref_.push_back(ref_px_[i]);
-    cand_index_.push_back(static_cast<int>(i));
-  }
-  result.flagged = static_cast<int>(cand_index_.size());
-  if (cand_index_.empty()) return;
-  const cv::Size win(tracking.window_px, tracking.window_px);
-  const cv::TermCriteria crit(cv::TermCriteria::COUNT | cv::TermCriteria::EPS, tracking.max_iterations, tracking.epsilon);
-  const cv::Mat& ref_left = frames_[static_cast<std::size_t>(h - 1 - chosen)].left;
-  cv::buildOpticalFlowPyramid(ref_left, ref_pyramid_, win, config_.verify_levels, false);
-  cv::calcOpticalFlowPyrLK(cur_pyramid, ref_pyramid_, cand_cur_, cand_ref_, status_, errors_, win, config_.verify_levels,
-                           crit, cv::OPTFLOW_USE_INITIAL_FLOW, tracking.min_eigen_threshold);
-  cand_back_ = cand_cur_;
-  cv::calcOpticalFlowPyrLK(ref_pyramid_, cur_pyramid, cand_ref_, cand_back_, back_status_, errors_, win,
-                           config_.verify_levels, crit, cv::OPTFLOW_USE_INITIAL_FLOW, tracking.min_eigen_threshold);
-  const float fb2 = static_cast<float>(config_.verify_fb_px * config_.verify_fb_px);
-  const float shift2 = static_cast<float>(config_.verify_max_shift_px * config_.verify_max_shift_px);
-  const cv::Size size = ref_left.size();
-  for (std::size_t k = 0; k < cand_index_.size(); ++k) {
-    const auto i = static_cast<std::size_t>(cand_index_[k]);
-    result.test.dynamic[i] = 0;
-    const cv::Point2f found = cand_ref_[k];
-    const cv::Point2f fb = cand_back_[k] - cand_cur_[k];
-    if (!status_[k] || !back_status_[k] || fb.dot(fb) > fb2 || !(found.x >= 0 && found.y >= 0 && found.x < size.width &&
-                                                                   found.y < size.height)) {
-      result.test.reprojection_px[i] = -1;  // not verifiable: neither dynamic nor static
-      result.test.disparity_residual_px[i] = -1;
-      continue;
-    }
-    const cv::Point2f shift = found - ref_px_[i];
-    const bool same_point = shift.dot(shift) <= shift2;
-    // The found reference position with the reference disparity, moved into the current camera: how far from
-    // the current position?
-    double offset = -1, r_disp = -1;
-    DepthConsistencyTest::residuals(camera, bf_px_m, result.T_cur_ref, found, ref_d_[i], cur_px_[i], cur_d_[i], offset,
-                                    r_disp);
-    const double d = cur_d_[i] > 0 ? cur_d_[i] : ref_d_[i];
-    const double t_2d = result.test.a_reproj_used_px + config_.b_reproj * d;
-    bool off_2d = offset >= 0 && offset > t_2d;
-    if (off_2d && config_.aperture_ratio > 0 && offset < 1e5) {
-      const double across = offset_across_edge(cur_pyramid[0], cur_px_[i], tracking.window_px / 2, camera, bf_px_m,
-                                               result.T_cur_ref, found, ref_d_[i], config_.aperture_ratio);
-      if (across >= 0) off_2d = across > t_2d;
-    }
-    bool off_depth = same_point && r_disp >= 0 && r_disp > result.test.a_disp_used_px + config_.b_disp * d;
-    // A track the per-frame depth test flagged since the reference (chained on stereo alone) must be off by
-    // chain_stereo_factor times the thresholds: noisy static tracks fail the per-frame test now and then too.
-    if (history.consistent_steps_strict(i) < chosen) {
-      off_2d = off_2d && offset > config_.chain_stereo_factor * t_2d;
-      off_depth = off_depth && r_disp > config_.chain_stereo_factor * (result.test.a_disp_used_px + config_.b_disp * d);
-    }
-    result.test.reprojection_px[i] = offset;
-    result.test.disparity_residual_px[i] = same_point ? r_disp : -1;
-    result.test.dynamic[i] = off_2d || off_depth ? 1 : 0;
-    result.confirmed += result.test.dynamic[i];
-  }
+  // Verification of the flagged tracks.
+  verify_flagged(camera, bf_px_m, history, cur_pyramid, tracking, chosen, result);
 }
 
 }  // namespace agvslam::dynamic

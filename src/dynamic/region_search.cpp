@@ -181,67 +181,78 @@ int choose_start_superpixel(const cv::Mat& labels, cv::Point origin, const std::
   return best;
 }
 
-DynamicRegion find_dynamic_region(const cv::Mat& labels, cv::Point origin, const SuperpixelGraph& graph,
-                                  const std::vector<DisparityPlane>& planes, const std::vector<cv::Point2f>& points_px,
-                                  const std::vector<float>& disparity_px, const RegionSearchConfig& config,
-                                  const std::vector<cv::Point2f>& static_points_px,
-                                  const std::vector<float>& static_disparity_px, const DisparityPlane* ground,
-                                  const std::vector<char>* moves_with_background) {
-  CV_Assert(points_px.size() == disparity_px.size());
-  CV_Assert(static_points_px.size() == static_disparity_px.size());
-  DynamicRegion region;
-  // Static veto: superpixels holding a static point whose disparity agrees with their plane.
-  std::vector<char> vetoed(static_cast<std::size_t>(graph.count()), 0);
-  if (config.static_veto) {
-    for (std::size_t i = 0; i < static_points_px.size(); ++i) {
-      const float d = static_disparity_px[i];
-      if (!(d > 0)) continue;
-      const int x = static_cast<int>(std::lround(static_points_px[i].x)) - origin.x;
-      const int y = static_cast<int>(std::lround(static_points_px[i].y)) - origin.y;
-      if (x < 0 || y < 0 || x >= labels.cols || y >= labels.rows) continue;
-      const int k = labels.at<int32_t>(y, x);
-      if (k < 0 || k >= graph.count() || vetoed[static_cast<std::size_t>(k)]) continue;
-      const DisparityPlane& plane = planes[static_cast<std::size_t>(k)];
-      const double tolerance = config.start_tolerance_px + config.start_tolerance_rel * d;
-      if (plane.valid && std::abs(plane.disparity_at(static_points_px[i].x, static_points_px[i].y) - d) <= tolerance) {
-        vetoed[static_cast<std::size_t>(k)] = 1;
-        region.vetoed_superpixels.push_back(k);
-      }
-    }
-  }
-  int x0 = 1 << 30, y0 = 1 << 30, x1 = -(1 << 30), y1 = -(1 << 30);
-  std::vector<char> is_start(static_cast<std::size_t>(graph.count()), 0);
-  std::vector<int> start_label(points_px.size(), -1);
+namespace {
+// The group's points with the superpixel each starts from (-1: none) and the disparity range of those that start.
+struct Starts {
+  std::vector<int> label;
   double d_min = 1e30, d_max = -1e30;
+};
+
+// Static veto: superpixels holding a static point whose disparity agrees with their plane.
+void veto_static_superpixels(const cv::Mat& labels, cv::Point origin, const SuperpixelGraph& graph,
+                             const std::vector<DisparityPlane>& planes, const std::vector<cv::Point2f>& static_points_px,
+                             const std::vector<float>& static_disparity_px, const RegionSearchConfig& config,
+                             std::vector<char>& vetoed, DynamicRegion& region) {
+  for (std::size_t i = 0; i < static_points_px.size(); ++i) {
+    const float d = static_disparity_px[i];
+    if (!(d > 0)) continue;
+    const int x = static_cast<int>(std::lround(static_points_px[i].x)) - origin.x;
+    const int y = static_cast<int>(std::lround(static_points_px[i].y)) - origin.y;
+    if (x < 0 || y < 0 || x >= labels.cols || y >= labels.rows) continue;
+    const int k = labels.at<int32_t>(y, x);
+    if (k < 0 || k >= graph.count() || vetoed[static_cast<std::size_t>(k)]) continue;
+    const DisparityPlane& plane = planes[static_cast<std::size_t>(k)];
+    const double tolerance = config.start_tolerance_px + config.start_tolerance_rel * d;
+    if (plane.valid && std::abs(plane.disparity_at(static_points_px[i].x, static_points_px[i].y) - d) <= tolerance) {
+      vetoed[static_cast<std::size_t>(k)] = 1;
+      region.vetoed_superpixels.push_back(k);
+    }
+  }
+}
+
+Starts choose_starts(const cv::Mat& labels, cv::Point origin, const std::vector<DisparityPlane>& planes,
+                     const std::vector<cv::Point2f>& points_px, const std::vector<float>& disparity_px,
+                     const RegionSearchConfig& config, const DisparityPlane* ground, const std::vector<char>& vetoed) {
+  Starts starts;
+  starts.label.assign(points_px.size(), -1);
   for (std::size_t i = 0; i < points_px.size(); ++i) {
-    start_label[i] = choose_start_superpixel(labels, origin, planes, points_px[i], disparity_px[i], config);
-    if (start_label[i] >= 0 && vetoed[static_cast<std::size_t>(start_label[i])]) start_label[i] = -1;
+    int& k = starts.label[i];
+    k = choose_start_superpixel(labels, origin, planes, points_px[i], disparity_px[i], config);
+    if (k >= 0 && vetoed[static_cast<std::size_t>(k)]) k = -1;
     // A point on the floor (a foot's sole, a wheel's contact) has the floor's disparity: it cannot start.
-    if (start_label[i] >= 0 && config.ground_veto && ground != nullptr && ground->valid &&
-        is_ground_like(planes[static_cast<std::size_t>(start_label[i])], *ground, points_px[i].x, points_px[i].y,
+    if (k >= 0 && config.ground_veto && ground != nullptr && ground->valid &&
+        is_ground_like(planes[static_cast<std::size_t>(k)], *ground, points_px[i].x, points_px[i].y,
                        config.ground_tolerance_px, config.ground_tolerance_rel, config.ground_slope_tolerance)) {
-      start_label[i] = -1;
+      k = -1;
     }
-    if (start_label[i] < 0) continue;
-    d_min = std::min(d_min, static_cast<double>(disparity_px[i]));
-    d_max = std::max(d_max, static_cast<double>(disparity_px[i]));
+    if (k < 0) continue;
+    starts.d_min = std::min(starts.d_min, static_cast<double>(disparity_px[i]));
+    starts.d_max = std::max(starts.d_max, static_cast<double>(disparity_px[i]));
   }
-  // Superpixels whose appearance moved with the background (and that no point starts from) are static too.
-  if (moves_with_background != nullptr && static_cast<int>(moves_with_background->size()) == graph.count()) {
-    std::vector<char> starts(static_cast<std::size_t>(graph.count()), 0);
-    for (int k : start_label) {
-      if (k >= 0) starts[static_cast<std::size_t>(k)] = 1;
-    }
-    for (int k = 0; k < graph.count(); ++k) {
-      const auto u = static_cast<std::size_t>(k);
-      if ((*moves_with_background)[u] && !starts[u] && !vetoed[u]) {
-        vetoed[u] = 1;
-        region.vetoed_superpixels.push_back(k);
-      }
+  return starts;
+}
+
+// Superpixels whose appearance moved with the background (and that no point starts from) are static too.
+void veto_background_superpixels(const std::vector<char>& moves_with_background, const Starts& starts, int count,
+                                 std::vector<char>& vetoed, DynamicRegion& region) {
+  std::vector<char> is_start(static_cast<std::size_t>(count), 0);
+  for (int k : starts.label) {
+    if (k >= 0) is_start[static_cast<std::size_t>(k)] = 1;
+  }
+  for (int k = 0; k < count; ++k) {
+    const auto u = static_cast<std::size_t>(k);
+    if (moves_with_background[u] && !is_start[u] && !vetoed[u]) {
+      vetoed[u] = 1;
+      region.vetoed_superpixels.push_back(k);
     }
   }
+}
+
+DisparityBand make_band(const RegionSearchConfig& config, const Starts& starts, const std::vector<DisparityPlane>& planes,
+                        cv::Point origin, const std::vector<char>& vetoed, const DisparityPlane* ground,
+                        DynamicRegion& region) {
   DisparityBand band;
-  band.enabled = config.disparity_band && d_max >= d_min;
+  band.enabled = config.disparity_band && starts.d_max >= starts.d_min;
   band.planes = &planes;
   band.origin = origin;
   band.vetoed = &vetoed;
@@ -252,34 +263,47 @@ DynamicRegion find_dynamic_region(const cv::Mat& labels, cv::Point origin, const
     band.ground_slope_tolerance = config.ground_slope_tolerance;
   }
   if (band.enabled) {
-    band.lo_px = d_min - (config.band_tolerance_px + config.band_tolerance_rel * d_min);
-    band.hi_px = d_max + (config.band_tolerance_px + config.band_tolerance_rel * d_max);
+    band.lo_px = starts.d_min - (config.band_tolerance_px + config.band_tolerance_rel * starts.d_min);
+    band.hi_px = starts.d_max + (config.band_tolerance_px + config.band_tolerance_rel * starts.d_max);
     region.band_lo_px = band.lo_px;
     region.band_hi_px = band.hi_px;
   }
-  for (std::size_t i = 0; i < points_px.size(); ++i) {
-    const int k = start_label[i];
-    if (k < 0) continue;
-    // Start inside the chosen superpixel: the point's pixel if it belongs to it, else its nearest pixel.
-    cv::Point start(static_cast<int>(std::lround(points_px[i].x)) - origin.x,
-                    static_cast<int>(std::lround(points_px[i].y)) - origin.y);
-    start.x = std::clamp(start.x, 0, labels.cols - 1);
-    start.y = std::clamp(start.y, 0, labels.rows - 1);
-    if (labels.at<int32_t>(start) != k) {
-      int best_d2 = 1 << 30;
-      cv::Point best = start;
-      const int r = config.start_radius_px;
-      for (int y = std::max(0, start.y - r); y <= std::min(labels.rows - 1, start.y + r); ++y) {
-        for (int x = std::max(0, start.x - r); x <= std::min(labels.cols - 1, start.x + r); ++x) {
-          const int d2 = (x - start.x) * (x - start.x) + (y - start.y) * (y - start.y);
-          if (labels.at<int32_t>(y, x) == k && d2 < best_d2) {
-            best_d2 = d2;
-            best = cv::Point(x, y);
-          }
-        }
+  return band;
+}
+
+// Inside superpixel k: the point's pixel (ROI coordinates) if it belongs to it, else its nearest pixel of k within
+// radius_px.
+cv::Point start_pixel(const cv::Mat& labels, cv::Point origin, const cv::Point2f& point_px, int k, int radius_px) {
+  cv::Point start(static_cast<int>(std::lround(point_px.x)) - origin.x, static_cast<int>(std::lround(point_px.y)) - origin.y);
+  start.x = std::clamp(start.x, 0, labels.cols - 1);
+  start.y = std::clamp(start.y, 0, labels.rows - 1);
+  if (labels.at<int32_t>(start) == k) return start;
+  int best_d2 = 1 << 30;
+  cv::Point best = start;
+  const int r = radius_px;
+  for (int y = std::max(0, start.y - r); y <= std::min(labels.rows - 1, start.y + r); ++y) {
+    for (int x = std::max(0, start.x - r); x <= std::min(labels.cols - 1, start.x + r); ++x) {
+      const int d2 = (x - start.x) * (x - start.x) + (y - start.y) * (y - start.y);
+      if (labels.at<int32_t>(y, x) == k && d2 < best_d2) {
+        best_d2 = d2;
+        best = cv::Point(x, y);
       }
-      start = best;
     }
+  }
+  return best;
+}
+
+// The search from each started point to the occlusion boundaries: the start superpixels, the stop points and the
+// rectangle they span.
+void search_from_starts(const cv::Mat& labels, cv::Point origin, const SuperpixelGraph& graph,
+                        const std::vector<cv::Point2f>& points_px, const Starts& starts,
+                        const RegionSearchConfig& config, const DisparityBand& band, DynamicRegion& region) {
+  int x0 = 1 << 30, y0 = 1 << 30, x1 = -(1 << 30), y1 = -(1 << 30);
+  std::vector<char> is_start(static_cast<std::size_t>(graph.count()), 0);
+  for (std::size_t i = 0; i < points_px.size(); ++i) {
+    const int k = starts.label[i];
+    if (k < 0) continue;
+    const cv::Point start = start_pixel(labels, origin, points_px[i], k, config.start_radius_px);
     ++region.started_points;
     if (!is_start[static_cast<std::size_t>(k)]) {
       is_start[static_cast<std::size_t>(k)] = 1;
@@ -294,12 +318,35 @@ DynamicRegion find_dynamic_region(const cv::Mat& labels, cv::Point origin, const
       region.stop_points.push_back(s + origin);
     }
   }
-  if (region.started_points == 0) return region;
-  region.rectangle = cv::Rect(cv::Point(x0, y0) + origin, cv::Point(x1 + 1, y1 + 1) + origin);
+  if (region.started_points > 0) region.rectangle = cv::Rect(cv::Point(x0, y0) + origin, cv::Point(x1 + 1, y1 + 1) + origin);
+}
 
-  // Flood over non-occlusion boundaries, among superpixels whose centre lies inside the rectangle and whose
-  // plane is in the band and not ground. Superpixels without a plane do not extend the flood; with
-  // enclosed_unknown_only they join afterwards only when members lie left and right of them.
+// Local band: a plane must also agree with the nearest started point of the group at c (a group that spans two
+// people at different depths has a wide band, which the background between them would pass).
+bool agrees_with_nearest_start(const DisparityPlane& plane, const cv::Point2d& c, const std::vector<cv::Point2f>& points_px,
+                               const std::vector<float>& disparity_px, const Starts& starts,
+                               const RegionSearchConfig& config) {
+  double best_d2 = 1e30, d_near = 0;
+  for (std::size_t i = 0; i < points_px.size(); ++i) {
+    if (starts.label[i] < 0) continue;
+    const double dx = points_px[i].x - c.x, dy = points_px[i].y - c.y;
+    if (dx * dx + dy * dy < best_d2) {
+      best_d2 = dx * dx + dy * dy;
+      d_near = disparity_px[i];
+    }
+  }
+  const double tol = config.band_tolerance_px + config.band_tolerance_rel * d_near;
+  return std::abs(plane.disparity_at(c.x, c.y) - d_near) <= tol;
+}
+
+// Flood over non-occlusion boundaries from the start superpixels, among superpixels whose centre lies inside the
+// rectangle and whose plane is in the band and not ground. Superpixels without a plane do not extend the flood; with
+// enclosed_unknown_only they are returned for add_enclosed_unknown.
+std::vector<int> flood_superpixels(const SuperpixelGraph& graph, const std::vector<DisparityPlane>& planes,
+                                   cv::Point origin, const std::vector<cv::Point2f>& points_px,
+                                   const std::vector<float>& disparity_px, const Starts& starts,
+                                   const RegionSearchConfig& config, const DisparityBand& band,
+                                   const std::vector<char>& vetoed, DynamicRegion& region) {
   std::vector<char> seen(static_cast<std::size_t>(graph.count()), 0);
   std::vector<int> queue = region.start_superpixels;
   std::vector<int> unknown;
@@ -322,20 +369,9 @@ DynamicRegion find_dynamic_region(const cv::Mat& labels, cv::Point origin, const
                                                         static_cast<int>(std::lround(c.y)) - origin.y));
         if (state == 1) continue;
       }
-      // Local band: the plane must also agree with the nearest started point of the group (a group that spans
-      // two people at different depths has a wide band, which the background between them would pass).
-      if (config.local_band && band.enabled && plane.valid) {
-        double best_d2 = 1e30, d_near = 0;
-        for (std::size_t i = 0; i < points_px.size(); ++i) {
-          if (start_label[i] < 0) continue;
-          const double dx = points_px[i].x - c.x, dy = points_px[i].y - c.y;
-          if (dx * dx + dy * dy < best_d2) {
-            best_d2 = dx * dx + dy * dy;
-            d_near = disparity_px[i];
-          }
-        }
-        const double tol = config.band_tolerance_px + config.band_tolerance_rel * d_near;
-        if (std::abs(plane.disparity_at(c.x, c.y) - d_near) > tol) continue;
+      if (config.local_band && band.enabled && plane.valid &&
+          !agrees_with_nearest_start(plane, c, points_px, disparity_px, starts, config)) {
+        continue;
       }
       seen[static_cast<std::size_t>(m)] = 1;
       if (!plane.valid && config.enclosed_unknown_only) {
@@ -345,29 +381,59 @@ DynamicRegion find_dynamic_region(const cv::Mat& labels, cv::Point origin, const
       queue.push_back(m);
     }
   }
-  if (!unknown.empty()) {
-    std::vector<char> member(static_cast<std::size_t>(graph.count()), 0);
-    for (int k : region.superpixels) member[static_cast<std::size_t>(k)] = 1;
-    const cv::Rect rect_local = cv::Rect(region.rectangle.tl() - origin, region.rectangle.size()) &
-                                cv::Rect(0, 0, labels.cols, labels.rows);
-    for (int m : unknown) {
-      const cv::Point2d c = graph.region(m).centroid();
-      const cv::Point centre(std::clamp(static_cast<int>(std::lround(c.x)) - origin.x, 0, labels.cols - 1),
-                             std::clamp(static_cast<int>(std::lround(c.y)) - origin.y, 0, labels.rows - 1));
-      // The first other superpixel met from the centre in direction (dx, dy), inside the rectangle, is a member.
-      auto member_towards = [&](int dx, int dy) {
-        for (cv::Point p = centre; rect_local.contains(p); p += cv::Point(dx, dy)) {
-          const int k = labels.at<int32_t>(p);
-          if (k == m) continue;
-          return k >= 0 && k < graph.count() && member[static_cast<std::size_t>(k)] != 0;
-        }
-        return false;
-      };
-      if (member_towards(-1, 0) && member_towards(1, 0) && member_towards(0, -1) && member_towards(0, 1)) {
-        region.superpixels.push_back(m);
+  return unknown;
+}
+
+// Superpixels without a plane join when the first other superpixel met from their centre left, right, up and down
+// (inside the rectangle) is a member.
+void add_enclosed_unknown(const cv::Mat& labels, cv::Point origin, const SuperpixelGraph& graph,
+                          const std::vector<int>& unknown, DynamicRegion& region) {
+  std::vector<char> member(static_cast<std::size_t>(graph.count()), 0);
+  for (int k : region.superpixels) member[static_cast<std::size_t>(k)] = 1;
+  const cv::Rect rect_local = cv::Rect(region.rectangle.tl() - origin, region.rectangle.size()) &
+                              cv::Rect(0, 0, labels.cols, labels.rows);
+  for (int m : unknown) {
+    const cv::Point2d c = graph.region(m).centroid();
+    const cv::Point centre(std::clamp(static_cast<int>(std::lround(c.x)) - origin.x, 0, labels.cols - 1),
+                           std::clamp(static_cast<int>(std::lround(c.y)) - origin.y, 0, labels.rows - 1));
+    auto member_towards = [&](int dx, int dy) {
+      for (cv::Point p = centre; rect_local.contains(p); p += cv::Point(dx, dy)) {
+        const int k = labels.at<int32_t>(p);
+        if (k == m) continue;
+        return k >= 0 && k < graph.count() && member[static_cast<std::size_t>(k)] != 0;
       }
+      return false;
+    };
+    if (member_towards(-1, 0) && member_towards(1, 0) && member_towards(0, -1) && member_towards(0, 1)) {
+      region.superpixels.push_back(m);
     }
   }
+}
+}  // namespace
+
+DynamicRegion find_dynamic_region(const cv::Mat& labels, cv::Point origin, const SuperpixelGraph& graph,
+                                  const std::vector<DisparityPlane>& planes, const std::vector<cv::Point2f>& points_px,
+                                  const std::vector<float>& disparity_px, const RegionSearchConfig& config,
+                                  const std::vector<cv::Point2f>& static_points_px,
+                                  const std::vector<float>& static_disparity_px, const DisparityPlane* ground,
+                                  const std::vector<char>* moves_with_background) {
+  CV_Assert(points_px.size() == disparity_px.size());
+  CV_Assert(static_points_px.size() == static_disparity_px.size());
+  DynamicRegion region;
+  std::vector<char> vetoed(static_cast<std::size_t>(graph.count()), 0);
+  if (config.static_veto) {
+    veto_static_superpixels(labels, origin, graph, planes, static_points_px, static_disparity_px, config, vetoed, region);
+  }
+  const Starts starts = choose_starts(labels, origin, planes, points_px, disparity_px, config, ground, vetoed);
+  if (moves_with_background != nullptr && static_cast<int>(moves_with_background->size()) == graph.count()) {
+    veto_background_superpixels(*moves_with_background, starts, graph.count(), vetoed, region);
+  }
+  const DisparityBand band = make_band(config, starts, planes, origin, vetoed, ground, region);
+  search_from_starts(labels, origin, graph, points_px, starts, config, band, region);
+  if (region.started_points == 0) return region;
+  const std::vector<int> unknown =
+      flood_superpixels(graph, planes, origin, points_px, disparity_px, starts, config, band, vetoed, region);
+  if (!unknown.empty()) add_enclosed_unknown(labels, origin, graph, unknown, region);
   return region;
 }
 

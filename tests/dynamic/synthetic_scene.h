@@ -214,6 +214,15 @@ struct CorridorScene {
   }
 };
 
+// A 0.5 x 0.9 m box 5 m away (~46 x 83 px): with 120 quadtree tracks (~55 px apart) two or three fall on it.
+inline CorridorScene small_far_box_scene() {
+  CorridorScene scene;
+  scene.box.origin = {-0.4, -0.4, 5.0};
+  scene.box.width_m = 0.5;
+  scene.box.height_m = 0.9;
+  return scene;
+}
+
 inline SE3d camera_pose(double x, double y, double z, double yaw_deg = 0) {
   SE3d T = SE3d::Identity();
   T.linear() = Eigen::AngleAxisd(yaw_deg * M_PI / 180.0, Eigen::Vector3d::UnitY()).toRotationMatrix();

@@ -16,7 +16,7 @@ using namespace agvslam::dynamic::testing;
 // confirmation has its own test below).
 DynamicDetectorConfig per_frame() {
   DynamicDetectorConfig config;
-  config.detector.confirm_min_box_iou = 0;
+  config.confirm.min_box_iou = 0;
   return config;
 }
 
@@ -136,7 +136,7 @@ TEST(DynamicDetector, DepthTestFindsMotionAlongTheEpipolarLines) {
 TEST(DynamicDetector, WholeFrameDisparityDebugModeAgrees) {
   DynamicDetectorConfig config = per_frame();
   config.detector.full_frame_disparity = true;
-  config.detector.roi_scale = 1.0;
+  config.roi.scale = 1.0;
   const RunOutcome run = run_two_frames(config, camera_pose(0.0, 0, 0.10, 0.0), Eigen::Vector3d(-0.12, 0, 0), true);
   ASSERT_FALSE(run.result.full_disparity_px.empty());
   EXPECT_EQ(run.result.full_disparity_px.size(), cv::Size(752, 480));
@@ -167,22 +167,13 @@ TEST(DynamicDetector, ResetAndSizeChangeStartOver) {
   EXPECT_EQ(r.mask.image.size(), cv::Size(376, 240));
 }
 
-// A 0.5 x 0.9 m box 5 m away, a little left of and above the optical axis (~46 x 83 px).
-CorridorScene small_far_box_scene() {
-  CorridorScene scene;
-  scene.box.origin = {-0.4, -0.4, 5.0};
-  scene.box.width_m = 0.5;
-  scene.box.height_m = 0.9;
-  return scene;
-}
-
 TEST(DynamicDetector, SmallFarObjectIsFoundThroughDensification) {
   // A 0.5 x 0.9 m box 5 m away (~46 x 83 px) with 120 quadtree points (~55 px apart): two or three points
   // fall on it, fewer than the five a ROI needs; the tracks added around them make it a ROI.
   const CorridorScene scene = small_far_box_scene();
   DynamicDetectorConfig sparse = per_frame();
   sparse.features.target_count = 120;
-  sparse.detector.densify = false;
+  sparse.densify.enabled = false;
   const RunOutcome without =
       run_two_frames(sparse, camera_pose(0.0, 0, 0.08), Eigen::Vector3d(-0.12, -0.06, 0), true, scene);
   DynamicDetectorConfig dense = per_frame();
@@ -201,15 +192,15 @@ TEST(DynamicDetector, SmallFarObjectIsFoundThroughDensification) {
 TEST(DynamicDetector, DepthTestPointsSeedDensificationAlongTheEpipolarLines) {
   // The same small far box, now coming straight at the camera that drives ahead: its image motion is radial from
   // the focus of expansion, on the epipolar lines, so only the depth test flags its two or three points. With
-  // detector.densify_depth_seed_factor they seed densification and the box becomes a ROI; without, nothing grows
+  // densify.depth_seed_factor they seed densification and the box becomes a ROI; without, nothing grows
   // around them.
   const CorridorScene scene = small_far_box_scene();
   DynamicDetectorConfig off = per_frame();
   off.features.target_count = 160;
-  off.detector.densify_depth_seed_factor = 0;
+  off.densify.depth_seed_factor = 0;
   DynamicDetectorConfig on = per_frame();
   on.features.target_count = 160;
-  ASSERT_GT(on.detector.densify_depth_seed_factor, 0);  // on by default
+  ASSERT_GT(on.densify.depth_seed_factor, 0);  // on by default
   const RunOutcome without = run_two_frames(off, camera_pose(0.0, 0, 0.08), Eigen::Vector3d(0, 0, -0.4), true, scene);
   const RunOutcome with = run_two_frames(on, camera_pose(0.0, 0, 0.08), Eigen::Vector3d(0, 0, -0.4), true, scene);
   auto densified_dynamic = [](const DetectorResult& r) {
@@ -286,7 +277,7 @@ std::vector<DetectorResult> box_crossing_then_stopping(const DynamicDetectorConf
 TEST(DynamicDetector, DensifiedPointsAroundASlowMoverAreTestedAgainstTheMultiFrameReference) {
   // A box 4 m ahead and 1-2 m to the left keeps its distance from the forward-driving camera, with only 60
   // tracks: a few of its tracks are multi-frame dynamic, and the points densified around them have no history.
-  // Tracked from this frame into the reference image (detector.densify_multiframe_*), those on the box are found
+  // Tracked from this frame into the reference image (densify.multiframe_*), those on the box are found
   // 10-17 px from where static points would be, the way the box's tracks are; frame to frame nothing flags them.
   CorridorScene scene;
   scene.box.origin = {-1.9, -1.1, 4.0};
@@ -303,10 +294,10 @@ TEST(DynamicDetector, DensifiedPointsAroundASlowMoverAreTestedAgainstTheMultiFra
     DynamicDetectorConfig config = per_frame();
     config.features.target_count = 60;
     config.tracking.max_tracks = 60;
-    config.detector.densify_multiframe_levels = levels;
+    config.densify.multiframe_levels = levels;
     // The multi-frame threshold adapts to this run's residuals (~5 px, 2.5x its floor; ~2 px in the simulator's
     // warehouse): 3x that would be above the box's offsets.
-    config.detector.densify_multiframe_factor = 1.5;
+    config.densify.multiframe_factor = 1.5;
     DynamicDetector detector(scene.calibration(), config);
     DetectorResult r;
     Count c;
@@ -338,13 +329,13 @@ TEST(DynamicDetector, DensifiedPointsAroundASlowMoverAreTestedAgainstTheMultiFra
 }
 
 TEST(DynamicDetector, AnObjectIsReportedOnceTheNextFrameConfirmsIt) {
-  // detector.confirm_min_box_iou: the crossing box (~37500 px) is found in frame 1 and, when every object must
+  // confirm.min_box_iou: the crossing box (~37500 px) is found in frame 1 and, when every object must
   // wait for confirmation (confirm_below_px 0, confirm_near_min_px 0), reported from frame 2 on, when its box
   // overlaps frame 1's.
   DynamicDetectorConfig confirming;
-  ASSERT_GT(confirming.detector.confirm_min_box_iou, 0);
-  confirming.detector.confirm_below_px = 0;
-  confirming.detector.confirm_near_min_px = 0;
+  ASSERT_GT(confirming.confirm.min_box_iou, 0);
+  confirming.confirm.below_px = 0;
+  confirming.confirm.near_min_px = 0;
   std::vector<cv::Mat> gt;
   const std::vector<DetectorResult> r = box_crossing_then_stopping(confirming, 5, 5, &gt);
   EXPECT_EQ(r[1].mask.pixel_count(), 0) << summary(r[1]);
@@ -359,29 +350,29 @@ TEST(DynamicDetector, AnObjectIsReportedOnceTheNextFrameConfirmsIt) {
   // With the defaults an object this large (near) is reported in the frame it is found, as without confirmation;
   // one smaller than confirm_below_px waits.
   const DynamicDetectorConfig defaults;
-  ASSERT_GT(defaults.detector.confirm_below_px, 0);
-  ASSERT_LT(defaults.detector.confirm_below_px, cv::countNonZero(gt[1]));
+  ASSERT_GT(defaults.confirm.below_px, 0);
+  ASSERT_LT(defaults.confirm.below_px, cv::countNonZero(gt[1]));
   for (const DynamicDetectorConfig& c : {defaults, per_frame()}) {
     const std::vector<DetectorResult> at_once = box_crossing_then_stopping(c, 2, 2);
     EXPECT_EQ(at_once[1].unconfirmed_objects, 0);
     EXPECT_GE(iou(at_once[1].mask.image, gt[1]), 0.7) << summary(at_once[1]);
   }
   DynamicDetectorConfig larger = defaults;
-  larger.detector.confirm_below_px = cv::countNonZero(gt[1]) * 2;
-  larger.detector.confirm_near_min_px = 0;
+  larger.confirm.below_px = cv::countNonZero(gt[1]) * 2;
+  larger.confirm.near_min_px = 0;
   const std::vector<DetectorResult> waits = box_crossing_then_stopping(larger, 3, 3);
   EXPECT_EQ(waits[1].mask.pixel_count(), 0) << summary(waits[1]);
   EXPECT_GE(iou(waits[2].mask.image, gt[2]), 0.7) << summary(waits[2]);
 }
 
 TEST(DynamicDetector, ANearObjectFarOffTheEgoMotionIsReportedAtOnce) {
-  // detector.confirm_near_*: the crossing box, 3 m away (d ~ 18 px), moves ~7 px per frame across the view. With
+  // confirm.near_*: the crossing box, 3 m away (d ~ 18 px), moves ~7 px per frame across the view. With
   // the size rule off (confirm_below_px 0) it is still reported in the frame it is found: its ROI's points are near
   // and the tracks inside its outline are far off the ego-motion. With the offset or the disparity needed above
   // theirs, a box fill it cannot reach, or the rule off, it waits for the next frame.
   DynamicDetectorConfig near_rule;
-  near_rule.detector.confirm_below_px = 0;
-  ASSERT_GT(near_rule.detector.confirm_near_min_px, 0);
+  near_rule.confirm.below_px = 0;
+  ASSERT_GT(near_rule.confirm.near_min_px, 0);
   std::vector<cv::Mat> gt;
   const std::vector<DetectorResult> r = box_crossing_then_stopping(near_rule, 3, 3, &gt);
   double offset_px = -1, disparity_px = 0;
@@ -391,19 +382,19 @@ TEST(DynamicDetector, ANearObjectFarOffTheEgoMotionIsReportedAtOnce) {
     disparity_px = std::max(disparity_px, roi.mean_disparity_px);
   }
   std::printf("box in frame 1: points' disparity %.1f px, tracks' median offset %.2f px\n", disparity_px, offset_px);
-  EXPECT_GE(disparity_px, near_rule.detector.confirm_near_min_disparity_px);
-  EXPECT_GE(offset_px, near_rule.detector.confirm_near_min_offset_px);
+  EXPECT_GE(disparity_px, near_rule.confirm.near_min_disparity_px);
+  EXPECT_GE(offset_px, near_rule.confirm.near_min_offset_px);
   EXPECT_EQ(r[1].unconfirmed_objects, 0) << summary(r[1]);
   EXPECT_GE(iou(r[1].mask.image, gt[1]), 0.7) << summary(r[1]);
 
   DynamicDetectorConfig too_slow = near_rule;
-  too_slow.detector.confirm_near_min_offset_px = offset_px + 1;
+  too_slow.confirm.near_min_offset_px = offset_px + 1;
   DynamicDetectorConfig too_far = near_rule;
-  too_far.detector.confirm_near_min_disparity_px = disparity_px + 1;
+  too_far.confirm.near_min_disparity_px = disparity_px + 1;
   DynamicDetectorConfig partial = near_rule;
-  partial.detector.confirm_near_min_roi_fill = 1.0;  // no outline's box fills its whole ROI (the margins)
+  partial.confirm.near_min_roi_fill = 1.0;  // no outline's box fills its whole ROI (the margins)
   DynamicDetectorConfig off = near_rule;
-  off.detector.confirm_near_min_px = 0;
+  off.confirm.near_min_px = 0;
   for (const DynamicDetectorConfig& c : {too_slow, too_far, partial, off}) {
     const std::vector<DetectorResult> waits = box_crossing_then_stopping(c, 3, 3);
     EXPECT_EQ(waits[1].mask.pixel_count(), 0) << summary(waits[1]);
@@ -412,29 +403,13 @@ TEST(DynamicDetector, ANearObjectFarOffTheEgoMotionIsReportedAtOnce) {
   }
 }
 
-TEST(DynamicDetector, AFragmentLiesHalfInsideAnotherObjectsBox) {
-  // detector.confirm_near_*: an arm outlined apart from its person is not reported at once.
-  const std::vector<cv::Rect> boxes = {cv::Rect(),                   // instance 0: none
-                                       cv::Rect(0, 0, 276, 428),     // a person
-                                       cv::Rect(101, 282, 52, 99),   // an arm inside its box
-                                       cv::Rect(250, 100, 52, 100),  // half of it inside (26 of 52 columns)
-                                       cv::Rect(251, 0, 52, 90),     // just under half inside (25 columns)
-                                       cv::Rect(400, 0, 100, 300)};  // a person apart
-  EXPECT_FALSE(lies_half_inside_another(boxes, 1));  // the arm inside it does not make the person a fragment
-  EXPECT_TRUE(lies_half_inside_another(boxes, 2));
-  EXPECT_TRUE(lies_half_inside_another(boxes, 3));
-  EXPECT_FALSE(lies_half_inside_another(boxes, 4));
-  EXPECT_FALSE(lies_half_inside_another(boxes, 5));
-  EXPECT_FALSE(lies_half_inside_another({cv::Rect(0, 0, 10, 10)}, 0));
-}
-
 TEST(DynamicDetector, ACoastedObjectMustShowItsMotion) {
   // The box is found while it crosses; when it stops, no test flags its points any more (the multi-frame test is
   // off here), so the detector tries to coast it on its tracks, and the photometric check finds its content where a
   // static surface would be: the coasted outline is dropped, the mask is empty from the first frame after the stop.
   DynamicDetectorConfig config = per_frame();
   config.multiframe.enabled = false;
-  config.detector.coast_max_frames = 4;
+  config.objects.coast_max_frames = 4;
   constexpr int kFrames = 10, kStop = 6;
   std::vector<cv::Mat> gt;
   const std::vector<DetectorResult> r = box_crossing_then_stopping(config, kFrames, kStop, &gt);
@@ -471,7 +446,7 @@ TEST(DynamicDetector, BoxAtTheLeftBorderGetsItsOutlineThere) {
   DynamicDetectorConfig padded = per_frame();
   padded.outline.left_band_touch_px = -1;
   DynamicDetectorConfig unpadded = padded;
-  unpadded.detector.pad_left_border = false;
+  unpadded.roi.pad_left_border = false;
   const RunOutcome with = box_at_left_border(padded);
   const RunOutcome without = box_at_left_border(unpadded);
   // Columns 24..31: matchable (x > d), left of what SGBM covers without padding.
@@ -543,14 +518,14 @@ std::vector<DetectorResult> box_sideways_at_left_border(const DynamicDetectorCon
 
 TEST(DynamicDetector, ABoxLeavingToTheLeftIsCarriedIntoTheUnmatchedBand) {
   // The box moves left by 3 cm (~6 px) per frame from x = 60 until it is cut by the border: its pixels that enter
-  // the band x < d (no match in the right image) were outlined in earlier frames, and with detector.band_carry_*
+  // the band x < d (no match in the right image) were outlined in earlier frames, and with band_carry.*
   // they are carried there with its tracks. Off, the band stays empty. Nothing of the wall behind it is carried.
   // (The band fill, outline.left_band_touch_px, which also reaches the band here, is off in both.)
   DynamicDetectorConfig carried = per_frame();
-  ASSERT_GT(carried.detector.band_carry_max_frames, 0);  // on by default
+  ASSERT_GT(carried.band_carry.max_frames, 0);  // on by default
   carried.outline.left_band_touch_px = -1;
   DynamicDetectorConfig not_carried = carried;
-  not_carried.detector.band_carry_max_frames = 0;
+  not_carried.band_carry.max_frames = 0;
   constexpr int kFrames = 14;
   std::vector<cv::Mat> gt;
   const std::vector<DetectorResult> with = box_sideways_at_left_border(carried, 60, -0.03, kFrames, gt);
@@ -710,7 +685,7 @@ TEST(DynamicDetector, ABoxSteppingIntoTheBandIsFoundWhileTheCameraStands) {
 TEST(DynamicDetector, OutlineCutByTheRoiSideIsWidened) {
   // A 1.2 m wide box 3 m away (~184 px) whose left half has a faint texture: no FAST corner there, so the ROI
   // (the tracks' box plus its margin) ends ~25 px left of the textured half, but SGBM matches the faint half.
-  // The outline reaches the ROI's left side over many rows; widened there (detector.extend_*) it covers the
+  // The outline reaches the ROI's left side over many rows; widened there (roi.extend_*) it covers the
   // whole box, without widening (the default, see params/dynamic.yaml) it stops at the ROI.
   CorridorScene scene;
   scene.box.origin = {-0.6, -1.1, 3.0};
@@ -720,9 +695,9 @@ TEST(DynamicDetector, OutlineCutByTheRoiSideIsWidened) {
   scene.box.texture = texture;
   scene.box.metres_per_texel = 0.006;
   DynamicDetectorConfig narrow = per_frame();
-  narrow.detector.extend_max_rounds = 0;
+  narrow.roi.extend_max_rounds = 0;
   DynamicDetectorConfig widened = per_frame();
-  widened.detector.extend_max_rounds = 2;
+  widened.roi.extend_max_rounds = 2;
   const SE3d pose1 = camera_pose(0.0, 0, 0.08);
   const Eigen::Vector3d motion(0.10, -0.04, 0);
   const RunOutcome with = run_two_frames(widened, pose1, motion, true, scene);
@@ -791,61 +766,3 @@ TEST(DynamicDetector, AnOutlineOffTheMultiFrameReferenceMovesTogether) {
 }  // namespace
 }  // namespace agvslam::dynamic
 
-TEST(DynamicDetector, AnOutlineThatFloodedASurfaceIsCutToTheObjectsLastPixelsMoved) {
-  // detector.growth_max_ratio: the object (a 40 x 100 px block) was at (200, 100) in the previous frame and moved
-  // by (+6, -2); this frame's outline, in a ROI whose top-left is (150, 60), holds it and a 120 x 60 px slab of
-  // racking beside and above it at its depth. Cut to the last pixels moved and grown by (4, 8), only the block and
-  // the margin around it remain.
-  cv::Mat last = cv::Mat::zeros(100, 40, CV_8UC1);
-  last.setTo(255);
-  const cv::Point last_origin(200, 100), shift(6, -2), roi_origin(150, 60);
-  cv::Mat outline = cv::Mat::zeros(200, 200, CV_8UC1);
-  const cv::Rect object_now = cv::Rect(last_origin + shift - roi_origin, last.size());
-  outline(object_now).setTo(255);
-  const cv::Rect slab(0, 0, 120, 60);  // ROI coordinates: left of and above the object, touching it
-  outline(slab).setTo(255);
-  ASSERT_GT((slab & object_now).area(), 0);
-  const int before = cv::countNonZero(outline);
-  const int kept = agvslam::dynamic::cut_to_moved_pixels(outline, roi_origin, last, last_origin, shift, cv::Size(4, 8));
-  EXPECT_EQ(kept, cv::countNonZero(outline));
-  EXPECT_LT(kept, before);
-  // The object is kept whole, nothing farther than the margin from it is.
-  EXPECT_EQ(cv::countNonZero(outline(object_now)), object_now.area());
-  const cv::Rect allowed(object_now.x - 4, object_now.y - 8, object_now.width + 8, object_now.height + 16);
-  EXPECT_EQ(kept, cv::countNonZero(outline(allowed & cv::Rect(0, 0, outline.cols, outline.rows))));
-  EXPECT_EQ(cv::countNonZero(outline(cv::Rect(0, 0, allowed.x, outline.rows))), 0);
-  // Last pixels that moved out of the ROI altogether leave nothing.
-  cv::Mat far_outline = cv::Mat::zeros(50, 50, CV_8UC1);
-  far_outline.setTo(255);
-  EXPECT_EQ(agvslam::dynamic::cut_to_moved_pixels(far_outline, cv::Point(600, 400), last, last_origin, shift, cv::Size(4, 8)), 0);
-}
-
-TEST(DynamicDetector, ACarvedOutlineLosesTheCellsOfItsStaticTracks) {
-  // detector.carve_min_tracks: a ROI at (100, 50) whose outline holds a person (a 40 x 120 px block, dynamic points
-  // down its middle) and, right of it, a 60 x 120 px rack face at its depth with two clearly static tracks. The
-  // Voronoi split between the two sets of points puts the boundary halfway between them: the person stays whole,
-  // the rack face beyond the halfway line goes.
-  const cv::Point roi_origin(100, 50);
-  cv::Mat outline = cv::Mat::zeros(140, 120, CV_8UC1);
-  const cv::Rect person(10, 10, 40, 120), rack(50, 10, 60, 120);  // ROI coordinates, side by side
-  outline(person).setTo(255);
-  outline(rack).setTo(255);
-  std::vector<cv::Point2f> object_px, static_px;
-  for (int y = 30; y <= 110; y += 20) object_px.emplace_back(static_cast<float>(roi_origin.x + 30), static_cast<float>(roi_origin.y + y));
-  static_px.emplace_back(static_cast<float>(roi_origin.x + 90), static_cast<float>(roi_origin.y + 40));
-  static_px.emplace_back(static_cast<float>(roi_origin.x + 90), static_cast<float>(roi_origin.y + 100));
-  const int kept = agvslam::dynamic::carve_static_cells(outline, roi_origin, object_px, static_px);
-  EXPECT_EQ(kept, cv::countNonZero(outline));
-  EXPECT_EQ(cv::countNonZero(outline(person)), person.area());
-  // Columns x >= 80 (ROI) lie within 10 columns and 30 rows of a static track (squared distance <= 1000) and 50
-  // columns from the object's points (>= 2500): all carved. Columns 50-54 lie 20-24 columns and <= 20 rows from an
-  // object point (<= 976) and >= 36 columns from the static tracks (>= 1296): all kept.
-  EXPECT_EQ(cv::countNonZero(outline(cv::Rect(80, 0, outline.cols - 80, outline.rows))), 0);
-  EXPECT_EQ(cv::countNonZero(outline(cv::Rect(50, 10, 5, 120))), 5 * 120);
-  EXPECT_LT(kept, person.area() + rack.area() / 2);
-  // Without static tracks (or without object points) nothing is carved.
-  cv::Mat untouched = cv::Mat::zeros(140, 120, CV_8UC1);
-  untouched(rack).setTo(255);
-  EXPECT_EQ(agvslam::dynamic::carve_static_cells(untouched, roi_origin, object_px, {}), rack.area());
-  EXPECT_EQ(agvslam::dynamic::carve_static_cells(untouched, roi_origin, {}, static_px), rack.area());
-}

@@ -106,10 +106,10 @@ TEST(DynamicDetectorSim, CoastedObjectsLieOnMovingObjects) {
   options.frames = 400;
   const sim::Simulator simulator(sim::SimConfig{}, options);
   DynamicDetectorConfig config;
-  config.detector.coast_max_frames = 4;
+  config.objects.coast_max_frames = 4;
   // Without the densification seeds from the depth test alone: with them the per-frame tests no longer miss that
   // person in these frames, and nothing needs to coast.
-  config.detector.densify_depth_seed_factor = 0;
+  config.densify.depth_seed_factor = 0;
   DynamicDetector detector(simulator.calibration(), config);
   sim::SimFrame rendered;
   DetectorResult result;

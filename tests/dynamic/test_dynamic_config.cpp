@@ -51,7 +51,7 @@ TEST(DynamicConfig, ShippedParamsFileEqualsTheDefaults) {
   EXPECT_EQ(c.slic.incremental, d.slic.incremental);
   EXPECT_EQ(c.regions.mask_mode, d.regions.mask_mode);
   EXPECT_EQ(c.planes.seed, d.planes.seed);
-  EXPECT_EQ(c.describe().size(), 16u);
+  EXPECT_EQ(c.describe().size(), 22u);
   EXPECT_EQ(c.band.close_px, d.band.close_px);
   EXPECT_EQ(c.motion_carve.block_px, d.motion_carve.block_px);
 }
@@ -59,13 +59,13 @@ TEST(DynamicConfig, ShippedParamsFileEqualsTheDefaults) {
 TEST(DynamicConfig, OverridesOnlyTheGivenKeys) {
   TempYaml f(
       "epipolar:\n  a_epi_px: 1.5\n  adaptive: false\nslic:\n  incremental: true\nregions:\n  mask_mode: rectangle\n"
-      "detector:\n  roi_scale: 1\nmultiframe:\n  prior_min_inlier_fraction: 0\n");
+      "roi:\n  scale: 1\nmultiframe:\n  prior_min_inlier_fraction: 0\n");
   const DynamicDetectorConfig c = load_dynamic_config(f.path());
   EXPECT_DOUBLE_EQ(c.epipolar.a_epi_px, 1.5);
   EXPECT_FALSE(c.epipolar.adaptive);
   EXPECT_TRUE(c.slic.incremental);
   EXPECT_EQ(c.regions.mask_mode, MaskMode::kRectangle);
-  EXPECT_DOUBLE_EQ(c.detector.roi_scale, 1.0);
+  EXPECT_DOUBLE_EQ(c.roi.scale, 1.0);
   EXPECT_DOUBLE_EQ(c.multiframe.prior_min_inlier_fraction, 0.0);
   EXPECT_EQ(c.features.target_count, QuadtreeFastConfig{}.target_count);
 }
@@ -76,7 +76,7 @@ TEST(DynamicConfig, BadValuesNameFileAndField) {
   expect_error("boundaries:\n  lambda_occ: 0.1\n", "boundaries.lambda_occ");  // must exceed lambda_hinge
   expect_error("grouping:\n  min_points: 0\n", "grouping.min_points");
   expect_error("grouping:\n  merge_side_gap_m: -0.1\n", "grouping.merge_side_gap_m");
-  expect_error("detector:\n  half_scale_erode_px: 11\n", "detector.half_scale_erode_px");
+  expect_error("roi:\n  half_scale_erode_px: 11\n", "roi.half_scale_erode_px");
   expect_error("outline:\n  close_far_m: 3\n", "outline.close_far_m");
   expect_error("multiframe:\n  aperture_ratio: 1\n", "multiframe.aperture_ratio");
   expect_error("outline:\n  left_band_touch_px: -2\n", "outline.left_band_touch_px");
@@ -85,35 +85,35 @@ TEST(DynamicConfig, BadValuesNameFileAndField) {
   expect_error("outline:\n  aggregate_min_tracks: -3\n", "outline.aggregate_min_tracks");
   expect_error("outline:\n  aggregate_multiframe_fraction: 1.5\n", "outline.aggregate_multiframe_fraction");
   expect_error("outline:\n  aggregate_multiframe_min_px: -0.1\n", "outline.aggregate_multiframe_min_px");
-  expect_error("detector:\n  coast_max_frames: -1\n", "detector.coast_max_frames");
+  expect_error("objects:\n  coast_max_frames: -1\n", "objects.coast_max_frames");
   expect_error("edge_refine:\n  band_px: 40\n", "edge_refine.band_px");
   expect_error("edge_refine:\n  occlusion_cost: 0\n", "edge_refine.occlusion_cost");
   expect_error("edge_refine:\n  width_px: 3\n", "edge_refine.width_px");  // unknown key
-  expect_error("detector:\n  extend_max_rounds: -1\n", "detector.extend_max_rounds");
-  expect_error("detector:\n  densify_depth_seed_factor: -1\n", "detector.densify_depth_seed_factor");
-  expect_error("detector:\n  roi_row_step: 3\n", "detector.roi_row_step");
-  expect_error("detector:\n  confirm_min_box_iou: 1.5\n", "detector.confirm_min_box_iou");
-  expect_error("detector:\n  confirm_below_px: -1\n", "detector.confirm_below_px");
-  expect_error("detector:\n  confirm_near_min_disparity_px: -2\n", "detector.confirm_near_min_disparity_px");
-  expect_error("detector:\n  confirm_near_min_offset_px: fast\n", "detector.confirm_near_min_offset_px");
-  expect_error("detector:\n  confirm_near_min_px: -1\n", "detector.confirm_near_min_px");
-  expect_error("detector:\n  confirm_near_min_roi_fill: 1.5\n", "detector.confirm_near_min_roi_fill");
-  expect_error("detector:\n  growth_max_ratio: 0.5\n", "detector.growth_max_ratio");
-  expect_error("detector:\n  growth_margin: -0.1\n", "detector.growth_margin");
-  expect_error("detector:\n  carve_min_tracks: -1\n", "detector.carve_min_tracks");
-  expect_error("detector:\n  carve_max_offset_px: -0.2\n", "detector.carve_max_offset_px");
-  expect_error("detector:\n  carve_max_multiframe_px: 200\n", "detector.carve_max_multiframe_px");
-  expect_error("detector:\n  carve_min_distance_px: -5\n", "detector.carve_min_distance_px");
-  expect_error("detector:\n  roi_row_step_min_area_px: -1\n", "detector.roi_row_step_min_area_px");
-  expect_error("detector:\n  extend_min_rows: 0\n", "detector.extend_min_rows");
-  expect_error("detector:\n  extend_step_m: 0\n", "detector.extend_step_m");
-  expect_error("detector:\n  extend_static_guard_px: -1\n", "detector.extend_static_guard_px");
-  expect_error("detector:\n  densify_min_seeds: 0\n", "detector.densify_min_seeds");
-  expect_error("detector:\n  densify_extra_tracks: -5\n", "detector.densify_extra_tracks");
-  expect_error("detector:\n  densify_keep_static: maybe\n", "detector.densify_keep_static");
-  expect_error("detector:\n  coast_min_tracks: 0\n", "detector.coast_min_tracks");
-  expect_error("detector:\n  coast_min_area_ratio: 1.5\n", "detector.coast_min_area_ratio");
-  expect_error("detector:\n  coast_min_detections: 0\n", "detector.coast_min_detections");
+  expect_error("roi:\n  extend_max_rounds: -1\n", "roi.extend_max_rounds");
+  expect_error("densify:\n  depth_seed_factor: -1\n", "densify.depth_seed_factor");
+  expect_error("roi:\n  row_step: 3\n", "roi.row_step");
+  expect_error("confirm:\n  min_box_iou: 1.5\n", "confirm.min_box_iou");
+  expect_error("confirm:\n  below_px: -1\n", "confirm.below_px");
+  expect_error("confirm:\n  near_min_disparity_px: -2\n", "confirm.near_min_disparity_px");
+  expect_error("confirm:\n  near_min_offset_px: fast\n", "confirm.near_min_offset_px");
+  expect_error("confirm:\n  near_min_px: -1\n", "confirm.near_min_px");
+  expect_error("confirm:\n  near_min_roi_fill: 1.5\n", "confirm.near_min_roi_fill");
+  expect_error("objects:\n  growth_max_ratio: 0.5\n", "objects.growth_max_ratio");
+  expect_error("objects:\n  growth_margin: -0.1\n", "objects.growth_margin");
+  expect_error("static_carve:\n  min_tracks: -1\n", "static_carve.min_tracks");
+  expect_error("static_carve:\n  max_offset_px: -0.2\n", "static_carve.max_offset_px");
+  expect_error("static_carve:\n  max_multiframe_px: 200\n", "static_carve.max_multiframe_px");
+  expect_error("static_carve:\n  min_distance_px: -5\n", "static_carve.min_distance_px");
+  expect_error("roi:\n  row_step_min_area_px: -1\n", "roi.row_step_min_area_px");
+  expect_error("roi:\n  extend_min_rows: 0\n", "roi.extend_min_rows");
+  expect_error("roi:\n  extend_step_m: 0\n", "roi.extend_step_m");
+  expect_error("roi:\n  extend_static_guard_px: -1\n", "roi.extend_static_guard_px");
+  expect_error("densify:\n  min_seeds: 0\n", "densify.min_seeds");
+  expect_error("densify:\n  extra_tracks: -5\n", "densify.extra_tracks");
+  expect_error("densify:\n  keep_static: maybe\n", "densify.keep_static");
+  expect_error("objects:\n  coast_min_tracks: 0\n", "objects.coast_min_tracks");
+  expect_error("objects:\n  coast_min_area_ratio: 1.5\n", "objects.coast_min_area_ratio");
+  expect_error("objects:\n  coast_min_detections: 0\n", "objects.coast_min_detections");
   expect_error("photometric:\n  multiframe_min_disparity_px: -2\n", "photometric.multiframe_min_disparity_px");
   expect_error("slic:\n  superpixel_size: 12\n", "slic.superpixel_size");  // unknown key
   expect_error("motion_carve:\n  block_px: 1\n", "motion_carve.block_px");
@@ -134,9 +134,13 @@ TEST(DynamicConfig, BadValuesNameFileAndField) {
   expect_error("depth_test:\n  prior_min_inlier_fraction: 0.5\n", "depth_test.prior_min_inlier_fraction");
   expect_error("multiframe:\n  prior_min_inlier_fraction: 1.5\n", "multiframe.prior_min_inlier_fraction");
   expect_error("regions:\n  mask_mode: blob\n", "regions.mask_mode");
-  expect_error("detector:\n  roi_scale: 0.3\n", "detector.roi_scale");
+  expect_error("roi:\n  scale: 0.3\n", "roi.scale");
   expect_error("detector:\n  use_epipolar_test: false\n  use_depth_test: false\n", "detector.use_epipolar_test");
   expect_error("planes:\n  seed: -4\n", "planes.seed");
+  // The parts' keys belong to their own sections (objects, densify, ...): under detector they are unknown.
+  expect_error("detector:\n  densify: true\n", "detector.densify");
+  expect_error("detector:\n  coast_max_frames: 4\n", "detector.coast_max_frames");
+  expect_error("objects:\n  track_objects: true\n", "objects.track_objects");
   expect_error("features: 3\n", "features");
   expect_error("superpixels:\n  size: 3\n", "superpixels");
   EXPECT_THROW(load_dynamic_config("/nonexistent/dynamic.yaml"), InputError);

@@ -3,8 +3,7 @@
 //
 // A pixel of the left image at x < d has no match in the right image: SGBM gives it no disparity, so no outline of
 // the detector reaches it, and a person stepping into view at the left border is a sliver in that band for several
-// frames (on the simulator's scene1, where the AGV waits while a person crosses, every object the detector missed
-// was such a sliver). The left image alone must then tell what moved.
+// frames (an AGV waiting while a person crosses). The left image alone must then tell what moved.
 //
 // Without depth, the position in the previous image of a static point seen at pixel p is known only up to its
 // epipolar segment: the positions of static points at every disparity in [0, max_disparity_px] along p's ray, moved
@@ -28,6 +27,7 @@
 
 #include <opencv2/core.hpp>
 #include <string>
+#include <utility>
 #include <vector>
 
 #include "agvslam/core/camera.h"
@@ -137,7 +137,33 @@ class BandSegmenter {
   void untracked_strip_corners(const cv::Mat& cur_left, const cv::Mat& masked, const std::vector<cv::Point2f>& occupied_px,
                                int cell_px);
 
+  // segment()'s steps. The seeds: the caller's tracks in the strip and the untracked cells' corners whose previous
+  // position lies off their static segment (at most max_seeds, the farthest off).
+  void collect_seeds(const cv::Mat& cur_left, const std::vector<cv::Mat>& cur_pyramid,
+                     const std::vector<cv::Mat>& prev_pyramid, LkTracker& tracker, int lk_levels,
+                     const PinholeCamera& camera, double bf_px_m, const SE3d& T_cur_prev, const cv::Mat& masked,
+                     const std::vector<cv::Point2f>& track_prev, const std::vector<cv::Point2f>& track_cur,
+                     BandResult& out);
+  // The area searched, and the seeds' distinct motions (flows_, flow_of_).
+  cv::Rect search_area(const std::vector<BandSeed>& seeds, cv::Size image);
+  // The static hypothesis' error over the area (static_error_): the least over samples of the static segment.
+  void static_hypothesis(const cv::Mat& cur_left, const cv::Mat& prev_left, const PinholeCamera& camera,
+                         double bf_px_m, const SE3d& T_cur_prev, const cv::Rect& area, double longest);
+  // Each seed motion's error (seed_error_), within reach_px of its seeds.
+  void seed_hypotheses(const cv::Mat& cur_left, const cv::Mat& prev_left, const cv::Rect& area,
+                       const std::vector<BandSeed>& seeds);
+  // Static minus object error per pixel (evidence_).
+  void evidence(const cv::Rect& area, const std::vector<BandSeed>& seeds);
+  // The evidence thresholded, closed, kept inside the strip and off masked pixels (binary_).
+  void binarize(const cv::Rect& area, int strip, const cv::Mat& masked);
+  // Its connected parts that hold a seed, into out.regions.
+  void seeded_regions(const cv::Rect& area, BandResult& out);
+
   BandSegmenterConfig config_;
+  std::vector<cv::Point2f> flows_;  // the seeds' distinct motions (quarter px) ...
+  std::vector<int> flow_of_;        // ... and each seed's
+  std::vector<std::pair<float, int>> by_distance_;
+  std::vector<int> block_flows_;
   std::vector<cv::KeyPoint> keypoints_;
   std::vector<cv::Point2f> corners_, back_;
   std::vector<uint8_t> ok_, tracked_cell_;

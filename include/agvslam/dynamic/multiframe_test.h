@@ -2,7 +2,7 @@
 // Multi-frame motion test (beyond paper 004; paper 001's reprojection offsets over a longer baseline).
 //
 // The per-frame tests cannot see an object whose image barely changes between two frames: a person walking
-// ahead of a forward-driving AGV at about its speed (scene3, scene5) moves by a fraction of a pixel per frame
+// ahead of a forward-driving AGV at about its speed moves by a fraction of a pixel per frame
 // relative to where a static point would be, below the tracking noise. Over 0.3-0.6 s the difference is
 // several pixels and, in disparity, a pixel or more: the static scene comes closer (its disparity grows and
 // it expands around the focus of expansion) while the walker keeps its distance.
@@ -19,10 +19,9 @@
 //
 // Following tracks over frames instead of re-finding them in the reference image keeps the per-step motion
 // small: re-localising a point 0.3-0.6 s back from the chained prediction aliases on repeated structure (the
-// hole pattern of rack uprights) and drifts with the chain in turns; an earlier version that did so raised the
-// false regions on the `static` scenario from ~1 to ~12 per 100 frames. But a track that straddles an
-// occlusion edge slides slowly over the frames, below the per-frame forward-backward check, and piles up with
-// others on the edge. So each candidate (a track the test flags) is verified: its current patch is tracked by
+// hole pattern of rack uprights) and drifts with the chain in turns, both of which look like motion. But a track
+// that straddles an occlusion edge slides slowly over the frames, below the per-frame forward-backward check, and
+// piles up with others on the edge. So each candidate (a track the test flags) is verified: its current patch is tracked by
 // LK directly into the reference image, starting at the track's own reference position (close for a real mover,
 // a few px off for a slid track), forward-backward checked; the candidate stays dynamic only when the position
 // found, back-projected with the reference disparity, still misses the current position, and its disparity
@@ -180,6 +179,19 @@ class MultiFrameTest {
   int chain_length() const { return static_cast<int>(frames_.size()); }
 
  private:
+  // Steps of track i held since the reference (multiframe.chain_stereo_only: stereo agreement counts).
+  int held_steps(const TrackHistory& history, std::size_t i) const;
+  // The reference frame (frames back; -1: none) and the motion from the current camera to it.
+  int choose_reference(const TrackHistory& history, const std::vector<uint8_t>& usable, SE3d& T_ref_cur) const;
+  // The flagged tracks verified by LK into the reference image.
+  void verify_flagged(const PinholeCamera& camera, double bf_px_m, const TrackHistory& history,
+                      const std::vector<cv::Mat>& cur_pyramid, const LkTrackerConfig& tracking, int chosen,
+                      MultiFrameResult& result);
+  // ... and track i's verdict, found at `found` in the reference image.
+  void judge_verified(const PinholeCamera& camera, double bf_px_m, const TrackHistory& history, const cv::Mat& cur_left,
+                      int half_window_px, int chosen, std::size_t i, const cv::Point2f& found,
+                      MultiFrameResult& result) const;
+
   MultiFrameTestConfig config_;
   DepthConsistencyTest test_;
   struct Frame {

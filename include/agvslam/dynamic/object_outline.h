@@ -125,7 +125,23 @@ class ObjectOutliner {
   struct Seed {
     float lo = 0, hi = 0;  // the seed's depth band, in disparity
   };
+  // The floor plane's column and row terms over the ROI (ground_x_, ground_y_); ground_ null: no floor test.
+  void prepare_floor(const DisparityPlane* ground, cv::Point origin, int w, int h);
+  bool is_floor(int x, int y, float d) const;
+  // Seeds the flood at the pixel within seed_radius_px of point p whose disparity agrees with d (and is no floor),
+  // nearest first; false when there is none or it is claimed already.
+  bool add_seed(const cv::Mat& disparity_px, cv::Point origin, double bf_px_m, const cv::Point2f& p, float d,
+                uint8_t label);
+  // Breadth-first from all seeds at once through smooth disparity within each seed's depth band.
+  void flood(const cv::Mat& disparity_px);
+  // Fills the enclosed parts of `mask` (complement components not reaching the ROI border) that are mostly without
+  // disparity or small.
+  void fill_enclosed(const cv::Mat& disparity_px, cv::Mat& mask);
+  // Median disparity of the mask's pixels (0 without any).
+  float median_disparity(const cv::Mat& disparity_px, const cv::Mat& mask);
+
   OutlineConfig config_;
+  const DisparityPlane* ground_ = nullptr;  // during outline(): the floor, when used
   std::vector<int> queue_;
   std::vector<uint8_t> label_;     // 0 unvisited, 1 object, 2 static
   std::vector<double> ground_x_, ground_y_;  // the floor plane's column and row terms over the ROI

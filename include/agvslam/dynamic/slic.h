@@ -78,6 +78,36 @@ class Slic {
     double g = 0, x = 0, y = 0;
     int64_t n = 0;
   };
+  // The seed grid of one image and the buffers the steps share.
+  struct Grid {
+    int W = 0, H = 0;
+    std::size_t P = 0;       // pixels
+    int nx = 0, ny = 0, K = 0;  // seeds per row / column, in all
+    double sx = 0, sy = 0;   // grid cell size (px)
+    double step = 0;         // N_s = S_step (px)
+    int win = 0;             // a centre's search window: +- win px around it
+    float inv_nc2 = 0, inv_ns2 = 0;
+    const uint8_t* img = nullptr;
+    int32_t* lab = nullptr;  // the labels being computed
+    cv::Mat grey_copy;       // the image when it is not continuous
+  };
+  struct Counters {
+    int64_t candidates = 0, visits = 0;  // SlicStats::candidate_checks, pixel_visits
+  };
+  Grid make_grid(const cv::Mat& grey, cv::Mat& labels) const;
+  // Grid labels, the seed centres (3x3 mean grey) and the clusters' running sums.
+  void seed(const Grid& g);
+  void accumulate_sums(const Grid& g);
+  // Step (2), every pixel against the centres whose window holds it; returns the distances evaluated.
+  int64_t assign_all(const Grid& g, Counters& counters);
+  // Step (2), the unstable pixels only (incremental).
+  int64_t assign_unstable(const Grid& g, Counters& counters);
+  void find_cell_candidates(const Grid& g);
+  // Step (3): the centres from the clusters; returns the pixels whose cluster changed this round.
+  int update_centres(const Grid& g, bool full, Counters& counters);
+  // Incremental: after the first round the clusters' edge pixels are unstable; then eq. 7 passes it on.
+  void mark_edges_unstable(const Grid& g, Counters& counters);
+  void propagate_unstable(const Grid& g, Counters& counters);
   int enforce_connectivity(cv::Mat& labels, int min_size);
 
   SlicConfig config_;
@@ -91,6 +121,7 @@ class Slic {
   std::vector<Window> window_;
   std::vector<int32_t> cell_candidates_;  // incremental: per grid cell, up to 9 centres whose window overlaps it
   std::vector<int> cell_count_;
+  std::vector<int> cell_x_, cell_y_;  // per column / row: its grid cell
 };
 
 }  // namespace agvslam::dynamic
