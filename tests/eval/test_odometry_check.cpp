@@ -1,6 +1,7 @@
 #include <gtest/gtest.h>
 
 #include <cmath>
+#include <filesystem>
 #include <fstream>
 #include <random>
 
@@ -9,6 +10,7 @@
 #include "agvslam/io/odometry_io.h"
 #include "agvslam/sim/simulator.h"
 #include "agvslam/sim/wheel_odometry.h"
+#include "common/test_data.h"
 
 namespace agvslam::eval {
 namespace {
@@ -144,11 +146,17 @@ TEST(OdometryCheck, NoCommonTimeIsAnError) {
 
 class OdometryCsv : public ::testing::Test {
  protected:
+  // Each test in its own folder: ctest runs the tests of this file in parallel processes.
+  void SetUp() override { dir_ = test::make_temp_dir("agvslam-odometry-csv"); }
+  void TearDown() override {
+    if (!HasFailure()) std::filesystem::remove_all(dir_);
+  }
   std::string write(const std::string& text) {
-    const std::string path = ::testing::TempDir() + "odometry_" + std::to_string(counter_++) + ".csv";
+    const std::string path = dir_ + "/odometry_" + std::to_string(counter_++) + ".csv";
     std::ofstream(path) << text;
     return path;
   }
+  std::string dir_;
   int counter_ = 0;
 };
 
