@@ -29,7 +29,7 @@
 // A progress bar with the frame rate goes to stderr. Exit status: 0 on success, 2 on bad input (the message names
 // the option, file or field), 1 on any other failure.
 //
-// Place recognition and maps (issue 5): --params-place names the vocabulary (default: the source tree's
+// Place recognition and maps: --params-place names the vocabulary (default: the source tree's
 // params/place.yaml); --loop off disables loop closing (relocalisation stays). --load-map FILE starts in a saved map
 // (--mode localise: track without changing it; map: extend it); the first frames relocalise in it. --save-map FILE
 // writes the final map (atomically). --blank A:B replaces frames A..B by black images (a covered camera: forced

@@ -1,5 +1,5 @@
 #!/usr/bin/env bash
-# Scores the dynamic-region detector on simulator scenarios (issue 3 figures):
+# Scores the dynamic-region detector on simulator scenarios:
 #   tests/bench/dynamic_scenarios.sh [--build DIR] [--data DIR] [--seeds "101 102 103 104 105"]
 #                                    [--scenarios "static scene1 scene2 scene3 scene4 scene5"] [--threads N]
 #                                    [--params-dynamic FILE] [--record]

@@ -1,5 +1,5 @@
 #!/usr/bin/env bash
-# Loop closing on simulator scenarios (issue 5 figures): ATE with --loop on and --loop off, loops detected, and
+# Loop closing on simulator scenarios : ATE with --loop on and --loop off, loops detected, and
 # whether every detected loop joins two places that really are the same (no false loop):
 #   tests/bench/loop_scenarios.sh [--build DIR] [--data DIR] [--seeds "101 102 103 104 105"]
 #                                 [--loop-scenarios "scene4 scene5"] [--line-scenarios "scene2 scene3"]

@@ -1,5 +1,5 @@
 #!/usr/bin/env bash
-# Map growth when the AGV drives the same loop again (issue 4: memory bounded on long runs over the same area):
+# Map growth when the AGV drives the same loop again (memory stays bounded on long runs over the same area):
 #   tests/bench/revisit_laps.sh [--build DIR] [--data DIR] [--seeds "101 102"] [--scenario scene4] [--laps 4]
 #                               [--threads N] [--record]
 # Generates <scenario>_<seed> under --data once (agvslam-sim), plays it --laps times in a row with loop closing

@@ -1,5 +1,5 @@
 #!/usr/bin/env bash
-# Runs the SLAM on simulator scenarios in the three --dynamic modes and tabulates the ATE (issue 4 figures):
+# Runs the SLAM on simulator scenarios in the three --dynamic modes and tabulates the ATE:
 #   tests/bench/slam_scenarios.sh [--build DIR] [--data DIR] [--seeds "101 102 103 104 105"]
 #                                 [--scenarios "static scene1 scene2 scene3 scene4 scene5 scene6"]
 #                                 [--modes "detector gt off"] [--mapping inline|thread] [--threads N]

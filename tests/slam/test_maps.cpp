@@ -1,4 +1,4 @@
-// Saved maps, relocalisation and localisation mode (issue 5) on real data: the KITTI 06 excerpt in ../shared/data
+// Saved maps, relocalisation and localisation mode on real data: the KITTI 06 excerpt in ../shared/data
 // and the simulator's warehouse rendered in the test.
 //   - a save/load round trip keeps every keyframe and map point (ids, poses, keypoints, descriptors, links), and
 //     the loaded map localises the same frames in the saved map's frame;

@@ -1,4 +1,4 @@
-// agvslam-run's place-recognition and map options (issue 5) end to end on the KITTI 06 excerpt: --save-map, then
+// agvslam-run's place-recognition and map options end to end on the KITTI 06 excerpt: --save-map, then
 // --load-map --mode localise on a later part of the sequence (relocalised at once, map unchanged, poses in the
 // saved frame), --blank, --repeat, and bad options or files exiting 2 with a message naming them.
 #include <gtest/gtest.h>

@@ -23,7 +23,7 @@
 namespace agvslam::features {
 
 // How the per-image feature budget is shared among pyramid levels: geometrically, level l getting a share
-// proportional to (1/scale_factor)^(2 l) (its area: the brief of issue 4) or to (1/scale_factor)^l (its side, as
+// proportional to (1/scale_factor)^(2 l) (its area) or to (1/scale_factor)^l (its side, as
 // ORB-SLAM2 and OpenCV's ORB do).
 enum class LevelAllocation : uint8_t { kArea, kSide };
 const char* to_string(LevelAllocation allocation);

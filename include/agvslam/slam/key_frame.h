@@ -1,7 +1,7 @@
 #pragma once
 // A keyframe: a frame kept in the map, with its map points, its covisibility edges (keyframes sharing at least
 // 15 map points, weighted by their count), its place in the spanning tree, and a slot for the bag-of-words
-// vector that the place-recognition module (issue 5) attaches.
+// vector that the place-recognition module attaches.
 //
 // Threads: read and written with the Map's mutex held (see map_point.h), except the `mapping` and `track`
 // scratch. Keyframes refer to each other by raw pointer; KeyFrame::set_bad removes every reference to itself

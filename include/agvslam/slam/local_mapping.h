@@ -3,7 +3,7 @@
 //   insertion (observations, covisibility, spanning tree) -> recent map point culling -> new map points by
 //   triangulation with the covisible keyframes -> duplicate fusion with the neighbours -> local bundle adjustment
 //   (Ceres, Schur complement, Huber loss) -> keyframe culling (90 % redundancy) -> hand-over to the next stage
-//   (the loop-closing slot: set_keyframe_sink; issue 5).
+//   (the loop-closing slot: set_keyframe_sink).
 //
 // Tracking hands keyframes over through a bounded queue (mapping.queue_capacity): try_insert() never blocks and
 // returns false when the queue is full (tracking then skips the keyframe, as ORB-SLAM2 does). The map mutex is

@@ -49,7 +49,7 @@ class Map {
   MapCounts counts() const;
   // The first keyframe (the world frame's origin); never culled.
   uint64_t origin_keyframe_id() const { return origin_id_; }
-  // Changed on events that move many poses at once (reset, and in issue 5 loop closure / map load).
+  // Changed on events that move many poses at once (reset, loop closure, map load).
   uint64_t big_change_index() const { return big_change_; }
   void notify_big_change() { ++big_change_; }
 
