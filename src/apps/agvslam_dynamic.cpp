@@ -36,6 +36,7 @@
 #include <string>
 #include <vector>
 
+#include "agvslam/core/clock.h"
 #include "agvslam/core/error.h"
 #include "agvslam/core/stats.h"
 #include "agvslam/dynamic/detector.h"
@@ -54,6 +55,7 @@ namespace {
 namespace fs = std::filesystem;
 using agvslam::InputError;
 using agvslam::Series;
+using agvslam::thread_cpu_ms;
 namespace dyn = agvslam::dynamic;
 namespace eval = agvslam::eval;
 
@@ -236,11 +238,6 @@ cv::Mat compose_overlay(const cv::Mat& left, const cv::Mat& right, const dyn::De
 // ---------------------------------------------------------------------------------------------------------------
 // Timing
 
-double thread_cpu_ms() {
-  timespec ts{};
-  clock_gettime(CLOCK_THREAD_CPUTIME_ID, &ts);
-  return 1e3 * static_cast<double>(ts.tv_sec) + 1e-6 * static_cast<double>(ts.tv_nsec);
-}
 
 std::vector<std::pair<std::string, double>> stage_values(const dyn::StageTimings& t) {
   return {{"pyramid", t.pyramid_ms},       {"tracking", t.tracking_ms},     {"point_disparity", t.point_disparity_ms},

@@ -44,6 +44,7 @@
 #include <opencv2/imgcodecs.hpp>
 #include <random>
 
+#include "agvslam/core/clock.h"
 #include "agvslam/core/error.h"
 #include "agvslam/core/parallel_for.h"
 #include "agvslam/features/features_config.h"
@@ -59,6 +60,7 @@
 namespace {
 
 namespace fs = std::filesystem;
+using agvslam::ms_since;
 namespace place = agvslam::place;
 using agvslam::InputError;
 using Clock = std::chrono::steady_clock;
@@ -74,7 +76,6 @@ struct Options {
   float threshold = 0.f;
 };
 
-double ms_since(Clock::time_point t0) { return std::chrono::duration<double, std::milli>(Clock::now() - t0).count(); }
 
 json stats_of(std::vector<double> v) {
   if (v.empty()) return {{"median", nullptr}, {"p95", nullptr}, {"max", nullptr}, {"count", 0}};

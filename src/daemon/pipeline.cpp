@@ -1,3 +1,4 @@
+#include "agvslam/core/clock.h"
 #include "agvslam/daemon/pipeline.h"
 
 #include <algorithm>
@@ -21,7 +22,6 @@ namespace {
 using drivers::v4l2::monotonic_now_ns;
 using Clock = std::chrono::steady_clock;
 
-double ms_since(Clock::time_point t0) { return std::chrono::duration<double, std::milli>(Clock::now() - t0).count(); }
 
 constexpr std::size_t kFpsRing = 512;
 
@@ -278,9 +278,9 @@ void Pipeline::detector_loop() {
       DetectedFrame d;
       const auto t0 = Clock::now();
       d.times.capture_queue_ms = static_cast<double>(monotonic_now_ns() - f->queued_mono_ns) * 1e-6;
-      const double cpu0 = slam::thread_cpu_ms();
+      const double cpu0 = thread_cpu_ms();
       detector_->detect(f->frame, result);
-      d.times.detector_cpu_ms = slam::thread_cpu_ms() - cpu0;
+      d.times.detector_cpu_ms = thread_cpu_ms() - cpu0;
       d.times.detector_ms = ms_since(t0);
       d.detected_mono_ns = monotonic_now_ns();
       d.mask = result.mask.image.clone();  // travels with the frame while the detector moves on
@@ -325,9 +325,9 @@ void Pipeline::tracking_loop() {
       if (d->detected_mono_ns > 0) item.times.detected_queue_ms = static_cast<double>(monotonic_now_ns() - d->detected_mono_ns) * 1e-6;
       const cv::Mat& mask = options_.ground_truth_masks ? c.ground_truth_mask : d->mask;
       const auto t0 = Clock::now();
-      const double cpu0 = slam::thread_cpu_ms();
+      const double cpu0 = thread_cpu_ms();
       const slam::TrackResult r = system_->track_stereo(slam_t_ns, c.frame.left, c.frame.right, mask);
-      item.times.tracking_cpu_ms = slam::thread_cpu_ms() - cpu0;
+      item.times.tracking_cpu_ms = thread_cpu_ms() - cpu0;
       const double tracking_ms = ms_since(t0);
       item.times.tracking_ms = tracking_ms;
       ++processed;

@@ -1,3 +1,4 @@
+#include "agvslam/core/clock.h"
 #include "agvslam/dynamic/detector.h"
 
 #include <algorithm>
@@ -11,7 +12,6 @@ namespace agvslam::dynamic {
 
 namespace {
 using Clock = std::chrono::steady_clock;
-double ms_since(Clock::time_point t0) { return std::chrono::duration<double, std::milli>(Clock::now() - t0).count(); }
 }  // namespace
 
 PointTracksConfig point_tracks_config(const DynamicDetectorConfig& c) {

@@ -1,3 +1,4 @@
+#include "agvslam/core/clock.h"
 #include "agvslam/dynamic/point_tracks.h"
 
 #include <algorithm>
@@ -10,7 +11,6 @@ namespace agvslam::dynamic {
 
 namespace {
 using Clock = std::chrono::steady_clock;
-double ms_since(Clock::time_point t0) { return std::chrono::duration<double, std::milli>(Clock::now() - t0).count(); }
 }  // namespace
 
 void DynamicPoints::clear() {

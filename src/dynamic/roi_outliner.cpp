@@ -1,3 +1,4 @@
+#include "agvslam/core/clock.h"
 #include "agvslam/dynamic/roi_outliner.h"
 
 #include <algorithm>
@@ -13,7 +14,6 @@ namespace agvslam::dynamic {
 
 namespace {
 using Clock = std::chrono::steady_clock;
-double ms_since(Clock::time_point t0) { return std::chrono::duration<double, std::milli>(Clock::now() - t0).count(); }
 double median_of(std::vector<float>& v) { return median_in_place(v, -1.0f); }
 
 // Whether image point p lies on a pixel of `outline` (its top-left at `origin`).

@@ -1,3 +1,4 @@
+#include "agvslam/core/clock.h"
 #include "agvslam/features/orb_extractor.h"
 
 #include <algorithm>
@@ -15,7 +16,6 @@ namespace agvslam::features {
 namespace {
 
 using Clock = std::chrono::steady_clock;
-double ms_since(Clock::time_point t0) { return std::chrono::duration<double, std::milli>(Clock::now() - t0).count(); }
 
 // FAST searches start this far inside a level (ORB-SLAM2: EDGE_THRESHOLD - 3); FAST itself needs 3 more pixels.
 constexpr int kFastBorder = kOrbEdgeThreshold - 3;

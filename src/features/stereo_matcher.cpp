@@ -1,3 +1,4 @@
+#include "agvslam/core/clock.h"
 #include "agvslam/features/stereo_matcher.h"
 
 #include <algorithm>
@@ -14,7 +15,6 @@ namespace agvslam::features {
 
 namespace {
 using Clock = std::chrono::steady_clock;
-double ms_since(Clock::time_point t0) { return std::chrono::duration<double, std::milli>(Clock::now() - t0).count(); }
 }  // namespace
 
 StereoMatcher::StereoMatcher(const StereoMatcherConfig& config, const StereoCalibration& calibration)

@@ -1,3 +1,4 @@
+#include "agvslam/core/clock.h"
 #include "agvslam/slam/local_mapping.h"
 
 #include <algorithm>
@@ -13,9 +14,6 @@ namespace agvslam::slam {
 namespace {
 
 using Clock = std::chrono::steady_clock;
-double ms_since(Clock::time_point t0) {
-  return std::chrono::duration<double, std::milli>(Clock::now() - t0).count();
-}
 
 }  // namespace
 

@@ -1,3 +1,4 @@
+#include "agvslam/core/clock.h"
 #include "agvslam/slam/loop_closing.h"
 
 #include <algorithm>
@@ -16,9 +17,6 @@ namespace agvslam::slam {
 namespace {
 
 using Clock = std::chrono::steady_clock;
-double ms_since(Clock::time_point t0) {
-  return std::chrono::duration<double, std::milli>(Clock::now() - t0).count();
-}
 
 // Loop-detection diagnostics on stderr (candidates, matches, confirmations) when AGVSLAM_LOOP_DEBUG is set.
 bool loop_debug() {

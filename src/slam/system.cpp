@@ -1,3 +1,4 @@
+#include "agvslam/core/clock.h"
 #include "agvslam/slam/system.h"
 
 #include <chrono>
@@ -11,9 +12,6 @@ namespace agvslam::slam {
 namespace {
 
 using Clock = std::chrono::steady_clock;
-double ms_since(Clock::time_point t0) {
-  return std::chrono::duration<double, std::milli>(Clock::now() - t0).count();
-}
 
 StereoIntrinsics intrinsics_of(const FrameGeometry& g) {
   return {g.camera.fx, g.camera.fy, g.camera.cx, g.camera.cy, g.bf};

@@ -1,3 +1,4 @@
+#include "agvslam/core/clock.h"
 #include "agvslam/slam/tracking.h"
 
 #include <algorithm>
@@ -16,17 +17,9 @@ namespace agvslam::slam {
 namespace {
 
 using Clock = std::chrono::steady_clock;
-double ms_since(Clock::time_point t0) {
-  return std::chrono::duration<double, std::milli>(Clock::now() - t0).count();
-}
 
 }  // namespace
 
-double thread_cpu_ms() {
-  timespec ts{};
-  clock_gettime(CLOCK_THREAD_CPUTIME_ID, &ts);
-  return static_cast<double>(ts.tv_sec) * 1e3 + static_cast<double>(ts.tv_nsec) * 1e-6;
-}
 
 const char* to_string(TrackingState state) {
   switch (state) {

@@ -78,6 +78,7 @@ for d in datasets:
         if not js:
             print(f"{d:<22}{mode:<10}  no result (see {out}/{d}_{mode}_*.log)")
             continue
+        # EuRoC's excerpt has ground truth for too few frames of its own time stamps: no ATE, drift only.
         ate = mean_sd([j.get("ate", {}).get("rmse_m", float("nan")) for j in js])
         drift = mean_sd([j.get("drift_m", float("nan")) for j in js])
         tracked = sum(j["frames"]["tracked"] for j in js) / len(js)

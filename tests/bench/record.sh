@@ -10,7 +10,7 @@ record_file=""
 record_init() {
   local script=$1; shift
   record_command="tests/bench/$(basename "$script")"
-  [[ $script == */tests/drivers/* ]] && record_command="tests/drivers/$(basename "$script")"
+  [[ $script == *tests/drivers/* ]] && record_command="tests/drivers/$(basename "$script")"
   local a
   for a in "$@"; do record_command+=" $(printf '%q' "$a")"; done
 }

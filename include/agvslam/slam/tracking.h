@@ -46,9 +46,6 @@ struct TrackTimings {
                                // else runs on the machine)
 };
 
-// CPU time consumed by the calling thread so far (ms).
-double thread_cpu_ms();
-
 struct TrackingCounts {
   int features = 0;            // keypoints in the frame
   int stereo_features = 0;     // of which with stereo depth
