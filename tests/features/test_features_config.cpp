@@ -1,47 +1,16 @@
 // params/features.yaml loading: defaults, overrides, and errors that name the file and the field.
 #include <gtest/gtest.h>
 
-#include <filesystem>
-#include <fstream>
-
 #include "agvslam/core/error.h"
 #include "agvslam/features/features_config.h"
-#include "common/test_data.h"
+#include "common/config_test.h"
 
 namespace agvslam::features {
 namespace {
-namespace fs = std::filesystem;
-
-class TempYaml {
- public:
-  explicit TempYaml(const std::string& text) {
-    dir_ = agvslam::test::make_temp_dir("agvslam-features-config");
-    path_ = (fs::path(dir_) / "features.yaml").string();
-    std::ofstream(path_) << text;
-  }
-  ~TempYaml() {
-    std::error_code ec;
-    fs::remove_all(dir_, ec);
-  }
-  TempYaml(const TempYaml&) = delete;
-  TempYaml& operator=(const TempYaml&) = delete;
-  const std::string& path() const { return path_; }
-
- private:
-  std::string dir_, path_;
-};
+using test::TempYaml;
 
 void expect_error(const std::string& text, const std::string& field) {
-  TempYaml f(text);
-  try {
-    load_features_config(f.path());
-    ADD_FAILURE() << "no error for " << text;
-  } catch (const InputError& e) {
-    EXPECT_EQ(e.source(), f.path()) << e.what();
-    EXPECT_EQ(e.where(), field) << e.what();
-    EXPECT_FALSE(e.expected().empty());
-    EXPECT_NE(std::string(e.what()).find(f.path()), std::string::npos);
-  }
+  test::expect_input_error([](const std::string& path) { load_features_config(path); }, text, field);
 }
 
 TEST(FeaturesConfig, ShippedParamsFileLoadsAndMatchesTheDefaults) {
