@@ -97,6 +97,25 @@ TEST(TimestampPairer, ToleranceIsInclusiveAndSideAheadIsBounded) {
   EXPECT_EQ(rel.back(), 99);
 }
 
+TEST(TimestampPairer, RightSideAheadIsBoundedToo) {
+  TimestampPairer p(5 * kMs, 3);
+  std::deque<int> rel;
+  // The left camera has not started: right frames pile up to max_pending, the oldest are dropped and released.
+  for (int i = 0; i < 6; ++i) p.push_right({100 * kMs + i * 50 * kMs, 0, 20 + i}, rel);
+  EXPECT_EQ(p.pending_right(), 3u);
+  EXPECT_EQ(p.pending_left(), 0u);
+  EXPECT_EQ(p.unpaired_right(), 3u);
+  ASSERT_EQ(rel.size(), 3u);
+  EXPECT_EQ(rel.front(), 20);
+  // The left camera starts next to the newest right frame: they pair, the two older right frames go.
+  p.push_left({350 * kMs + 2 * kMs, 0, 7}, rel);
+  auto q = p.pop(rel);
+  ASSERT_TRUE(q.has_value());
+  EXPECT_EQ(q->right.slot, 25);
+  EXPECT_EQ(p.pending_right(), 0u);
+  EXPECT_EQ(p.unpaired_right(), 5u);
+}
+
 // Free-running cameras: independent jitter (+-3 ms), random drops on both sides; every frame whose partner
 // exists must pair with it, every other frame must be counted as unpaired, nothing else.
 TEST(TimestampPairer, RandomDropsAndJitter) {
