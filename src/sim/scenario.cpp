@@ -61,6 +61,8 @@ const ScenarioInfo& find_scenario(const std::string& name) {
 void ScenarioOptions::validate(const WarehouseLayout& layout) const {
   find_scenario(name);
   if (frames < 0) throw InputError("--frames", std::to_string(frames), "expected a number of frames > 0");
+  if (squeeze_to_frames < 0)
+    throw InputError("--squeeze-to", std::to_string(squeeze_to_frames), "expected a number of frames > 0");
   if (!std::isfinite(start_offset_m))
     throw InputError("--start-offset", std::to_string(start_offset_m), "expected a finite distance in metres");
   const bool line = name == "scene2" || name == "scene3";
@@ -444,8 +446,11 @@ Scenario make_scenario(const ScenarioOptions& options, const Warehouse& warehous
   sc.start_offset_m = options.start_offset_m;
   sc.rate_hz = rate_hz;
   sc.nominal_duration_s = info.nominal_duration_s;
-  sc.frames = options.frames > 0 ? options.frames : std::max(1, static_cast<int>(std::lround(info.nominal_duration_s * rate_hz)));
-  sc.time_scale = (sc.frames / rate_hz) / sc.nominal_duration_s;
+  sc.timeline_frames = options.squeeze_to_frames > 0
+                           ? options.squeeze_to_frames
+                           : std::max(1, static_cast<int>(std::lround(info.nominal_duration_s * rate_hz)));
+  sc.frames = options.frames > 0 ? options.frames : sc.timeline_frames;
+  sc.time_scale = (sc.timeline_frames / rate_hz) / sc.nominal_duration_s;
 
   const WarehouseLayout& L = warehouse.layout;
   ScenarioBuilder b(sc, warehouse);

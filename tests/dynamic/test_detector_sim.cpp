@@ -34,7 +34,7 @@ StereoFrame render(const sim::Simulator& simulator, int i, sim::SimFrame& render
 Score run(const std::string& scenario, int first, int last) {
   sim::ScenarioOptions options;
   options.name = scenario;
-  options.frames = 400;
+  options.squeeze_to_frames = 400;
   const sim::SimConfig config;
   const sim::Simulator simulator(config, options);
   DynamicDetector detector(simulator.calibration());
@@ -68,7 +68,7 @@ TEST(DynamicDetectorSim, StationaryAgvPersonWalkingIn) {
 int first_frame_with_person_in_view(const std::string& scenario) {
   sim::ScenarioOptions options;
   options.name = scenario;
-  options.frames = 400;
+  options.squeeze_to_frames = 400;
   const sim::Simulator simulator(sim::SimConfig{}, options);
   const PinholeCamera cam = simulator.calibration().left;
   std::vector<sim::DynamicObject> objects;
@@ -103,7 +103,7 @@ TEST(DynamicDetectorSim, CoastedObjectsLieOnMovingObjects) {
   // kept in 28 frames, 95 % of their pixels on the moving person).
   sim::ScenarioOptions options;
   options.name = "scene3";
-  options.frames = 400;
+  options.squeeze_to_frames = 400;
   const sim::Simulator simulator(sim::SimConfig{}, options);
   DynamicDetectorConfig config;
   config.detector.coast_max_frames = 4;

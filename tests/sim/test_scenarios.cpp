@@ -77,9 +77,37 @@ TEST(Scenario, DefaultFrameCountsAndSpeeds) {
     EXPECT_LE(s.scenario().agv_speed_mps(), e.max_speed) << e.name;
     EXPECT_NEAR(s.scenario().agv_path_length_m(), e.length, 0.01) << e.name;
   }
-  // --frames plays the same timeline faster or slower.
-  const Simulator half = make_sim("scene2", 1, 200);
-  EXPECT_NEAR(half.scenario().agv_speed_mps(), 2.0 * make_sim("scene2", 1).scenario().agv_speed_mps(), 1e-9);
+}
+
+TEST(Scenario, FramesCutTheTimelineAtItsOwnSpeedAndSqueezeToPlaysItFaster) {
+  const Simulator full = make_sim("scene2", 1);
+  const Scenario& f = full.scenario();
+  // --frames: the first N frames, the AGV and the people where they are in the whole run.
+  const Simulator cut = make_sim("scene2", 1, 100);
+  EXPECT_EQ(cut.frame_count(), 100);
+  EXPECT_EQ(cut.scenario().timeline_frames, 400);
+  EXPECT_DOUBLE_EQ(cut.scenario().agv_speed_mps(), f.agv_speed_mps());
+  for (int k : {0, 37, 99}) {
+    EXPECT_TRUE(cut.T_w_c(k).isApprox(full.T_w_c(k), 0.0)) << "frame " << k;
+    EXPECT_EQ(cut.scenario().scenario_time(k), f.scenario_time(k));
+  }
+  // --squeeze-to: the whole timeline over N frames, twice as fast over 200; --frames cuts that.
+  ScenarioOptions o;
+  o.name = "scene2";
+  o.seed = 1;
+  o.squeeze_to_frames = 200;
+  const Simulator half(SimConfig{}.scaled(0.25), o);
+  EXPECT_EQ(half.frame_count(), 200);
+  EXPECT_NEAR(half.scenario().agv_speed_mps(), 2.0 * f.agv_speed_mps(), 1e-9);
+  EXPECT_TRUE(half.T_w_c(100).isApprox(full.T_w_c(200), 1e-12));
+  EXPECT_TRUE(half.T_w_c(199).isApprox(full.T_w_c(398), 1e-12));
+  o.frames = 50;
+  const Simulator half_cut(SimConfig{}.scaled(0.25), o);
+  EXPECT_EQ(half_cut.frame_count(), 50);
+  EXPECT_TRUE(half_cut.T_w_c(49).isApprox(half.T_w_c(49), 0.0));
+  // Beyond the end of the timeline the AGV stands where it stopped.
+  const Simulator longer = make_sim("scene2", 1, 450);
+  EXPECT_TRUE(longer.T_w_c(449).isApprox(full.T_w_c(399), 1e-12));
 }
 
 TEST(Scenario, PosesStartAtIdentityAndFollowTheRoutes) {

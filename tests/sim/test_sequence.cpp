@@ -261,6 +261,14 @@ TEST_F(Tool, RejectsBadArgumentsWithAClearMessage) {
   EXPECT_EQ(run("--scenario scene1 --frames -5 --out " + dir_ + "/x", &out), 2);
   EXPECT_NE(out.find("--frames"), std::string::npos) << out;
 
+  EXPECT_EQ(run("--scenario scene1 --squeeze-to 0 --out " + dir_ + "/x", &out), 2);
+  EXPECT_NE(out.find("--squeeze-to"), std::string::npos) << out;
+  // --frames cuts the timeline: more frames than it has (400 for scene1) is an error that names the way out.
+  EXPECT_EQ(run("--scenario scene1 --frames 401 --params " + params_ + " --out " + dir_ + "/x", &out), 2);
+  EXPECT_NE(out.find("--frames"), std::string::npos) << out;
+  EXPECT_NE(out.find("at most 400"), std::string::npos) << out;
+  EXPECT_NE(out.find("--squeeze-to"), std::string::npos) << out;
+
   EXPECT_EQ(run("--scenario scene1 --out /proc/agvslam-sim-out", &out), 2);
   EXPECT_NE(out.find("--out"), std::string::npos) << out;
   EXPECT_NE(out.find("/proc/agvslam-sim-out"), std::string::npos) << out;
@@ -272,11 +280,41 @@ TEST_F(Tool, RejectsBadArgumentsWithAClearMessage) {
   EXPECT_NE(out.find("/nonexistent/sim.yaml"), std::string::npos) << out;
 }
 
+TEST_F(Tool, FramesCutsTheTimelineAndSqueezeToPlaysItOverFewerFrames) {
+  std::string out;
+  ASSERT_EQ(run("--scenario scene2 --frames 6 --seed 3 --params " + params_ + " --out " + dir_ + "/cut", &out), 0)
+      << out;
+  ASSERT_EQ(run("--scenario scene2 --squeeze-to 40 --frames 6 --seed 3 --params " + params_ + " --out " + dir_ +
+                    "/fast",
+                &out),
+            0)
+      << out;
+  const auto cut = lines_of(read_text(fs::path(dir_) / "cut" / "poses.txt"));
+  const auto fast = lines_of(read_text(fs::path(dir_) / "fast" / "poses.txt"));
+  ASSERT_EQ(cut.size(), 6u);
+  ASSERT_EQ(fast.size(), 6u);
+  const std::string cut_json = read_text(fs::path(dir_) / "cut" / "scenario.json");
+  const std::string fast_json = read_text(fs::path(dir_) / "fast" / "scenario.json");
+  EXPECT_NE(cut_json.find("\"timeline_frames\": 400"), std::string::npos) << cut_json;
+  EXPECT_NE(cut_json.find("\"speed_factor\": 1.0"), std::string::npos) << cut_json;
+  EXPECT_NE(fast_json.find("\"timeline_frames\": 40"), std::string::npos) << fast_json;
+  EXPECT_NE(fast_json.find("\"speed_factor\": 10.0"), std::string::npos) << fast_json;
+  // Frame 0 is the identity in both; by frame 5 the squeezed run (ten times as fast) has driven further.
+  EXPECT_EQ(cut[0], fast[0]);
+  auto z_of = [](const std::string& line) {
+    std::istringstream in(line);
+    double v[12];
+    for (double& x : v) in >> x;
+    return v[11];
+  };
+  EXPECT_GT(z_of(fast[5]), z_of(cut[5]) + 1e-3);
+}
+
 TEST_F(Tool, WritesTheSameSequenceWithOneOrTwoThreads) {
   std::string out1, out2;
-  ASSERT_EQ(run("--scenario scene5 --frames 4 --seed 9 --params " + params_ + " --out " + dir_ + "/t1", &out1), 0)
+  ASSERT_EQ(run("--scenario scene5 --squeeze-to 4 --seed 9 --params " + params_ + " --out " + dir_ + "/t1", &out1), 0)
       << out1;
-  ASSERT_EQ(run("--scenario scene5 --frames 4 --seed 9 --threads 2 --params " + params_ + " --out " + dir_ + "/t2",
+  ASSERT_EQ(run("--scenario scene5 --squeeze-to 4 --seed 9 --threads 2 --params " + params_ + " --out " + dir_ + "/t2",
                 &out2),
             0)
       << out2;

@@ -135,6 +135,14 @@ TEST(ScenarioOptions, RejectBadValuesNamingTheOption) {
     EXPECT_EQ(e.source(), "--frames");
   }
   o.frames = 0;
+  o.squeeze_to_frames = -1;
+  try {
+    o.validate(layout);
+    FAIL();
+  } catch (const InputError& e) {
+    EXPECT_EQ(e.source(), "--squeeze-to");
+  }
+  o.squeeze_to_frames = 0;
   o.start_offset_m = 7.0;  // beyond the aisle
   try {
     o.validate(layout);

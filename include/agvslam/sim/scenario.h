@@ -19,8 +19,9 @@
 //   scene5  the same loop; a person walks 1.5-2.4 m ahead of the AGV for the whole loop, one crosses beyond
 //           them (~3.3-4 m ahead), one stands picking then walks away; another AGV is parked, then drives
 //
-// Every scenario has a nominal timeline (people 0.6-1.3 m/s, the AGV ~0.8-0.9 m/s). `--frames N` plays the whole
-// timeline over N frames, so speeds scale with default_frames / N. Actors are generated from (seed,
+// Every scenario has a nominal timeline (people 0.6-1.3 m/s, the AGV ~0.8-0.9 m/s), played at its own speed:
+// `--frames N` writes its first N frames. `--squeeze-to N` plays the whole timeline over N frames instead, so
+// speeds scale with default_frames / N (and --frames then cuts that). Actors are generated from (seed,
 // RngStream::kActors), the warehouse from the layout seed, so the layout can be kept while people change.
 // Actor timings are chosen so that people keep >= 1 m (vehicles >= 1.5 m) from the camera and every actor
 // >= 0.5 m from the others (checked on a 50 ms grid; a warning is logged if no candidate satisfies it); the
@@ -49,13 +50,15 @@ const ScenarioInfo& find_scenario(const std::string& name);
 
 struct ScenarioOptions {
   std::string name = "scene1";
-  int frames = 0;                        // 0: the scenario's default
+  int frames = 0;             // frames to write: the first `frames` of the timeline (0: all of it); beyond its
+                              // end the AGV and the actors stand where the timeline left them
+  int squeeze_to_frames = 0;  // play the whole timeline over this many frames (0: at its own speed)
   uint64_t seed = 1;                     // actors (and, by default, the layout)
   std::optional<uint64_t> layout_seed;   // warehouse layout and textures (default: seed)
   double start_offset_m = 0;             // AGV start along its route (loop: any value, wraps; line: [0, 3] m)
 
   uint64_t effective_layout_seed() const { return layout_seed ? *layout_seed : seed; }
-  // Throws InputError naming the option for frames <= 0 (when given), a bad start offset, ...
+  // Throws InputError naming the option for negative frame counts, a bad start offset, ...
   void validate(const WarehouseLayout& layout) const;
 };
 
@@ -110,10 +113,11 @@ struct Scenario {
   std::string name, description;
   uint64_t seed = 1, layout_seed = 1;
   double start_offset_m = 0;
-  int frames = 1;
+  int frames = 1;                   // frames written
+  int timeline_frames = 1;          // frames the whole timeline is played over (the scenario's own: its default)
   double rate_hz = 20;
   double nominal_duration_s = 20;   // scenario timeline length
-  double time_scale = 1;            // real seconds per scenario second = frames / rate / nominal duration
+  double time_scale = 1;            // real seconds per scenario second = timeline_frames / rate / nominal duration
   AgvMotion agv;
   std::vector<Actor> actors;
   double min_camera_clearance_m = 1e9;  // smallest actor-to-camera distance over the timeline (surface)
