@@ -5,8 +5,9 @@
 //   agvslam-sim --list
 //
 // Writes the KITTI layout (image_0/ image_1/ calib.txt times.txt poses.txt) plus disp_0/ (16-bit disparity*256),
-// mask_0/ (255 = moving object), instance_0/ (the actor id seen at each pixel, 0 = none), objects.txt and
-// scenario.json (what was generated, with its seeds).
+// mask_0/ (255 = moving object), instance_0/ (the actor id seen at each pixel, 0 = none), class_0/ (the semantic
+// class of each pixel, agvslam/sim/semantic_classes.h), objects.txt and scenario.json (what was generated, with
+// its seeds, and the class ids).
 // --frames N writes the first N frames of the scenario's timeline at its own speed; --squeeze-to N plays the whole
 // timeline over N frames (faster or slower; --frames then cuts that).
 // The output is identical for any --threads. Exit status: 0 on success, 2 on bad input (the message names the
@@ -23,6 +24,7 @@
 
 #include "agvslam/core/error.h"
 #include "agvslam/io/trajectory_io.h"
+#include "agvslam/sim/semantic_classes.h"
 #include "agvslam/sim/sim_config.h"
 #include "agvslam/sim/simulator.h"
 #include "tool_main.h"
@@ -72,7 +74,12 @@ nlohmann::json describe(const sim::Simulator& s) {
                  {"baseline_m", c.baseline_m}, {"height_above_floor_m", c.camera_height_m}};
   j["conventions"] = "poses.txt: T_w_cam0 (world = left camera at frame 0; camera x right, y down, z forward); "
                      "disp_0: uint16 disparity*256 of the left image, 0 = none; mask_0: 255 = moving object; "
-                     "instance_0: uint8 actor id (objects.txt) of each pixel, 0 = none";
+                     "instance_0: uint8 actor id (objects.txt) of each pixel, 0 = none; class_0: uint8 class id "
+                     "(classes) of each pixel";
+  nlohmann::json classes = nlohmann::json::array();
+  for (int id = 0; id < sim::kSemanticClassCount; ++id)
+    classes.push_back({{"id", id}, {"name", sim::semantic_class_name(static_cast<sim::SemanticClass>(id))}});
+  j["classes"] = classes;
   return j;
 }
 

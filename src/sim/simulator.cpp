@@ -223,6 +223,7 @@ void Simulator::render_frame(int frame, SimFrame& out, int threads) const {
       }
     }
   }
+  out.left_render.class_id.copyTo(out.classes);
   out.objects.clear();
   for (int id = 1; id <= max_id; ++id) {
     VisibleObject b = boxes[static_cast<std::size_t>(id)];
@@ -246,7 +247,7 @@ void prepare_output_dir(const std::string& dir, const std::string& option) {
   fs::create_directories(dir, ec);
   if (ec || !fs::is_directory(dir))
     throw InputError(option, dir, "could not create the output folder: " + (ec ? ec.message() : std::string("unknown")));
-  for (const char* sub : {"image_0", "image_1", "disp_0", "mask_0", "instance_0"}) {
+  for (const char* sub : {"image_0", "image_1", "disp_0", "mask_0", "instance_0", "class_0"}) {
     fs::create_directories(fs::path(dir) / sub, ec);
     if (ec) throw InputError(option, (fs::path(dir) / sub).string(), "could not create the folder: " + ec.message());
   }
@@ -301,6 +302,7 @@ void write_sequence(const Simulator& sim, const std::string& out_dir, const Writ
     png.write((root / "disp_0" / name).string(), frame.disparity_u16, PngFilter::kPaeth);
     png.write((root / "mask_0" / name).string(), frame.mask, PngFilter::kNone);
     png.write((root / "instance_0" / name).string(), frame.instances, PngFilter::kNone);
+    png.write((root / "class_0" / name).string(), frame.classes, PngFilter::kNone);
     objects += format_objects(k, frame.objects);
     if (options.progress) options.progress(k + 1, sim.frame_count());
   }

@@ -8,7 +8,8 @@
 //   poses.txt   T_w_cam0 per frame (3x4, row-major); times.txt seconds = frame / rate.
 // Ground truth at pixel centres of the LEFT image: depth z along the optical axis, disparity
 // fx * baseline / z (0 where nothing is hit, beyond max_depth_m or too close for 16 bits), the id of the actor
-// seen there, and the motion mask (255 where that actor is moving at that instant).
+// seen there, the motion mask (255 where that actor is moving at that instant) and the semantic class of the
+// surface (semantic_classes.h).
 
 #include <cstdint>
 #include <functional>
@@ -42,6 +43,7 @@ struct SimFrame {
   cv::Mat disparity_u16;          // CV_16UC1: disparity * 256, 0 = none
   cv::Mat mask;                   // CV_8UC1: 255 = pixel of a moving object
   cv::Mat instances;              // CV_8UC1: the id of the actor seen at each pixel (moving or not), 0 = none
+  cv::Mat classes;                // CV_8UC1: the SemanticClass of each pixel (semantic_classes.h)
   std::vector<VisibleObject> objects;
   std::vector<DynamicObject> posed_objects;  // the actors as rendered
   CameraRender left_render, right_render;    // depth_m and object_id of each camera (pixel centres)
@@ -100,8 +102,9 @@ struct WriteOptions {
 // Writes the whole sequence in the KITTI layout:
 //   image_0/ image_1/ NNNNNN.png (8-bit grey), disp_0/ NNNNNN.png (16-bit, disparity * 256, 0 = none),
 //   mask_0/ NNNNNN.png (8-bit, 255 = moving object), instance_0/ NNNNNN.png (8-bit, the id of the actor seen at
-//   each pixel, as in objects.txt, 0 = none: an object's own pixels where objects overlap), calib.txt (labelled
-//   P0/P1), times.txt, poses.txt,
+//   each pixel, as in objects.txt, 0 = none: an object's own pixels where objects overlap), class_0/ NNNNNN.png
+//   (8-bit, the SemanticClass id of each pixel, semantic_classes.h), calib.txt (labelled P0/P1), times.txt,
+//   poses.txt,
 //   objects.txt ("frame id class moving x_min y_min x_max y_max" per visible actor and frame),
 //   odometry.txt (TUM: simulated wheel odometry with default WheelOdometryConfig errors, seeded by the scenario).
 void write_sequence(const Simulator& sim, const std::string& out_dir, const WriteOptions& options = {});
