@@ -3,14 +3,20 @@
 #include <algorithm>
 #include <cmath>
 
+#include "agvslam/sim/random.h"
+
 namespace agvslam::sim {
 namespace {
 
 constexpr double kPi = 3.14159265358979323846;
-constexpr double kMovingSpeed = 0.05;  // m/s
+constexpr double kMovingSpeed = 0.05;      // m/s
+constexpr double kMovingTurnRate = 0.052;  // rad/s (3 degrees/s)
+constexpr double kMovingLiftRate = 0.02;   // m/s
 
 double wrap_angle(double a) { return std::atan2(std::sin(a), std::cos(a)); }
 double lerp_angle(double a, double b, double t) { return a + wrap_angle(b - a) * t; }
+// Both waypoints of a stretch give the heading.
+bool explicit_yaw(const Waypoint& p, const Waypoint& q) { return std::isfinite(p.yaw_rad) && std::isfinite(q.yaw_rad); }
 double smooth01(double t) {
   t = std::clamp(t, 0.0, 1.0);
   return t * t * (3 - 2 * t);
@@ -26,7 +32,12 @@ Segment compute_segment(const Actor& a, std::size_t k) {
   s.t1 = q.t_s;
   s.length_m = std::hypot(q.x - p.x, q.y - p.y);
   s.dir_rad = std::atan2(q.y - p.y, q.x - p.x);
-  s.moving = s.t1 > s.t0 && s.length_m / (s.t1 - s.t0) > kMovingSpeed;
+  const double dt = s.t1 - s.t0;
+  s.moving = dt > 0 && s.length_m / dt > kMovingSpeed;
+  if (dt > 0 && !s.moving) {
+    const double turn = explicit_yaw(p, q) ? std::fabs(wrap_angle(q.yaw_rad - p.yaw_rad)) : 0.0;
+    s.moving = turn / dt > kMovingTurnRate || std::fabs(q.lift_m - p.lift_m) / dt > kMovingLiftRate;
+  }
   return s;
 }
 
@@ -52,7 +63,7 @@ double standing_yaw(const Actor& a, long k) {
   const long n_seg = static_cast<long>(a.path.size()) - 1;
   for (long i = std::min(k, n_seg - 1); i >= 0; --i) {
     const Segment s = segment(a, static_cast<std::size_t>(i));
-    if (s.moving) return s.dir_rad;
+    if (s.moving && s.length_m > 0) return s.dir_rad;
   }
   return a.initial_yaw_rad;
 }
@@ -64,6 +75,7 @@ std::string to_string(ActorClass cls) {
     case ActorClass::kPerson: return "person";
     case ActorClass::kForklift: return "forklift";
     case ActorClass::kAgv: return "agv";
+    case ActorClass::kPallet: return "pallet";
   }
   return "unknown";
 }
@@ -73,6 +85,7 @@ double actor_radius_m(ActorClass cls) {
     case ActorClass::kPerson: return 0.35;
     case ActorClass::kForklift: return 1.6;
     case ActorClass::kAgv: return 0.75;
+    case ActorClass::kPallet: return 0.75;
   }
   return 1.0;
 }
@@ -118,7 +131,10 @@ void prepare_actor(Actor& a) {
   }
 }
 
-ActorState actor_state(const Actor& a, double t) {
+namespace {
+
+// The state with the heading along the direction of travel (the default when waypoints give none).
+ActorState state_heading_along_travel(const Actor& a, double t) {
   ActorState st;
   if (a.path.empty()) return st;
   const long n_seg = static_cast<long>(a.path.size()) - 1;
@@ -182,6 +198,66 @@ ActorState actor_state(const Actor& a, double t) {
   return st;
 }
 
+}  // namespace
+
+ActorState actor_state(const Actor& a, double t) {
+  ActorState st = state_heading_along_travel(a, t);
+  if (a.path.empty()) return st;
+  st.distance_m = actor_distance_m(a, t);
+  const long n_seg = static_cast<long>(a.path.size()) - 1;
+  const long k = segment_index(a, t);
+  if (k < 0 || k >= n_seg) {
+    const Waypoint& w = k < 0 ? a.path.front() : a.path.back();
+    st.lift_m = w.lift_m;
+    if (std::isfinite(w.yaw_rad)) st.yaw_rad = wrap_angle(w.yaw_rad);
+    return st;
+  }
+  const Waypoint& p = a.path[static_cast<std::size_t>(k)];
+  const Waypoint& q = a.path[static_cast<std::size_t>(k) + 1];
+  const double f = q.t_s > p.t_s ? (t - p.t_s) / (q.t_s - p.t_s) : 1.0;
+  st.lift_m = p.lift_m + (q.lift_m - p.lift_m) * f;
+  if (explicit_yaw(p, q)) st.yaw_rad = wrap_angle(lerp_angle(p.yaw_rad, q.yaw_rad, f));
+  return st;
+}
+
+void actor_track_point(const Actor& a, double distance_m, double& x, double& y, double& heading_rad) {
+  if (a.path.empty()) {
+    x = y = heading_rad = 0;
+    return;
+  }
+  const Waypoint& first = a.path.front();
+  if (distance_m <= 0 || a.path.size() < 2) {
+    const double yaw = std::isfinite(first.yaw_rad) ? first.yaw_rad : a.initial_yaw_rad;
+    const double back = std::max(0.0, -distance_m);
+    x = first.x - back * std::cos(yaw);
+    y = first.y - back * std::sin(yaw);
+    heading_rad = yaw;
+    return;
+  }
+  for (std::size_t k = 0; k + 1 < a.path.size(); ++k) {
+    const Segment s = segment(a, k);
+    double before = 0;
+    if (prepared(a)) {
+      before = s.distance_before_m;
+    } else {
+      for (std::size_t i = 0; i < k; ++i) before += segment(a, i).length_m;
+    }
+    if (s.length_m > 0 && distance_m <= before + s.length_m) {
+      const double f = (distance_m - before) / s.length_m;
+      const Waypoint& p = a.path[k];
+      const Waypoint& q = a.path[k + 1];
+      x = p.x + (q.x - p.x) * f;
+      y = p.y + (q.y - p.y) * f;
+      heading_rad = s.dir_rad;
+      return;
+    }
+  }
+  const Waypoint& last = a.path.back();
+  x = last.x;
+  y = last.y;
+  heading_rad = standing_yaw(a, static_cast<long>(a.path.size()) - 2);
+}
+
 namespace {
 
 struct PosingContext {
@@ -220,6 +296,84 @@ struct PosingContext {
   }
 };
 
+constexpr float kForkTravelZ = 0.12f;    // forks' height above the floor while driving, m
+constexpr float kPalletHeightM = 0.144f;  // a pallet's height, m
+
+// Goods of `load` standing on [x0, x1] x [y0, y1] at height z (object frame): one stretch-wrapped block, cartons
+// in layers or stacked crates (their arrangement from `seed`); body parts 10 and up.
+void add_goods(PosingContext& ctx, float x0, float x1, float y0, float y1, float z, const Load& load, uint32_t seed) {
+  const float top = z + load.height_m;
+  switch (load.kind) {
+    case Load::Kind::kNone: return;
+    case Load::Kind::kWrapped: ctx.box(x0, x1, y0, y1, z, top, Material::kWrappedLoad, 10); return;
+    case Load::Kind::kCartons: {
+      const int nx = (x1 - x0) > 0.9f ? 2 : 1, ny = (y1 - y0) > 0.6f ? 2 : 1;
+      const float cx = (x1 - x0) / static_cast<float>(nx), cy = (y1 - y0) / static_cast<float>(ny);
+      uint8_t part = 10;
+      float zz = z;
+      for (uint32_t layer = 0; zz < top - 0.15f && part < 250; ++layer) {
+        const float h = std::min(top - zz, 0.26f + 0.16f * unit_from_hash(hash32(seed, layer)));
+        for (int i = 0; i < nx; ++i)
+          for (int j = 0; j < ny; ++j) {
+            const uint32_t hc = hash32(seed, layer, static_cast<uint32_t>(i * ny + j + 1));
+            const float inset = 0.008f + 0.02f * unit_from_hash(hc);
+            const float shift = 0.02f * (unit_from_hash(hash32(hc)) - 0.5f);
+            ctx.box(x0 + cx * static_cast<float>(i) + inset + shift, x0 + cx * static_cast<float>(i + 1) - inset + shift,
+                    y0 + cy * static_cast<float>(j) + inset, y0 + cy * static_cast<float>(j + 1) - inset, zz,
+                    zz + h - 0.005f, Material::kCarton, part++);
+          }
+        zz += h;
+      }
+      return;
+    }
+    case Load::Kind::kCrates: {
+      const int nx = (x1 - x0) > 0.9f ? 2 : 1, ny = (y1 - y0) > 0.6f ? 2 : 1;
+      const float cx = (x1 - x0) / static_cast<float>(nx), cy = (y1 - y0) / static_cast<float>(ny);
+      const float crate_h = 0.22f + 0.12f * unit_from_hash(hash32(seed, 77U));
+      const int layers = std::max(1, static_cast<int>(load.height_m / crate_h));
+      uint8_t part = 10;
+      for (int i = 0; i < nx; ++i)
+        for (int j = 0; j < ny; ++j) {
+          // One column per crate stack: the crates' own texture draws the layers.
+          const int n = std::max(1, layers - static_cast<int>(hash32(seed, static_cast<uint32_t>(i * ny + j)) % 2U));
+          ctx.box(x0 + cx * static_cast<float>(i) + 0.01f, x0 + cx * static_cast<float>(i + 1) - 0.01f,
+                  y0 + cy * static_cast<float>(j) + 0.01f, y0 + cy * static_cast<float>(j + 1) - 0.01f, z,
+                  z + crate_h * static_cast<float>(n) - 0.005f, Material::kCrate, part++);
+        }
+      return;
+    }
+  }
+}
+
+// The object's bounding box from its primitives.
+void set_bounds(DynamicObject& obj) {
+  const float c = obj.cos_yaw, s = obj.sin_yaw;
+  V3 lo{kInfinity, kInfinity, kInfinity}, hi{-kInfinity, -kInfinity, -kInfinity};
+  for (const auto& p : obj.primitives) {
+    switch (p.shape) {
+      case PrimitiveShape::kBox: {
+        const float ex = std::fabs(c) * p.half.x + std::fabs(s) * p.half.y;
+        const float ey = std::fabs(s) * p.half.x + std::fabs(c) * p.half.y;
+        lo = vmin(lo, p.a - V3{ex, ey, p.half.z});
+        hi = vmax(hi, p.a + V3{ex, ey, p.half.z});
+        break;
+      }
+      case PrimitiveShape::kSphere:
+        lo = vmin(lo, p.a - V3{p.radius, p.radius, p.radius});
+        hi = vmax(hi, p.a + V3{p.radius, p.radius, p.radius});
+        break;
+      case PrimitiveShape::kCapsule: {
+        const V3 r{p.radius, p.radius, p.radius};
+        lo = vmin(lo, vmin(p.a, p.b) - r);
+        hi = vmax(hi, vmax(p.a, p.b) + r);
+        break;
+      }
+    }
+  }
+  obj.lo = lo - V3{1e-3f, 1e-3f, 1e-3f};
+  obj.hi = hi + V3{1e-3f, 1e-3f, 1e-3f};
+}
+
 }  // namespace
 
 void pose_actor(const Actor& actor, const ActorState& st, DynamicObject& obj) {
@@ -227,6 +381,7 @@ void pose_actor(const Actor& actor, const ActorState& st, DynamicObject& obj) {
   obj.cls = actor.cls;
   obj.moving = st.moving;
   obj.look = actor.look;
+  obj.vehicle = actor.vehicle;
   obj.seed = actor.seed;
   obj.walk_phase = static_cast<float>(st.gait_phase_rad);
   obj.origin = {static_cast<float>(st.x), static_cast<float>(st.y), 0.0f};
@@ -294,14 +449,26 @@ void pose_actor(const Actor& actor, const ActorState& st, DynamicObject& obj) {
     ctx.box(0.8f, 0.9f, 0.3f, 0.4f, 0.08f, 2.3f, Material::kVehicleMetal, 6);            // mast
     ctx.box(0.8f, 0.9f, -0.4f, -0.3f, 0.08f, 2.3f, Material::kVehicleMetal, 6);
     ctx.box(0.8f, 0.9f, -0.4f, 0.4f, 2.2f, 2.3f, Material::kVehicleMetal, 6);
-    const float fork_z = 0.12f;
+    const float fork_z = kForkTravelZ + static_cast<float>(st.lift_m);
     ctx.box(0.91f, 0.97f, -0.46f, 0.46f, fork_z, fork_z + 0.62f, Material::kVehicleDark, 7);  // carriage
     ctx.box(0.97f, 2.1f, 0.2f, 0.32f, fork_z, fork_z + 0.05f, Material::kVehicleMetal, 8);   // forks
     ctx.box(0.97f, 2.1f, -0.32f, -0.2f, fork_z, fork_z + 0.05f, Material::kVehicleMetal, 8);
-    if ((actor.seed & 1U) != 0) {  // carrying a loaded pallet
+    if (actor.vehicle.load.kind != Load::Kind::kNone) {  // a loaded pallet resting on the forks
       ctx.box(1.0f, 2.2f, -0.4f, 0.4f, fork_z + 0.05f, fork_z + 0.194f, Material::kPallet, 9);
-      ctx.box(1.03f, 2.17f, -0.38f, 0.38f, fork_z + 0.194f, fork_z + 0.194f + 0.9f, Material::kWrappedLoad, 10);
+      add_goods(ctx, 1.03f, 2.17f, -0.38f, 0.38f, fork_z + 0.194f, actor.vehicle.load, actor.seed);
     }
+  } else if (actor.cls == ActorClass::kPallet) {
+    obj.origin.z = static_cast<float>(st.lift_m);
+    ctx.box(-0.6f, 0.6f, -0.4f, 0.4f, 0.0f, kPalletHeightM, Material::kPallet, 9);  // a 1.2 m x 0.8 m pallet
+    add_goods(ctx, -0.58f, 0.58f, -0.38f, 0.38f, kPalletHeightM, actor.vehicle.load, actor.seed);
+  } else if (actor.vehicle.tugger_carts > 0) {  // automated tugger; its carts are trailers
+    ctx.box(-0.7f, 0.55f, -0.34f, 0.34f, 0.07f, 0.55f, Material::kVehicleBody, 0);
+    ctx.box(0.55f, 0.62f, -0.3f, 0.3f, 0.1f, 0.3f, Material::kVehicleDark, 4);    // bumper with the safety scanner
+    for (float px : {-0.5f, 0.3f})
+      for (float py : {-0.4f, 0.34f}) ctx.box(px - 0.1f, px + 0.1f, py, py + 0.06f, 0.0f, 0.2f, Material::kTyre, 2);
+    ctx.box(-0.65f, -0.35f, -0.2f, 0.2f, 0.55f, 1.2f, Material::kVehicleBody, 5);  // control tower
+    ctx.box(-0.55f, -0.45f, -0.05f, 0.05f, 1.2f, 1.32f, Material::kVehicleGuard, 3);  // beacon
+    ctx.box(-0.95f, -0.7f, -0.04f, 0.04f, 0.22f, 0.28f, Material::kVehicleMetal, 6);  // tow hitch
   } else {  // AGV with a cart of crates
     ctx.box(-0.6f, 0.6f, -0.4f, 0.4f, 0.07f, 0.34f, Material::kVehicleBody, 0);
     ctx.box(-0.45f, -0.25f, 0.35f, 0.42f, 0.0f, 0.16f, Material::kTyre, 2);
@@ -317,32 +484,46 @@ void pose_actor(const Actor& actor, const ActorState& st, DynamicObject& obj) {
     ctx.box(-0.04f, 0.38f, -0.32f, 0.3f, 0.38f, 0.66f, Material::kCarton, 10);
     ctx.box(-0.48f, 0.36f, -0.3f, 0.28f, 0.87f, 1.2f, Material::kCarton, 11);
   }
+  set_bounds(obj);
+}
 
-  // Bounding box.
-  V3 lo{kInfinity, kInfinity, kInfinity}, hi{-kInfinity, -kInfinity, -kInfinity};
-  for (const auto& p : obj.primitives) {
-    switch (p.shape) {
-      case PrimitiveShape::kBox: {
-        const float ex = std::fabs(ctx.c) * p.half.x + std::fabs(ctx.s) * p.half.y;
-        const float ey = std::fabs(ctx.s) * p.half.x + std::fabs(ctx.c) * p.half.y;
-        lo = vmin(lo, p.a - V3{ex, ey, p.half.z});
-        hi = vmax(hi, p.a + V3{ex, ey, p.half.z});
-        break;
-      }
-      case PrimitiveShape::kSphere:
-        lo = vmin(lo, p.a - V3{p.radius, p.radius, p.radius});
-        hi = vmax(hi, p.a + V3{p.radius, p.radius, p.radius});
-        break;
-      case PrimitiveShape::kCapsule: {
-        const V3 r{p.radius, p.radius, p.radius};
-        lo = vmin(lo, vmin(p.a, p.b) - r);
-        hi = vmax(hi, vmax(p.a, p.b) + r);
-        break;
-      }
-    }
-  }
-  obj.lo = lo - V3{1e-3f, 1e-3f, 1e-3f};
-  obj.hi = hi + V3{1e-3f, 1e-3f, 1e-3f};
+int trailer_count(const Actor& actor) {
+  return actor.cls == ActorClass::kAgv ? static_cast<int>(actor.vehicle.tugger_carts) : 0;
+}
+
+double trailer_offset_m(int k) {
+  // The tractor's hitch is 0.95 m behind its origin and a cart's drawbar reaches 1.35 m ahead of its centre,
+  // its rear is 0.8 m behind it.
+  return 0.95 + 1.35 + 2.15 * k;
+}
+
+void pose_trailer(const Actor& actor, const ActorState& st, int k, DynamicObject& obj) {
+  double x, y, heading;
+  actor_track_point(actor, st.distance_m - trailer_offset_m(k), x, y, heading);
+  obj.id = actor.id;
+  obj.cls = actor.cls;
+  obj.moving = st.moving;
+  obj.look = actor.look;
+  obj.vehicle = actor.vehicle;
+  obj.seed = hash32(actor.seed, static_cast<uint32_t>(k + 1));
+  obj.walk_phase = 0;
+  obj.origin = {static_cast<float>(x), static_cast<float>(y), 0.0f};
+  obj.cos_yaw = static_cast<float>(std::cos(heading));
+  obj.sin_yaw = static_cast<float>(std::sin(heading));
+  obj.primitives.clear();
+  PosingContext ctx{obj, obj.cos_yaw, obj.sin_yaw};
+  ctx.box(-0.8f, 0.8f, -0.5f, 0.5f, 0.26f, 0.32f, Material::kVehicleMetal, 6);  // deck
+  for (float px : {-0.7f, 0.55f})
+    for (float py : {-0.5f, 0.42f}) ctx.box(px, px + 0.15f, py, py + 0.08f, 0.0f, 0.2f, Material::kTyre, 2);
+  ctx.box(0.8f, 1.35f, -0.03f, 0.03f, 0.24f, 0.28f, Material::kVehicleMetal, 6);  // drawbar
+  for (float px : {-0.8f, 0.75f})
+    for (float py : {-0.5f, 0.45f}) ctx.box(px, px + 0.05f, py, py + 0.05f, 0.32f, 1.8f, Material::kVehicleMetal, 6);
+  ctx.box(-0.8f, 0.8f, 0.45f, 0.5f, 1.75f, 1.8f, Material::kVehicleMetal, 6);  // top rails
+  ctx.box(-0.8f, 0.8f, -0.5f, -0.45f, 1.75f, 1.8f, Material::kVehicleMetal, 6);
+  Load load = actor.vehicle.load;
+  load.height_m = std::min(load.height_m, 1.4f);  // below the top rails
+  add_goods(ctx, -0.72f, 0.72f, -0.42f, 0.42f, 0.32f, load, obj.seed);
+  set_bounds(obj);
 }
 
 }  // namespace agvslam::sim

@@ -281,7 +281,7 @@ AGVSLAM_SIM_CLONES float actor_albedo(const DynamicObject& obj, const DynamicPri
     if (prim.material == Material::kPersonShirt) {
       // Torso: handled below with the shirt pattern.
     } else if (prim.material == Material::kVehicleBody) {
-      return vehicle_body(f, obj.cls == ActorClass::kAgv ? 0.58f : 0.72f, obj.cls == ActorClass::kAgv);
+      return vehicle_body(f, obj.vehicle.body_shade, obj.cls == ActorClass::kAgv);
     } else {
       return box_albedo(prim.material, 0, f);
     }

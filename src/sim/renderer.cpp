@@ -601,7 +601,8 @@ std::vector<Renderer::BlobShadow> Renderer::blob_shadows(const std::vector<Dynam
   std::vector<BlobShadow> shadows;
   shadows.reserve(objects.size());
   for (const DynamicObject& obj : objects) {
-    // Radius 0.45 m (people), 1.3 m (forklifts, centred 0.3 m ahead of their origin), 0.75 m (AGVs).
+    // Radius 0.45 m (people), 1.3 m (forklifts, centred 0.3 m ahead of their origin), 0.75 m (AGVs, carts and
+    // pallets).
     const float inv_radius2 = obj.cls == ActorClass::kPerson
                                   ? 1.0f / (0.45f * 0.45f)
                                   : (obj.cls == ActorClass::kForklift ? 1.0f / (1.3f * 1.3f) : 1.0f / (0.75f * 0.75f));

@@ -175,16 +175,27 @@ void AgvMotion::planar_pose(double t_s, double& x_out, double& y_out, double& ya
   route.sample(s_start + s_out, x_out, y_out, yaw_out);
 }
 
-std::vector<Circle> actor_footprint(ActorClass cls, const ActorState& st) {
+std::vector<Circle> actor_footprint(const Actor& a, const ActorState& st) {
   const double c = std::cos(st.yaw_rad), s = std::sin(st.yaw_rad);
   auto at = [&](double fwd, double r) { return Circle{st.x + c * fwd, st.y + s * fwd, r}; };
-  switch (cls) {
-    case ActorClass::kPerson: return {at(0.0, 0.3)};
-    case ActorClass::kForklift: return {at(-0.5, 0.75), at(0.45, 0.75), at(1.5, 0.7)};
-    case ActorClass::kAgv: return {at(-0.3, 0.45), at(0.3, 0.45)};
+  std::vector<Circle> circles;
+  switch (a.cls) {
+    case ActorClass::kPerson: circles = {at(0.0, 0.3)}; break;
+    case ActorClass::kForklift: circles = {at(-0.5, 0.75), at(0.45, 0.75), at(1.5, 0.7)}; break;
+    case ActorClass::kAgv:
+      circles = a.vehicle.tugger_carts > 0 ? std::vector<Circle>{at(-0.1, 0.6)} : std::vector<Circle>{at(-0.3, 0.45), at(0.3, 0.45)};
+      break;
+    case ActorClass::kPallet: circles = {at(-0.3, 0.5), at(0.3, 0.5)}; break;
   }
-  return {at(0, 1.0)};
+  for (int k = 0; k < trailer_count(a); ++k) {  // a cart: 1.6 m x 1 m
+    double x, y, heading;
+    actor_track_point(a, st.distance_m - trailer_offset_m(k), x, y, heading);
+    for (double fwd : {-0.45, 0.45}) circles.push_back({x + std::cos(heading) * fwd, y + std::sin(heading) * fwd, 0.6});
+  }
+  return circles;
 }
+
+bool carries(const Actor& a, const Actor& b) { return a.carrier_id == b.id || b.carrier_id == a.id; }
 
 // ---- Scenario construction --------------------------------------------------------------------------------------
 
@@ -232,6 +243,8 @@ Actor make_actor(int id, ActorClass cls, const std::string& role, std::vector<Wa
   a.path = std::move(path);
   a.seed = rng.next_u32();
   if (cls == ActorClass::kPerson) a.look = random_look(rng);
+  if (cls == ActorClass::kForklift && (a.seed & 1U) != 0) a.vehicle.load = {Load::Kind::kWrapped, 0.9f};
+  if (cls == ActorClass::kAgv) a.vehicle.body_shade = 0.58f;
   // Facing the first direction of travel until then.
   a.initial_yaw_rad = 0;
   for (std::size_t i = 0; i + 1 < a.path.size(); ++i) {
@@ -327,7 +340,7 @@ class ScenarioBuilder {
     double worst = 1e9;
     for (double t = 0; t <= sc_.nominal_duration_s + 1e-9; t += kCheckStepS) {
       const ActorState st = actor_state(cand, t);
-      const std::vector<Circle> circles = actor_footprint(cand.cls, st);
+      const std::vector<Circle> circles = actor_footprint(cand, st);
       double cx, cy, cyaw, cs;
       sc_.agv.planar_pose(t, cx, cy, cyaw, cs);
       const double camera_clearance =
@@ -335,8 +348,9 @@ class ScenarioBuilder {
       for (const Circle& c : circles) {
         worst = std::min(worst, std::hypot(c.x - cx, c.y - cy) - c.r - camera_clearance);
         for (const Actor& other : sc_.actors) {
+          if (carries(cand, other)) continue;
           const ActorState so = actor_state(other, t);
-          for (const Circle& o : actor_footprint(other.cls, so))
+          for (const Circle& o : actor_footprint(other, so))
             worst = std::min(worst, std::hypot(c.x - o.x, c.y - o.y) - c.r - o.r - kActorClearanceM);
         }
       }
@@ -405,12 +419,14 @@ class ScenarioBuilder {
       double cx, cy, cyaw, cs;
       sc_.agv.planar_pose(t, cx, cy, cyaw, cs);
       std::vector<std::vector<Circle>> fp;
-      for (const Actor& a : sc_.actors) fp.push_back(actor_footprint(a.cls, actor_state(a, t)));
+      for (const Actor& a : sc_.actors) fp.push_back(actor_footprint(a, actor_state(a, t)));
       for (std::size_t i = 0; i < fp.size(); ++i)
         for (const Circle& c : fp[i]) {
           cam = std::min(cam, std::hypot(c.x - cx, c.y - cy) - c.r);
-          for (std::size_t j = i + 1; j < fp.size(); ++j)
+          for (std::size_t j = i + 1; j < fp.size(); ++j) {
+            if (carries(sc_.actors[i], sc_.actors[j])) continue;
             for (const Circle& o : fp[j]) act = std::min(act, std::hypot(c.x - o.x, c.y - o.y) - c.r - o.r);
+          }
         }
     }
     sc_.min_camera_clearance_m = cam;

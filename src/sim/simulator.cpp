@@ -134,10 +134,16 @@ double Simulator::exposure_gain(int frame) const {
 
 void Simulator::pose_objects(int frame, std::vector<DynamicObject>& out) const {
   const double t = scenario_.scenario_time(frame);
-  out.resize(scenario_.actors.size());
-  for (std::size_t i = 0; i < scenario_.actors.size(); ++i) {
+  const std::size_t n = scenario_.actors.size();
+  std::size_t parts = n;
+  for (const Actor& a : scenario_.actors) parts += static_cast<std::size_t>(trailer_count(a));
+  out.resize(parts);
+  std::size_t next = n;  // trailers after the actors, so out[i] is actor i
+  for (std::size_t i = 0; i < n; ++i) {
     const Actor& a = scenario_.actors[i];
-    pose_actor(a, actor_state(a, t), out[i]);
+    const ActorState st = actor_state(a, t);
+    pose_actor(a, st, out[i]);
+    for (int k = 0; k < trailer_count(a); ++k) pose_trailer(a, st, k, out[next++]);
   }
 }
 

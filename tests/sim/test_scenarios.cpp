@@ -4,6 +4,7 @@
 #include <algorithm>
 #include <cmath>
 #include <cstdio>
+#include <limits>
 
 #include "agvslam/sim/simulator.h"
 
@@ -374,6 +375,92 @@ TEST(Actors, StandingStillIsNotMovingAndLimbsRest) {
   pose_actor(a, walking, obj);
   EXPECT_GE(obj.primitives.size(), 12u);
   EXPECT_NEAR(obj.hi.z, a.look.height_m, 0.05);
+}
+
+TEST(Actors, GivenHeadingsTurnLinearlyAndLiftingOrTurningInPlaceIsMoving) {
+  // A forklift that reverses out (heading kept against the travel), turns on the spot and raises its forks.
+  Actor a;
+  a.cls = ActorClass::kForklift;
+  const double nan = std::numeric_limits<double>::quiet_NaN();
+  a.path = {{0.0, 0.0, 0.0, -kPi / 2, 0.0},  {2.0, 0.0, 2.0, -kPi / 2, 0.0}, {4.0, 0.0, 2.0, kPi, 0.0},
+            {6.0, 0.0, 2.0, kPi, 0.3},       {8.0, 0.0, 2.0, kPi, 0.3},     {9.0, -1.0, 2.0, nan, 0.3}};
+  prepare_actor(a);
+  const ActorState reversing = actor_state(a, 1.0);
+  EXPECT_TRUE(reversing.moving);
+  EXPECT_NEAR(reversing.yaw_rad, -kPi / 2, 1e-9);  // facing -y while driving +y
+  EXPECT_NEAR(reversing.y, 1.0, 1e-9);
+  const ActorState turning = actor_state(a, 3.0);
+  EXPECT_TRUE(turning.moving) << "turning on the spot (45 degrees/s) is moving";
+  EXPECT_EQ(turning.speed_mps, 0.0);
+  EXPECT_NEAR(std::fabs(turning.yaw_rad), 3 * kPi / 4, 1e-9);  // half way from -90 to 180 degrees, the short way
+  const ActorState lifting = actor_state(a, 5.0);
+  EXPECT_TRUE(lifting.moving) << "raising the forks (0.15 m/s) is moving";
+  EXPECT_NEAR(lifting.lift_m, 0.15, 1e-9);
+  const ActorState parked = actor_state(a, 7.0);
+  EXPECT_FALSE(parked.moving);
+  EXPECT_NEAR(parked.lift_m, 0.3, 1e-9);
+  EXPECT_NEAR(std::fabs(parked.yaw_rad), kPi, 1e-9);
+  // A stretch without headings: the direction of travel again.
+  EXPECT_NEAR(std::fabs(actor_state(a, 8.7).yaw_rad), kPi, 1e-6);
+  EXPECT_NEAR(actor_state(a, 8.7).distance_m, 2.7, 1e-9);
+  // The forks ride 0.3 m higher than at travel height.
+  DynamicObject low, high;
+  pose_actor(a, actor_state(a, 0.5), low);
+  pose_actor(a, parked, high);
+  EXPECT_NEAR(high.hi.z - low.hi.z, 0.0, 1e-6);      // the mast does not grow
+  float fork_low = 0, fork_high = 0;
+  for (const auto& p : low.primitives)
+    if (p.part == 8) fork_low = p.a.z;
+  for (const auto& p : high.primitives)
+    if (p.part == 8) fork_high = p.a.z;
+  EXPECT_NEAR(fork_high - fork_low, 0.3, 1e-5);
+}
+
+TEST(Actors, TuggerCartsFollowTheTrackAndPalletsRideAtTheirLift) {
+  Actor t;
+  t.id = 3;
+  t.cls = ActorClass::kAgv;
+  t.vehicle.tugger_carts = 2;
+  t.vehicle.load = {Load::Kind::kCartons, 1.2f};
+  // East 6 m, then north 6 m.
+  t.path = {{0.0, 0.0, 0.0}, {6.0, 6.0, 0.0}, {12.0, 6.0, 6.0}};
+  t.initial_yaw_rad = 0;
+  prepare_actor(t);
+  ASSERT_EQ(trailer_count(t), 2);
+  // At t = 10 s the tractor is 4 m up the north leg; cart 0 (2.3 m back) too, cart 1 (4.45 m back) has not
+  // turned yet.
+  const ActorState st = actor_state(t, 10.0);
+  DynamicObject tractor, cart0, cart1;
+  pose_actor(t, st, tractor);
+  pose_trailer(t, st, 0, cart0);
+  pose_trailer(t, st, 1, cart1);
+  EXPECT_EQ(cart0.id, 3);
+  EXPECT_EQ(cart1.cls, ActorClass::kAgv);
+  EXPECT_NEAR(tractor.origin.x, 6.0, 1e-5);
+  EXPECT_NEAR(tractor.origin.y, 4.0, 1e-5);
+  EXPECT_NEAR(cart0.origin.x, 6.0, 1e-5);
+  EXPECT_NEAR(cart0.origin.y, 4.0 - trailer_offset_m(0), 1e-5);
+  EXPECT_NEAR(cart0.sin_yaw, 1.0, 1e-6);  // heading north
+  EXPECT_NEAR(cart1.origin.x, 6.0 - (trailer_offset_m(1) - 4.0), 1e-5);
+  EXPECT_NEAR(cart1.origin.y, 0.0, 1e-5);
+  EXPECT_NEAR(cart1.cos_yaw, 1.0, 1e-6);  // still heading east
+  EXPECT_GT(cart1.hi.z, 1.5f);            // goods on the cart
+  // Before it starts, the carts stand behind it along its initial heading.
+  DynamicObject waiting;
+  pose_trailer(t, actor_state(t, 0.0), 1, waiting);
+  EXPECT_NEAR(waiting.origin.x, -trailer_offset_m(1), 1e-5);
+  // A pallet actor stands at its lift: its base is lift_m above the floor.
+  Actor p;
+  p.cls = ActorClass::kPallet;
+  p.vehicle.load = {Load::Kind::kWrapped, 1.0f};
+  p.path = {{0.0, 1.0, 1.0, 0.0, 0.25}};
+  prepare_actor(p);
+  DynamicObject pallet;
+  pose_actor(p, actor_state(p, 0.0), pallet);
+  EXPECT_NEAR(pallet.lo.z, 0.25, 2e-3);
+  EXPECT_NEAR(pallet.hi.z, 0.25 + 0.144 + 1.0, 2e-3);
+  EXPECT_NEAR(pallet.hi.x - pallet.lo.x, 1.2, 3e-3);
+  EXPECT_EQ(to_string(ActorClass::kPallet), "pallet");
 }
 
 }  // namespace

@@ -137,6 +137,8 @@ Scenario make_scenario(const ScenarioOptions& options, const Warehouse& warehous
 struct Circle {
   double x, y, r;
 };
-std::vector<Circle> actor_footprint(ActorClass cls, const ActorState& state);
+std::vector<Circle> actor_footprint(const Actor& actor, const ActorState& state);
+// True when one of the two carries the other at times (their footprints overlap then by design).
+bool carries(const Actor& a, const Actor& b);
 
 }  // namespace agvslam::sim

@@ -69,6 +69,7 @@ constexpr SemanticClass actor_part_class(ActorClass actor, Material part) {
     case ActorClass::kPerson: return SemanticClass::kPerson;
     case ActorClass::kForklift: return SemanticClass::kForklift;
     case ActorClass::kAgv: return SemanticClass::kAgv;
+    case ActorClass::kPallet: return SemanticClass::kPalletBox;
   }
   return SemanticClass::kBackground;
 }

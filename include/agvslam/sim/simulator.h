@@ -73,7 +73,7 @@ class Simulator {
   Trajectory ground_truth() const;
   double exposure_gain(int frame) const;
 
-  // The actors posed at a frame.
+  // The actors posed at a frame: out[i] is actor i, then the trailers (a tugger's carts, with its id).
   void pose_objects(int frame, std::vector<DynamicObject>& out) const;
   // Renders both cameras and derives the ground truth; reuses `out`'s buffers.
   void render_frame(int frame, SimFrame& out, int threads = 1) const;
