@@ -64,8 +64,11 @@ nlohmann::json describe(const sim::Simulator& s) {
               {"path_length_m", sc.agv_path_length_m()},
               {"cruise_speed_mps", sc.agv_speed_mps()}};
   nlohmann::json actors = nlohmann::json::array();
-  for (const auto& a : sc.actors)
-    actors.push_back({{"id", a.id}, {"class", sim::to_string(a.cls)}, {"role", a.role}});
+  for (const auto& a : sc.actors) {
+    nlohmann::json moving = nlohmann::json::array();  // [first, last] frames (inclusive) while it moves
+    for (const auto& [first, last] : s.moving_frames(a)) moving.push_back({first, last});
+    actors.push_back({{"id", a.id}, {"class", sim::to_string(a.cls)}, {"role", a.role}, {"moving_frames", moving}});
+  }
   j["actors"] = actors;
   j["min_camera_clearance_m"] = sc.actors.empty() ? nlohmann::json(nullptr) : nlohmann::json(sc.min_camera_clearance_m);
   const sim::SimConfig& c = s.config();
@@ -152,7 +155,7 @@ int run(const Options& o) {
 
 void list_scenarios() {
   for (const auto& s : sim::scenario_catalogue())
-    std::printf("%-7s %4.0f frames at 20 Hz  %s\n", s.name.c_str(), s.nominal_duration_s * 20.0, s.description.c_str());
+    std::printf("%-8s %5.0f frames at 20 Hz  %s\n", s.name.c_str(), s.nominal_duration_s * 20.0, s.description.c_str());
 }
 
 }  // namespace

@@ -512,17 +512,18 @@ void pose_trailer(const Actor& actor, const ActorState& st, int k, DynamicObject
   obj.sin_yaw = static_cast<float>(std::sin(heading));
   obj.primitives.clear();
   PosingContext ctx{obj, obj.cos_yaw, obj.sin_yaw};
-  ctx.box(-0.8f, 0.8f, -0.5f, 0.5f, 0.26f, 0.32f, Material::kVehicleMetal, 6);  // deck
+  // A 1.6 m x 1.2 m cart (a 1.2 m x 0.8 m pallet's goods fit across it).
+  ctx.box(-0.8f, 0.8f, -0.6f, 0.6f, 0.26f, 0.32f, Material::kVehicleMetal, 6);  // deck
   for (float px : {-0.7f, 0.55f})
-    for (float py : {-0.5f, 0.42f}) ctx.box(px, px + 0.15f, py, py + 0.08f, 0.0f, 0.2f, Material::kTyre, 2);
+    for (float py : {-0.58f, 0.5f}) ctx.box(px, px + 0.15f, py, py + 0.08f, 0.0f, 0.2f, Material::kTyre, 2);
   ctx.box(0.8f, 1.35f, -0.03f, 0.03f, 0.24f, 0.28f, Material::kVehicleMetal, 6);  // drawbar
   for (float px : {-0.8f, 0.75f})
-    for (float py : {-0.5f, 0.45f}) ctx.box(px, px + 0.05f, py, py + 0.05f, 0.32f, 1.8f, Material::kVehicleMetal, 6);
-  ctx.box(-0.8f, 0.8f, 0.45f, 0.5f, 1.75f, 1.8f, Material::kVehicleMetal, 6);  // top rails
-  ctx.box(-0.8f, 0.8f, -0.5f, -0.45f, 1.75f, 1.8f, Material::kVehicleMetal, 6);
+    for (float py : {-0.6f, 0.55f}) ctx.box(px, px + 0.05f, py, py + 0.05f, 0.32f, 1.9f, Material::kVehicleMetal, 6);
+  ctx.box(-0.8f, 0.8f, 0.55f, 0.6f, 1.85f, 1.9f, Material::kVehicleMetal, 6);  // top rails
+  ctx.box(-0.8f, 0.8f, -0.6f, -0.55f, 1.85f, 1.9f, Material::kVehicleMetal, 6);
   Load load = actor.vehicle.load;
-  load.height_m = std::min(load.height_m, 1.4f);  // below the top rails
-  add_goods(ctx, -0.72f, 0.72f, -0.42f, 0.42f, 0.32f, load, obj.seed);
+  load.height_m = std::min(load.height_m, 1.5f);  // below the top rails
+  add_goods(ctx, -0.72f, 0.72f, -0.52f, 0.52f, 0.32f, load, obj.seed);
   set_bounds(obj);
 }
 

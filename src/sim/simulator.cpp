@@ -132,6 +132,18 @@ double Simulator::exposure_gain(int frame) const {
                     0.4 * std::sin(2 * kPi * t / 3.9 + exposure_phase_[1]));
 }
 
+std::vector<std::pair<int, int>> Simulator::moving_frames(const Actor& actor) const {
+  std::vector<std::pair<int, int>> ranges;
+  for (int k = 0; k < frame_count(); ++k) {
+    if (!actor_state(actor, scenario_.scenario_time(k)).moving) continue;
+    if (!ranges.empty() && ranges.back().second == k - 1)
+      ranges.back().second = k;
+    else
+      ranges.emplace_back(k, k);
+  }
+  return ranges;
+}
+
 void Simulator::pose_objects(int frame, std::vector<DynamicObject>& out) const {
   const double t = scenario_.scenario_time(frame);
   const std::size_t n = scenario_.actors.size();
@@ -267,8 +279,8 @@ void prepare_output_dir(const std::string& dir, const std::string& option) {
 }
 
 std::string objects_header() {
-  return "# frame id class moving x_min y_min x_max y_max  (class: person|forklift|agv; moving: 1 = moving at this "
-         "frame; bbox of the visible pixels in image_0, inclusive, pixels)";
+  return "# frame id class moving x_min y_min x_max y_max  (class: person|forklift|agv|pallet; moving: 1 = moving at "
+         "this frame; bbox of the visible pixels in image_0, inclusive, pixels)";
 }
 
 std::string format_objects(int frame, const std::vector<VisibleObject>& objects) {

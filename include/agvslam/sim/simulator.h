@@ -14,6 +14,7 @@
 #include <cstdint>
 #include <functional>
 #include <string>
+#include <utility>
 #include <vector>
 
 #include "agvslam/core/camera.h"
@@ -73,6 +74,8 @@ class Simulator {
   Trajectory ground_truth() const;
   double exposure_gain(int frame) const;
 
+  // The frames at which an actor moves, as inclusive [first, last] ranges.
+  std::vector<std::pair<int, int>> moving_frames(const Actor& actor) const;
   // The actors posed at a frame: out[i] is actor i, then the trailers (a tugger's carts, with its id).
   void pose_objects(int frame, std::vector<DynamicObject>& out) const;
   // Renders both cameras and derives the ground truth; reuses `out`'s buffers.
