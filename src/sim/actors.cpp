@@ -345,6 +345,103 @@ void add_goods(PosingContext& ctx, float x0, float x1, float y0, float y1, float
   }
 }
 
+// A person standing or walking (gait from the state), in the object's frame: torso (part 0), head (1), neck (2),
+// upper and lower arms (3, 4), thighs and shins (5, 6), shoes (7); what the hands carry (12, 13).
+void pose_person(PosingContext& ctx, const PersonLook& look, const ActorState& st) {
+  const float h = look.height_m;
+  const float sc = h / 1.75f;
+  const float wide = sc * look.build, deep = sc * look.girth;
+  const float amp = static_cast<float>(st.gait_amplitude);
+  const float phase = static_cast<float>(st.gait_phase_rad);
+  const float bob = 0.018f * amp * std::fabs(std::cos(phase));
+  ctx.obj.origin.z = 0.0f;
+  const float hip_z = 0.50f * h + bob;
+  const float shoulder_z = 0.815f * h + bob;
+  const float thigh = 0.245f * h, shin = 0.235f * h;
+  const float upper = 0.17f * h, fore = 0.165f * h;
+  for (int side = 0; side < 2; ++side) {
+    const float sign_y = side == 0 ? 1.0f : -1.0f;  // 0: left (+y)
+    const float ph = phase + (side == 0 ? 0.0f : 3.14159265f);
+    // Legs: hip swing +-0.42 rad, knee flexes on the forward swing.
+    const float hip_angle = 0.42f * amp * std::sin(ph);
+    const float knee = amp * (0.15f + 0.45f * std::max(0.0f, std::cos(ph)));
+    const V3 hip{0.0f, sign_y * 0.095f * wide, hip_z};
+    const V3 knee_p{hip.x + thigh * std::sin(hip_angle), hip.y, hip.z - thigh * std::cos(hip_angle)};
+    const float shin_angle = hip_angle - knee;
+    const V3 ankle{knee_p.x + shin * std::sin(shin_angle), hip.y, knee_p.z - shin * std::cos(shin_angle)};
+    ctx.capsule(hip, knee_p, 0.078f * sc, Material::kPersonTrousers, 5);
+    ctx.capsule(knee_p, ankle, 0.06f * sc, Material::kPersonTrousers, 6);
+    const float foot_pitch = shin_angle * 0.6f;
+    const V3 toe{ankle.x + 0.17f * sc * std::cos(foot_pitch), ankle.y, ankle.z - 0.17f * sc * std::sin(foot_pitch)};
+    ctx.capsule({ankle.x - 0.04f * sc, ankle.y, ankle.z}, toe, 0.045f * sc, Material::kTyre, 7);
+    // Arms: the one on this side swings against the leg on this side, unless the hand holds something.
+    const V3 shoulder{0.0f, sign_y * 0.215f * wide, shoulder_z - 0.05f * sc};
+    V3 elbow, hand;
+    const bool holds = look.carry == PersonLook::Carry::kBox ||
+                       (look.carry == PersonLook::Carry::kScanner && side == 1) ||
+                       (look.carry == PersonLook::Carry::kPhone && side == 0);
+    if (holds && look.carry == PersonLook::Carry::kPhone) {  // elbow out, hand at the ear
+      elbow = {shoulder.x + 0.06f * sc, shoulder.y + sign_y * 0.08f * sc, shoulder.z - 0.2f * sc};
+      hand = {0.04f * sc, sign_y * 0.12f * sc, h - 0.13f * sc + bob};
+    } else if (holds) {  // forearm forward, the hand in front of the waist
+      const float a_upper = 0.3f, a_fore = 1.35f;
+      elbow = {shoulder.x + upper * std::sin(a_upper), shoulder.y - sign_y * 0.01f * sc,
+               shoulder.z - upper * std::cos(a_upper)};
+      hand = {elbow.x + fore * std::sin(a_fore), elbow.y - sign_y * 0.02f * sc, elbow.z - fore * std::cos(a_fore)};
+    } else {
+      const float arm_angle = -0.38f * look.arm_swing * amp * std::sin(ph);
+      elbow = {shoulder.x + upper * std::sin(arm_angle), shoulder.y + sign_y * 0.02f * sc,
+               shoulder.z - upper * std::cos(arm_angle)};
+      const float fore_angle = arm_angle + 0.2f + 0.35f * amp * std::max(0.0f, std::sin(-ph));
+      hand = {elbow.x + fore * std::sin(fore_angle), elbow.y + sign_y * 0.01f * sc, elbow.z - fore * std::cos(fore_angle)};
+    }
+    ctx.capsule(shoulder, elbow, 0.052f * sc, Material::kPersonShirt, 3);
+    ctx.capsule(elbow, hand, 0.043f * sc, Material::kPersonShirt, 4);
+    if (holds && look.carry == PersonLook::Carry::kScanner)
+      ctx.box(hand.x - 0.02f, hand.x + 0.12f, hand.y - 0.03f, hand.y + 0.03f, hand.z, hand.z + 0.035f,
+              Material::kVehicleDark, 13);
+    if (holds && look.carry == PersonLook::Carry::kPhone)
+      ctx.box(hand.x - 0.04f, hand.x + 0.03f, hand.y - 0.01f, hand.y + 0.005f, hand.z - 0.04f, hand.z + 0.08f,
+              Material::kVehicleDark, 13);
+    if (holds && look.carry == PersonLook::Carry::kBox && side == 0)  // between the hands
+      ctx.box(0.17f * deep, hand.x + 0.06f, -hand.y + 0.03f, hand.y - 0.03f, hand.z - 0.1f, hand.z + 0.22f,
+              Material::kCarton, 12);
+  }
+  // Torso (pelvis to shoulders), neck, head.
+  ctx.box(-0.115f * deep, 0.115f * deep, -0.19f * wide, 0.19f * wide, hip_z - 0.06f * sc, shoulder_z + 0.02f * sc,
+          Material::kPersonShirt, 0);
+  ctx.capsule({0.0f, 0.0f, shoulder_z}, {0.01f * sc, 0.0f, shoulder_z + 0.07f * sc}, 0.05f * sc,
+              Material::kPersonSkin, 2);
+  const float head_r = 0.105f * sc;
+  ctx.sphere({0.015f * sc, 0.0f, h - head_r + bob}, head_r, Material::kPersonHead, 1);
+}
+
+// A forklift's driver seated behind the dashboard, hands on the wheel (the same parts as a standing person).
+void pose_driver(PosingContext& ctx, const PersonLook& look) {
+  const float sc = look.height_m / 1.75f;
+  const float wide = sc * look.build, deep = sc * look.girth;
+  const float seat_z = 1.38f, hip_x = -0.33f;
+  const float shoulder_z = seat_z + 0.5f * sc;
+  ctx.box(hip_x - 0.11f * deep, hip_x + 0.11f * deep, -0.18f * wide, 0.18f * wide, seat_z, shoulder_z + 0.02f * sc,
+          Material::kPersonShirt, 0);
+  for (float sign_y : {1.0f, -1.0f}) {
+    const V3 hip{hip_x, sign_y * 0.095f * wide, seat_z + 0.06f};
+    const V3 knee{hip_x + 0.42f * sc, sign_y * 0.12f * wide, seat_z + 0.08f};
+    ctx.capsule(hip, knee, 0.078f * sc, Material::kPersonTrousers, 5);
+    ctx.capsule(knee, {knee.x + 0.05f, knee.y, 1.1f}, 0.06f * sc, Material::kPersonTrousers, 6);
+    const V3 shoulder{hip_x, sign_y * 0.2f * wide, shoulder_z - 0.05f * sc};
+    const V3 elbow{hip_x + 0.22f * sc, sign_y * 0.23f * wide, shoulder_z - 0.3f * sc};
+    ctx.capsule(shoulder, elbow, 0.052f * sc, Material::kPersonShirt, 3);
+    ctx.capsule(elbow, {0.22f, sign_y * 0.14f, 1.42f}, 0.043f * sc, Material::kPersonShirt, 4);
+  }
+  ctx.capsule({hip_x, 0.0f, shoulder_z}, {hip_x + 0.01f, 0.0f, shoulder_z + 0.07f * sc}, 0.05f * sc,
+              Material::kPersonSkin, 2);
+  const float head_r = 0.105f * sc;
+  // The head stays under the overhead guard's roof (2.1 m).
+  const float head_z = std::min(shoulder_z + 0.07f * sc + 0.9f * head_r, 2.08f - head_r);
+  ctx.sphere({hip_x + 0.02f, 0.0f, head_z}, head_r, Material::kPersonHead, 1);
+}
+
 // The object's bounding box from its primitives.
 void set_bounds(DynamicObject& obj) {
   const float c = obj.cos_yaw, s = obj.sin_yaw;
@@ -391,49 +488,7 @@ void pose_actor(const Actor& actor, const ActorState& st, DynamicObject& obj) {
   PosingContext ctx{obj, obj.cos_yaw, obj.sin_yaw};
 
   if (actor.cls == ActorClass::kPerson) {
-    const float h = actor.look.height_m;
-    const float sc = h / 1.75f;
-    const float amp = static_cast<float>(st.gait_amplitude);
-    const float phase = static_cast<float>(st.gait_phase_rad);
-    const float bob = 0.018f * amp * std::fabs(std::cos(phase));
-    obj.origin.z = 0.0f;
-    const float hip_z = 0.50f * h + bob;
-    const float shoulder_z = 0.815f * h + bob;
-    const float thigh = 0.245f * h, shin = 0.235f * h;
-    // Legs: hip swing +-0.42 rad, knee flexes on the forward swing.
-    for (int side = 0; side < 2; ++side) {
-      const float sign_y = side == 0 ? 1.0f : -1.0f;  // 0: left (+y)
-      const float ph = phase + (side == 0 ? 0.0f : 3.14159265f);
-      const float hip_angle = 0.42f * amp * std::sin(ph);
-      const float knee = amp * (0.15f + 0.45f * std::max(0.0f, std::cos(ph)));
-      const V3 hip{0.0f, sign_y * 0.095f * sc, hip_z};
-      const V3 knee_p{hip.x + thigh * std::sin(hip_angle), hip.y, hip.z - thigh * std::cos(hip_angle)};
-      const float shin_angle = hip_angle - knee;
-      const V3 ankle{knee_p.x + shin * std::sin(shin_angle), hip.y, knee_p.z - shin * std::cos(shin_angle)};
-      ctx.capsule(hip, knee_p, 0.078f * sc, Material::kPersonTrousers, 5);
-      ctx.capsule(knee_p, ankle, 0.06f * sc, Material::kPersonTrousers, 6);
-      const float foot_pitch = shin_angle * 0.6f;
-      const V3 toe{ankle.x + 0.17f * sc * std::cos(foot_pitch), ankle.y, ankle.z - 0.17f * sc * std::sin(foot_pitch)};
-      ctx.capsule({ankle.x - 0.04f * sc, ankle.y, ankle.z}, toe, 0.045f * sc, Material::kTyre, 7);
-      // Arm on this side swings against the leg on this side.
-      const float arm_angle = -0.38f * amp * std::sin(ph);
-      const V3 shoulder{0.0f, sign_y * 0.215f * sc, shoulder_z - 0.05f * sc};
-      const float upper = 0.17f * h, fore = 0.165f * h;
-      const V3 elbow{shoulder.x + upper * std::sin(arm_angle), shoulder.y + sign_y * 0.02f * sc,
-                     shoulder.z - upper * std::cos(arm_angle)};
-      const float fore_angle = arm_angle + 0.2f + 0.35f * amp * std::max(0.0f, std::sin(-ph));
-      const V3 hand{elbow.x + fore * std::sin(fore_angle), elbow.y + sign_y * 0.01f * sc,
-                    elbow.z - fore * std::cos(fore_angle)};
-      ctx.capsule(shoulder, elbow, 0.052f * sc, Material::kPersonShirt, 3);
-      ctx.capsule(elbow, hand, 0.043f * sc, Material::kPersonShirt, 4);
-    }
-    // Torso (pelvis to shoulders), neck, head.
-    ctx.box(-0.115f * sc, 0.115f * sc, -0.19f * sc, 0.19f * sc, hip_z - 0.06f * sc, shoulder_z + 0.02f * sc,
-            Material::kPersonShirt, 0);
-    ctx.capsule({0.0f, 0.0f, shoulder_z}, {0.01f * sc, 0.0f, shoulder_z + 0.07f * sc}, 0.05f * sc,
-                Material::kPersonSkin, 2);
-    const float head_r = 0.105f * sc;
-    ctx.sphere({0.015f * sc, 0.0f, h - head_r + bob}, head_r, Material::kPersonHead, 1);
+    pose_person(ctx, actor.look, st);
   } else if (actor.cls == ActorClass::kForklift) {
     ctx.box(-0.95f, 0.75f, -0.55f, 0.55f, 0.14f, 1.05f, Material::kVehicleBody, 0);      // chassis
     ctx.box(-1.18f, -0.95f, -0.52f, 0.52f, 0.16f, 1.12f, Material::kVehicleMetal, 1);    // counterweight
@@ -445,6 +500,7 @@ void pose_actor(const Actor& actor, const ActorState& st, DynamicObject& obj) {
       for (float py : {-0.5f, 0.5f}) ctx.box(px - 0.03f, px + 0.03f, py - 0.03f, py + 0.03f, 1.05f, 2.12f, Material::kVehicleGuard, 3);
     ctx.box(-0.66f, 0.46f, -0.54f, 0.54f, 2.1f, 2.16f, Material::kVehicleGuard, 3);      // roof
     ctx.box(-0.55f, -0.15f, -0.26f, 0.26f, 1.05f, 1.38f, Material::kVehicleDark, 4);     // seat
+    pose_driver(ctx, actor.look);
     ctx.box(0.28f, 0.62f, -0.42f, 0.42f, 1.05f, 1.32f, Material::kVehicleBody, 5);       // dashboard
     ctx.box(0.8f, 0.9f, 0.3f, 0.4f, 0.08f, 2.3f, Material::kVehicleMetal, 6);            // mast
     ctx.box(0.8f, 0.9f, -0.4f, -0.3f, 0.08f, 2.3f, Material::kVehicleMetal, 6);

@@ -242,16 +242,91 @@ bool carries(const Actor& a, const Actor& b) { return a.carrier_id == b.id || b.
 
 namespace scenario_detail {
 
-PersonLook random_look(Rng& rng) {
+namespace {
+
+// Albedos of common colours as the grey camera sees them (the luma of the colour times a fabric's or a paint's
+// reflectance), darkest first.
+constexpr float kClothShades[] = {0.04f, 0.08f, 0.14f, 0.2f, 0.26f, 0.3f, 0.38f, 0.48f, 0.58f, 0.7f, 0.8f, 0.86f};
+constexpr float kTrouserShades[] = {0.05f, 0.09f, 0.16f, 0.2f, 0.24f, 0.32f, 0.42f};
+constexpr float kHiVisShades[] = {0.58f, 0.86f};  // orange, yellow
+constexpr float kForkliftShades[] = {0.72f, 0.55f, 0.32f, 0.28f, 0.38f, 0.5f, 0.8f, 0.15f};
+constexpr float kAgvShades[] = {0.58f, 0.75f, 0.55f, 0.7f, 0.3f, 0.2f};
+
+template <std::size_t N>
+float pick(const float (&shades)[N], double u) {
+  return shades[std::min(N - 1, static_cast<std::size_t>(u * static_cast<double>(N)))];
+}
+// A second colour that stands out against `shade`.
+float contrasting(float shade, Rng& a) {
+  return static_cast<float>(shade < 0.45f ? shade + a.uniform(0.3, 0.55) : shade - a.uniform(0.3, 0.5));
+}
+
+// Clothing, build and what the hands hold: the colours and the pattern from u in [0, 1), the rest from the
+// actor's appearance stream.
+void dress(PersonLook& look, double colour_u, double pattern_u, double trousers_u, Rng& a) {
+  using P = PersonLook;
+  const double top = a.uniform();
+  look.top = top < 0.22 ? P::Top::kTshirt
+                        : top < 0.44 ? P::Top::kLongSleeve
+                                     : top < 0.64 ? P::Top::kJacket
+                                                  : top < 0.76 ? P::Top::kHoodie
+                                                               : top < 0.92 ? P::Top::kHiVisVest : P::Top::kOveralls;
+  look.shirt_shade = std::clamp(pick(kClothShades, colour_u) + static_cast<float>(a.uniform(-0.03, 0.03)), 0.03f, 0.9f);
+  look.inner_shade = pick(kClothShades, a.uniform());
+  if (look.top == P::Top::kHiVisVest) look.shirt_shade = pick(kHiVisShades, a.uniform());
+  look.pattern = pattern_u < 0.3    ? P::Pattern::kPlain
+                 : pattern_u < 0.47 ? P::Pattern::kStripes
+                 : pattern_u < 0.6  ? P::Pattern::kChecks
+                 : pattern_u < 0.75 ? P::Pattern::kPlaid
+                 : pattern_u < 0.88 ? P::Pattern::kBlotches
+                                    : P::Pattern::kDots;
+  look.pattern_shade = contrasting(look.shirt_shade, a);
+  look.pattern_period_m = static_cast<float>(a.uniform(0.05, 0.15));
+  look.prints = 0;
+  if (a.chance(0.5)) look.prints |= P::kChestLogo;
+  if (a.chance(0.45)) look.prints |= P::kBackPrint;
+  if ((look.top == P::Top::kTshirt || look.top == P::Top::kHoodie) && a.chance(0.35)) look.prints |= P::kFrontGraphic;
+  if (a.chance(0.2)) look.prints |= P::kNameBadge;
+  look.pockets = a.chance(0.75);
+  look.folds = a.chance(0.9);
+  const double bottom = a.uniform();
+  look.bottom = bottom < 0.4 ? P::Bottom::kWork : bottom < 0.7 ? P::Bottom::kJeans : bottom < 0.9 ? P::Bottom::kCargo : P::Bottom::kHiVis;
+  look.trousers_shade = look.bottom == P::Bottom::kHiVis ? pick(kHiVisShades, trousers_u) : pick(kTrouserShades, trousers_u);
+  if (look.top == P::Top::kOveralls) look.trousers_shade = look.shirt_shade;
+  look.shoe_shade = static_cast<float>(a.uniform(0.04, 0.2));
+  const double carry = a.uniform();
+  look.carry = carry < 0.7 ? P::Carry::kNothing : carry < 0.82 ? P::Carry::kBox : carry < 0.94 ? P::Carry::kScanner : P::Carry::kPhone;
+  look.arm_swing = static_cast<float>(a.uniform(0.6, 1.25));
+  look.build = static_cast<float>(a.uniform(0.9, 1.12));
+  look.girth = static_cast<float>(a.uniform(0.9, 1.2));
+}
+
+// A forklift driver: everything from the appearance stream, hands on the wheel.
+PersonLook driver_look(Rng& a) {
+  PersonLook look;
+  look.height_m = static_cast<float>(a.uniform(1.6, 1.92));
+  look.skin_shade = static_cast<float>(a.uniform(0.35, 0.75));
+  look.hair_shade = static_cast<float>(a.uniform(0.05, 0.4));
+  look.helmet = a.chance(0.3);
+  const double colour_u = a.uniform(), pattern_u = a.uniform(), trousers_u = a.uniform();
+  dress(look, colour_u, pattern_u, trousers_u, a);
+  look.carry = PersonLook::Carry::kNothing;
+  return look;
+}
+
+}  // namespace
+
+PersonLook random_look(Rng& rng, uint32_t actor_seed) {
+  // Seven draws from the scenario's stream, as many as ever (every later actor's path depends on them); the rest
+  // of the clothing from the actor's own stream.
   PersonLook look;
   look.height_m = static_cast<float>(rng.uniform(1.6, 1.92));
-  look.shirt_shade = static_cast<float>(rng.uniform(0.12, 0.85));
-  const double p = rng.uniform();
-  look.shirt_pattern = p < 0.35 ? 0 : (p < 0.55 ? 1 : (p < 0.7 ? 2 : 3));
-  look.trousers_shade = static_cast<float>(rng.uniform(0.08, 0.4));
+  const double colour_u = rng.uniform(), pattern_u = rng.uniform(), trousers_u = rng.uniform();
   look.skin_shade = static_cast<float>(rng.uniform(0.35, 0.75));
   look.hair_shade = static_cast<float>(rng.uniform(0.05, 0.4));
   look.helmet = rng.chance(0.3);
+  Rng a(actor_seed, RngStream::kAppearance);
+  dress(look, colour_u, pattern_u, trousers_u, a);
   return look;
 }
 
@@ -262,9 +337,15 @@ Actor make_actor(int id, ActorClass cls, const std::string& role, std::vector<Wa
   a.role = role;
   a.path = std::move(path);
   a.seed = rng.next_u32();
-  if (cls == ActorClass::kPerson) a.look = random_look(rng);
-  if (cls == ActorClass::kForklift && (a.seed & 1U) != 0) a.vehicle.load = {Load::Kind::kWrapped, 0.9f};
-  if (cls == ActorClass::kAgv) a.vehicle.body_shade = 0.58f;
+  if (cls == ActorClass::kPerson) a.look = random_look(rng, a.seed);
+  Rng appearance(a.seed, RngStream::kAppearance);
+  if (cls == ActorClass::kForklift) {
+    if ((a.seed & 1U) != 0) a.vehicle.load = {Load::Kind::kWrapped, 0.9f};
+    a.vehicle.body_shade = pick(kForkliftShades, appearance.uniform()) + static_cast<float>(appearance.uniform(-0.03, 0.03));
+    a.look = driver_look(appearance);
+  }
+  if (cls == ActorClass::kAgv)
+    a.vehicle.body_shade = pick(kAgvShades, appearance.uniform()) + static_cast<float>(appearance.uniform(-0.03, 0.03));
   // Facing the first direction of travel until then.
   a.initial_yaw_rad = 0;
   for (std::size_t i = 0; i + 1 < a.path.size(); ++i) {

@@ -59,8 +59,9 @@ struct PathBuilder {
   }
 };
 
-// Appearance of a person, drawn from the scenario's actor stream.
-PersonLook random_look(Rng& rng);
+// Appearance of a person: body from the scenario's actor stream, clothing from the actor's appearance stream
+// (RngStream::kAppearance seeded with its texture seed).
+PersonLook random_look(Rng& rng, uint32_t actor_seed);
 // An actor with its texture seed (and a person's look) drawn from `rng`, facing its first direction of travel.
 Actor make_actor(int id, ActorClass cls, const std::string& role, std::vector<Waypoint> path, Rng& rng);
 

@@ -41,9 +41,10 @@ std::array<int, kSemanticClassCount> check_frame(const SimFrame& f, const std::s
       const auto sc = static_cast<SemanticClass>(c);
       const bool actor_class = sc == SemanticClass::kPerson || sc == SemanticClass::kForklift || sc == SemanticClass::kAgv;
       if (id > 0) {
-        // An actor's pixel: its own class, or pallet/box where it carries goods.
+        // An actor's pixel: its own class, pallet/box where it carries goods, person for a forklift's driver.
         const auto cls = static_cast<ActorClass>(cls_of_id[static_cast<std::size_t>(id)]);
-        if (sc != own_class(cls) && sc != SemanticClass::kPalletBox) ++actor_without_class;
+        const bool driver = cls == ActorClass::kForklift && sc == SemanticClass::kPerson;
+        if (sc != own_class(cls) && sc != SemanticClass::kPalletBox && !driver) ++actor_without_class;
       } else if (actor_class) {
         ++class_without_actor;  // a person / vehicle class on the static scene
       }
@@ -107,6 +108,7 @@ TEST(ClassLabels, StaticLabelsFollowTheGeometry) {
   EXPECT_EQ(static_box_class(Material::kPillar), SemanticClass::kWall);
   EXPECT_EQ(actor_part_class(ActorClass::kForklift, Material::kWrappedLoad), SemanticClass::kPalletBox);
   EXPECT_EQ(actor_part_class(ActorClass::kForklift, Material::kTyre), SemanticClass::kForklift);
+  EXPECT_EQ(actor_part_class(ActorClass::kForklift, Material::kPersonHead), SemanticClass::kPerson);
   EXPECT_STREQ(semantic_class_name(SemanticClass::kPalletBox), "pallet/box");
 }
 

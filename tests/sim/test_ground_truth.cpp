@@ -209,9 +209,12 @@ TEST(GroundTruth, ImagesHaveCornersAllOverForFeatureTrackers) {
       if (frame >= sim.frame_count()) continue;
       SimFrame f;
       sim.render_frame(frame, f);
+      // The threshold (20 grey levels at nominal exposure) follows the sequence's exposure, as the contrast does.
+      const int threshold = static_cast<int>(std::lround(20 * sim.exposure_gain(frame)));
       std::vector<cv::KeyPoint> corners;
-      cv::FAST(f.left, corners, 20, true);
-      EXPECT_GT(corners.size(), 1500u) << name << " frame " << frame;
+      cv::FAST(f.left, corners, threshold, true);
+      // Fewer where the hall's key light grazes the racks' faces (SimConfig::lighting_variation).
+      EXPECT_GT(corners.size(), 1300u) << name << " frame " << frame;
       // Coverage: corners in most cells of an 8 x 6 grid.
       bool cell[6][8] = {};
       for (const auto& kp : corners)

@@ -52,11 +52,33 @@ struct VehicleLook {
   uint8_t tugger_carts = 0;   // AGV: 0 a cart AGV carrying crates; n > 0 an automated tugger towing n carts
 };
 
+// How a person looks. Shades are albedos of a colour as the grey camera sees it. The default is a plain long-sleeved
+// shirt without pockets, prints or folds (the least textured clothing).
 struct PersonLook {
   float height_m = 1.75f;
-  float shirt_shade = 0.5f, trousers_shade = 0.25f, skin_shade = 0.6f, hair_shade = 0.15f;
-  uint8_t shirt_pattern = 0;  // 0 plain, 1 horizontal stripes, 2 checks, 3 hi-vis vest
+  float build = 1.0f;   // width of shoulders and hips relative to an average body of this height
+  float girth = 1.0f;   // depth of chest and belly, likewise
+  float skin_shade = 0.6f, hair_shade = 0.15f;
   bool helmet = false;
+  enum class Top : uint8_t { kTshirt, kLongSleeve, kJacket, kHoodie, kHiVisVest, kOveralls };
+  Top top = Top::kLongSleeve;
+  enum class Pattern : uint8_t { kPlain, kStripes, kChecks, kPlaid, kBlotches, kDots };
+  Pattern pattern = Pattern::kPlain;
+  float shirt_shade = 0.5f;       // the top
+  float pattern_shade = 0.2f;     // the pattern's second colour, the trim
+  float inner_shade = 0.7f;       // what shows under a vest or an open jacket
+  float pattern_period_m = 0.1f;  // stripes, checks, dots
+  enum Print : uint8_t { kChestLogo = 1, kBackPrint = 2, kFrontGraphic = 4, kNameBadge = 8 };
+  uint8_t prints = 0;             // Print bits
+  bool pockets = false;           // pockets, buttons, zips
+  bool folds = false;             // creases of the fabric
+  enum class Bottom : uint8_t { kWork, kJeans, kCargo, kHiVis };
+  Bottom bottom = Bottom::kWork;
+  float trousers_shade = 0.25f;
+  float shoe_shade = 0.07f;
+  enum class Carry : uint8_t { kNothing, kBox, kScanner, kPhone };
+  Carry carry = Carry::kNothing;  // what the hands hold (a box in both, a scanner in the right, a phone at the ear)
+  float arm_swing = 1.0f;         // relative to an average gait
 };
 
 // Derived per path segment [path[k], path[k+1]] by prepare_actor().

@@ -181,5 +181,8 @@ float box_albedo(Material material, uint8_t variant, const FaceSample& f);
 // Albedo of a point on an actor (p_local in the object's yaw frame: x forward, y left, z up).
 float actor_albedo(const DynamicObject& obj, const DynamicPrimitive& prim, const V3& p_local, const V3& n_local,
                    float axis_param, float footprint_m);
+// The same for a person's body, clothes and shoes (clothing.cpp).
+float person_albedo(const DynamicObject& obj, const DynamicPrimitive& prim, const V3& p_local, const V3& n_local,
+                    float axis_param, float footprint_m);
 
 }  // namespace agvslam::sim

@@ -13,8 +13,8 @@
 //   7 agv         automated vehicles (cart AGVs, tugger trains)
 //
 // class_0 says what a surface is; instance_0 says which actor it belongs to. So a load on a forklift is pallet/box
-// in class_0 and carries the forklift's id in instance_0, and a pallet that an actor carries (scenario `pallet`)
-// is pallet/box with its own id, in mask_0 only while it moves.
+// in class_0 and carries the forklift's id in instance_0, its driver is person with the forklift's id, and a
+// pallet that an actor carries (scenario `pallet`) is pallet/box with its own id, in mask_0 only while it moves.
 
 #include <cstdint>
 
@@ -62,9 +62,17 @@ constexpr SemanticClass static_box_class(Material m) {
   }
 }
 
-// Class of a part of an actor: goods are pallet/box, everything else is the actor's own class.
+// A person's body and clothes (also a forklift driver's).
+constexpr bool is_person_part(Material m) {
+  return m == Material::kPersonShirt || m == Material::kPersonTrousers || m == Material::kPersonSkin ||
+         m == Material::kPersonHead;
+}
+
+// Class of a part of an actor: goods are pallet/box, a person's body is person (a forklift's driver too),
+// everything else is the actor's own class.
 constexpr SemanticClass actor_part_class(ActorClass actor, Material part) {
   if (is_goods(part)) return SemanticClass::kPalletBox;
+  if (is_person_part(part)) return SemanticClass::kPerson;
   switch (actor) {
     case ActorClass::kPerson: return SemanticClass::kPerson;
     case ActorClass::kForklift: return SemanticClass::kForklift;

@@ -72,6 +72,7 @@ class Simulator {
   SE3d T_w_c(int frame) const { return T_w_map_ * T_map_cam(frame); }
   const Eigen::Isometry3d& T_w_map() const { return T_w_map_; }
   Trajectory ground_truth() const;
+  // Global gain of frame `frame`: the sequence's exposure times its smooth variation.
   double exposure_gain(int frame) const;
 
   // The frames at which an actor moves, as inclusive [first, last] ranges.
@@ -89,6 +90,7 @@ class Simulator {
   Eigen::Isometry3d T_w_map_ = Eigen::Isometry3d::Identity();
   uint64_t sensor_seed_ = 0;
   double exposure_phase_[2] = {0, 0};
+  double exposure_base_ = 1.0;  // this sequence's exposure (SimConfig::exposure_spread)
   uint32_t vibration_seed_ = 0;
 };
 
