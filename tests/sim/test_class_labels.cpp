@@ -7,16 +7,12 @@
 
 #include "agvslam/sim/semantic_classes.h"
 #include "agvslam/sim/simulator.h"
+#include "sim_test_util.h"
 
 namespace agvslam::sim {
 namespace {
 
-Simulator make_sim(const std::string& name, uint64_t seed, double scale) {
-  ScenarioOptions o;
-  o.name = name;
-  o.seed = seed;
-  return Simulator(SimConfig{}.scaled(scale), o);
-}
+using test::make_sim;
 
 // The class an actor's own pixels may carry besides pallet/box (its goods).
 SemanticClass own_class(ActorClass cls) { return actor_part_class(cls, Material::kVehicleBody); }
@@ -57,9 +53,10 @@ std::array<int, kSemanticClassCount> check_frame(const SimFrame& f, const std::s
 
 TEST(ClassLabels, EveryPixelLabelledAndActorsAgreeWithTheInstances) {
   // scene3: people, a forklift, racks, pallets, floor, walls and the roof down the aisle; scene5: an AGV with its
-  // load, people on the loop.
+  // load, people on the loop; crowd: people carrying boxes, a forklift with its driver; pallet: pallets that are
+  // actors; follow: a tugger train's carts or a loaded forklift.
   std::array<int, kSemanticClassCount> seen{};
-  for (const char* name : {"scene3", "scene5"}) {
+  for (const char* name : {"scene3", "scene5", "crowd", "pallet", "follow"}) {
     const Simulator s = make_sim(name, 3, 0.25);
     SimFrame f;
     for (int k = 0; k < s.frame_count(); k += 25) {
@@ -71,7 +68,7 @@ TEST(ClassLabels, EveryPixelLabelledAndActorsAgreeWithTheInstances) {
   }
   for (int i = 0; i < kSemanticClassCount; ++i)
     EXPECT_GT(seen[static_cast<std::size_t>(i)], 0) << semantic_class_name(static_cast<SemanticClass>(i))
-                                                     << " never seen in scene3 and scene5";
+                                                     << " never seen";
 }
 
 TEST(ClassLabels, StaticLabelsFollowTheGeometry) {

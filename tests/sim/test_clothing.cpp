@@ -9,6 +9,7 @@
 #include <opencv2/imgproc.hpp>
 
 #include "agvslam/sim/simulator.h"
+#include "sim_test_util.h"
 
 namespace agvslam::sim {
 namespace {
@@ -52,10 +53,7 @@ Corners corners_on_person(const Simulator& sim, double grey_per_radiance, const 
 }
 
 TEST(Clothing, PeopleWearClothesWithCornersWhereAPlainShirtHasFew) {
-  ScenarioOptions o;
-  o.name = "static";
-  o.seed = 1;
-  const Simulator sim(SimConfig{}, o);
+  const Simulator sim = test::make_sim("static", 1, 1.0);
   // The camera's exposure of the first frame: grey level over radiance in the image centre (no vignetting there).
   SimFrame first;
   sim.render_frame(0, first);

@@ -7,17 +7,13 @@
 
 #include "agvslam/sim/semantic_classes.h"
 #include "agvslam/sim/simulator.h"
+#include "sim_test_util.h"
 
 namespace agvslam::sim {
 namespace {
 
-Simulator make_sim(const std::string& name, uint64_t seed, double scale = 0.25, double start_offset_m = 0) {
-  ScenarioOptions o;
-  o.name = name;
-  o.seed = seed;
-  o.start_offset_m = start_offset_m;
-  return Simulator(SimConfig{}.scaled(scale), o);
-}
+// Quarter-size images: the tests count pixels and check geometry, not texture.
+Simulator make_sim(const std::string& name, uint64_t seed) { return test::make_sim(name, seed, 0.25); }
 
 // The camera's planar position and heading at frame k.
 struct Planar {
