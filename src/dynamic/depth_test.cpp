@@ -2,46 +2,12 @@
 
 #include <algorithm>
 #include <cmath>
-#include <cstdio>
 #include <opencv2/calib3d.hpp>
 #include <opencv2/core/eigen.hpp>
 
-#include "agvslam/core/error.h"
 #include "agvslam/dynamic/epipolar.h"
 
 namespace agvslam::dynamic {
-
-void DepthTestConfig::validate(const std::string& source) const {
-  auto require = [&](bool ok, const char* field, const char* expected) {
-    if (!ok) throw InputError(source, std::string("depth_test.") + field, expected);
-  };
-  require(min_points >= 6 && min_points <= 10000, "min_points", "expected an integer in [6, 10000]");
-  require(min_disparity_px > 0 && min_disparity_px <= 100, "min_disparity_px", "expected a number in (0, 100] px");
-  require(ransac_reprojection_px > 0 && ransac_reprojection_px <= 20, "ransac_reprojection_px",
-          "expected a number in (0, 20] px");
-  require(ransac_iterations >= 10 && ransac_iterations <= 100000, "ransac_iterations", "expected an integer in [10, 100000]");
-  require(ransac_confidence > 0.5 && ransac_confidence < 1, "ransac_confidence", "expected a number in (0.5, 1)");
-  require(a_reproj_px > 0 && a_reproj_px <= 50, "a_reproj_px", "expected a number in (0, 50] px");
-  require(b_reproj >= 0 && b_reproj <= 1, "b_reproj", "expected a number in [0, 1]");
-  require(a_disp_px > 0 && a_disp_px <= 50, "a_disp_px", "expected a number in (0, 50] px");
-  require(b_disp >= 0 && b_disp <= 1, "b_disp", "expected a number in [0, 1]");
-  require(adaptive_k > 0 && adaptive_k <= 20, "adaptive_k", "expected a number in (0, 20]");
-  require(max_scale >= 1 && max_scale <= 100, "max_scale", "expected a number in [1, 100]");
-  require(prior_min_inlier_fraction >= 0 && prior_min_inlier_fraction <= 1, "prior_min_inlier_fraction",
-          "expected a fraction in [0, 1] (0: always RANSAC)");
-}
-
-std::string DepthTestConfig::describe() const {
-  char buf[440];
-  std::snprintf(buf, sizeof(buf),
-                "depth_test: P3P RANSAC %.2f px / <= %d samples on >= %d tracks with d >= %.1f px; dynamic if "
-                "reprojection > %.2f + %.3f d px or disparity residual > %.2f + %.3f d px (adaptive %s, k %.1f, "
-                "<= %.1fx); a motion prior's inliers replace RANSAC when >= %.0f %% of the tracks (0: never)",
-                ransac_reprojection_px, ransac_iterations, min_points, min_disparity_px,
-                a_reproj_px, b_reproj, a_disp_px, b_disp, adaptive ? "on" : "off", adaptive_k, max_scale,
-                100 * prior_min_inlier_fraction);
-  return buf;
-}
 
 namespace {
 
@@ -263,6 +229,5 @@ bool DepthConsistencyTest::is_dynamic(const DepthTestResult& fitted, double repr
   const bool off_2d = reprojection_px > reprojection_threshold_px(fitted, disparity_px);
   return off_2d || disparity_off(fitted, disparity_residual_px, disparity_px);
 }
-
 
 }  // namespace agvslam::dynamic

@@ -2,36 +2,10 @@
 
 #include <algorithm>
 #include <cmath>
-#include <cstdio>
 
-#include "agvslam/core/error.h"
 #include "agvslam/dynamic/median.h"
 
 namespace agvslam::dynamic {
-
-void EdgeRefineConfig::validate(const std::string& source) const {
-  auto require = [&](bool ok, const char* field, const char* expected) {
-    if (!ok) throw InputError(source, std::string("edge_refine.") + field, expected);
-  };
-  require(band_px >= 0 && band_px <= 32, "band_px", "expected an integer in [0, 32] px (0: off)");
-  require(half_rows >= 0 && half_rows <= 16, "half_rows", "expected an integer in [0, 16] rows");
-  require(background_px >= 1 && background_px <= 64, "background_px", "expected an integer in [1, 64] px");
-  require(min_disparity_gap_px >= 0 && min_disparity_gap_px <= 100, "min_disparity_gap_px",
-          "expected a number in [0, 100] px");
-  require(occlusion_cost > 0 && occlusion_cost <= 255, "occlusion_cost", "expected a number in (0, 255] grey levels");
-  require(min_gain >= 0 && min_gain <= 255, "min_gain", "expected a number in [0, 255] grey levels per px");
-}
-
-std::string EdgeRefineConfig::describe() const {
-  if (band_px == 0) return "edge_refine: off";
-  char buf[400];
-  std::snprintf(buf, sizeof(buf),
-                "edge_refine: each side of each outline row moves within %d px, split by 1 x %d windows at the "
-                "object's and the background's disparity (background: median of %d px outside, at least %.2f px "
-                "behind), background cost capped at %.1f, a move must gain %.2f per px",
-                band_px, 2 * half_rows + 1, background_px, min_disparity_gap_px, occlusion_cost, min_gain);
-  return buf;
-}
 
 EdgeRefiner::EdgeRefiner(const EdgeRefineConfig& config) : config_(config) { config_.validate("EdgeRefineConfig"); }
 

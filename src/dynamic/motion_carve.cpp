@@ -2,43 +2,12 @@
 
 #include <algorithm>
 #include <cmath>
-#include <cstdio>
 #include <opencv2/imgproc.hpp>
 
-#include "agvslam/core/error.h"
 #include "agvslam/dynamic/bilinear.h"
 #include "agvslam/dynamic/static_warp.h"
 
 namespace agvslam::dynamic {
-
-void MotionCarveConfig::validate(const std::string& source) const {
-  auto require = [&](bool ok, const char* field, const char* expected) {
-    if (!ok) throw InputError(source, std::string("motion_carve.") + field, expected);
-  };
-  require(block_px >= 2 && block_px <= 64, "block_px", "expected an integer in [2, 64] px");
-  require(sample_step_px >= 1 && sample_step_px <= block_px, "sample_step_px", "expected an integer in [1, block_px]");
-  require(search_px >= 0 && search_px <= 8, "search_px", "expected an integer in [0, 8] px");
-  require(min_gradient >= 0 && min_gradient <= 255, "min_gradient", "expected a number in [0, 255] grey levels/px");
-  require(min_samples >= 2 && min_samples <= 4096, "min_samples", "expected an integer in [2, 4096]");
-  require(max_static_ratio > 0 && max_static_ratio <= 1, "max_static_ratio", "expected a number in (0, 1]");
-  require(min_object_error_dn >= 0 && min_object_error_dn <= 255, "min_object_error_dn",
-          "expected a number in [0, 255] grey levels");
-  require(max_static_error_dn > 0 && max_static_error_dn <= 255, "max_static_error_dn",
-          "expected a number in (0, 255] grey levels");
-  require(min_separation_px >= 0 && min_separation_px <= 100, "min_separation_px", "expected a number in [0, 100] px");
-  require(seed_radius_px >= 0 && seed_radius_px <= 32, "seed_radius_px", "expected an integer in [0, 32] px");
-}
-
-std::string MotionCarveConfig::describe() const {
-  char buf[400];
-  std::snprintf(buf, sizeof(buf),
-                "motion_carve: %s, %d px blocks sampled every %d px (gradient >= %.1f /px, >= %d samples), static when "
-                "its error <= %.2f x the object's (motion +- %d px) and <= %.1f, the object's >= %.1f grey levels; objects >= %.1f px off "
-                "the ego-motion; parts within %d px of an object point stay",
-                enabled ? "on" : "off", block_px, sample_step_px, min_gradient, min_samples, max_static_ratio, search_px,
-                max_static_error_dn, min_object_error_dn, min_separation_px, seed_radius_px);
-  return buf;
-}
 
 namespace {
 
