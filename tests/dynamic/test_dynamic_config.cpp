@@ -1,51 +1,20 @@
 // params/dynamic.yaml loading: the shipped file, overrides, and errors naming the file and the field.
 #include <gtest/gtest.h>
 
-#include <filesystem>
-#include <fstream>
 #include <string>
 #include <vector>
 
 #include "agvslam/core/error.h"
 #include "agvslam/dynamic/detector.h"
-#include "common/test_data.h"
+#include "common/config_test.h"
 
 namespace agvslam::dynamic {
 namespace {
-namespace fs = std::filesystem;
-
-class TempYaml {
- public:
-  explicit TempYaml(const std::string& text) {
-    dir_ = agvslam::test::make_temp_dir("agvslam-dynamic-config");
-    path_ = (fs::path(dir_) / "dynamic.yaml").string();
-    std::ofstream(path_) << text;
-  }
-  ~TempYaml() {
-    std::error_code ec;
-    fs::remove_all(dir_, ec);
-  }
-  TempYaml(const TempYaml&) = delete;
-  TempYaml& operator=(const TempYaml&) = delete;
-  const std::string& path() const { return path_; }
-
- private:
-  std::string dir_, path_;
-};
+using test::TempYaml;
 
 // expected: the whole "expected ..." text of the error, or "" to check only the file and the field.
 void expect_error(const std::string& text, const std::string& field, const std::string& expected = "") {
-  TempYaml f(text);
-  try {
-    load_dynamic_config(f.path());
-    ADD_FAILURE() << "no error for:\n" << text;
-  } catch (const InputError& e) {
-    EXPECT_EQ(e.source(), f.path());
-    EXPECT_EQ(e.where(), field) << e.what();
-    if (!expected.empty()) {
-      EXPECT_EQ(e.expected(), expected);
-    }
-  }
+  test::expect_input_error([](const std::string& path) { load_dynamic_config(path); }, text, field, expected);
 }
 
 TEST(DynamicConfig, ShippedParamsFileEqualsTheDefaults) {
