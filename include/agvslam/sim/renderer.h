@@ -90,7 +90,6 @@ class Renderer {
   float cached_wall_albedo(int wall, float u, float z, float footprint_m) const;
   float cached_ceiling_albedo(float x, float y, float footprint_m) const;
   float cached_box_face_albedo(std::size_t box, int face, float u, float v, float footprint_m) const;
-  TextureCache::Stats texture_cache_stats() const { return textures_.stats(); }
 
   const Warehouse& warehouse() const { return warehouse_; }
   const RenderSettings& settings() const { return settings_; }
