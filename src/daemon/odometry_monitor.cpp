@@ -22,13 +22,14 @@ void OdometryMonitor::add_odometry(const OdometryRate& sample) {
   }
   ++odometry_samples_;
   odometry_.push_back(sample);
-  // Keep one sample at or before the window's first pose (integration starts there), and never more than a
-  // window and a second behind the newest sample (no poses: nothing to compare with yet).
-  const auto keep_ns = static_cast<int64_t>((config_.window_s + 1.0) * 1e9);
-  while (odometry_.size() > 2 && odometry_[1].t_ns <= (poses_.empty() ? odometry_.back().t_ns : poses_.front().t_ns)) {
-    odometry_.pop_front();
-  }
-  while (odometry_.size() > 2 && odometry_.front().t_ns < odometry_.back().t_ns - keep_ns) odometry_.pop_front();
+  // Keep one sample at or before the window's first pose (integration starts there; the poses lag the odometry by
+  // the pipeline's latency), but never more than a window and kMaxLagS behind the newest sample (no poses for a
+  // long while: nothing to compare with).
+  constexpr double kMaxLagS = 60.0;
+  const int64_t newest = odometry_.back().t_ns;
+  int64_t keep_from = poses_.empty() ? newest - static_cast<int64_t>(config_.window_s * 1e9) : poses_.front().t_ns;
+  keep_from = std::max(keep_from, newest - static_cast<int64_t>((config_.window_s + kMaxLagS) * 1e9));
+  while (odometry_.size() > 2 && odometry_[1].t_ns <= keep_from) odometry_.pop_front();
 }
 
 OdometryCheckState OdometryMonitor::odometry_state(int64_t t_ns) const {

@@ -1,6 +1,6 @@
 # VM case: wheel odometry in over a real (virtual) CAN bus and the daemon's live odometry check. agvslamd plays a
 # simulator sequence (scene2, seed 11, 80 frames, the daemon tests' sequence) slowed down to what the emulated VM
-# tracks (source.rate 0.04: one frame per 1.25 s), with odometry.source can on vcan0; can_odometry_send plays the
+# tracks (source.rate 0.02: one frame per 2.5 s), with odometry.source can on vcan0; can_odometry_send plays the
 # simulator's wheel odometry (odometry.txt: the true motion with its +1 % bias) as VEHICLE_ODOMETRY frames in step
 # with the playback (speeds slowed down alike), from dataset time 2.0 s on scaled by 0.75 (the pose then runs 33 %
 # longer than the odometry). candump records the bus. Pass only if
@@ -9,13 +9,13 @@
 #     while the odometry is true, with a distance ratio within 0.8..1.2, and Disagrees once the scaled odometry
 #     fills the window, with a ratio above 1.2;
 #   - the daemon logged the warning when the state turned to disagrees.
-# Windows are 30 s of wall time (1.2 s of the sequence, about 1 m driven). Takes ~3 min on the 2-core machine.
+# Windows are 30 s of wall time (0.6 s of the sequence, about 2 m driven). Takes ~4-5 min on the 2-core machine.
 . "$(dirname "$0")/lib.sh"
 for t in agvslamd agvslam-can-decode can_odometry_send; do require_tool "$t"; done
 w=$VM_LOG_DIR
 dbc=$AGVSLAM_SOURCE/deploy/agvslam.dbc
 params=$AGVSLAM_SOURCE/params
-rate=0.04
+rate=0.02
 
 step "the simulator sequence"
 seq=$AGVSLAM_BUILD/test-data/daemon_scene2_s11_80
@@ -58,7 +58,7 @@ can:
   rate_hz: 0
 odometry:
   source: can
-  window_s: 30              # wall s: 1.2 s of the sequence at rate $rate
+  window_s: 30              # wall s: 0.6 s of the sequence at rate $rate
   min_distance_m: 0.5
   min_yaw_rate_degps: 0.5   # a straight aisle: heading judged against 0.2 x 15 deg
   stale_ms: 1000
