@@ -1,5 +1,7 @@
 #include "agvslam/drivers/dds/ros_messages.h"
 
+#include <cmath>
+
 #include <Eigen/Geometry>
 #include <nlohmann/json.hpp>
 
@@ -134,7 +136,9 @@ nlohmann::json to_json(const StatusMsg& m) {
           {"dynamic_pixel_fraction", m.dynamic_pixel_fraction},
           {"latency_ms", m.latency_ms},
           {"odometry_check_state", m.odometry_check_state},
-          {"odometry_distance_ratio", m.odometry_distance_ratio},
+          // NaN (no ratio) as null, so that two JSON copies of one message compare equal.
+          {"odometry_distance_ratio", std::isnan(m.odometry_distance_ratio) ? nlohmann::json()
+                                                                           : nlohmann::json(m.odometry_distance_ratio)},
           {"odometry_speed_rmse_mps", m.odometry_speed_rmse_mps},
           {"odometry_heading_difference_deg", m.odometry_heading_difference_deg}};
 }
