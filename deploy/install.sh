@@ -70,7 +70,11 @@ install_config() {  # SRC DEST
   fi
 }
 echo "install.sh: configuration -> $etc"
-install_config "$src/params/agvslamd.yaml" "$etc/agvslamd.yaml"
+# The shipped agvslamd.yaml names the CAN DBC relative to the source tree; installed, it lies in the shared files.
+daemon_yaml=$(mktemp)
+trap 'rm -f "$daemon_yaml"' EXIT
+sed "s|dbc: \.\./deploy/agvslam\.dbc|dbc: $prefix/share/agvslam/agvslam.dbc|" "$src/params/agvslamd.yaml" > "$daemon_yaml"
+install_config "$daemon_yaml" "$etc/agvslamd.yaml"
 for f in features.yaml slam.yaml dynamic.yaml stereo.yaml camera_v4l2.yaml agvslamd_calibration_example.yaml; do
   install_config "$src/params/$f" "$etc/$f"
 done

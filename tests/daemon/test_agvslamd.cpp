@@ -603,6 +603,9 @@ TEST(DeployFiles, InstallScriptStagesBinariesConfigurationUnitAndKeepsEditedConf
   }
   EXPECT_NE(read_text(dir + "/etc/systemd/system/agvslamd.service").find("ExecStart=/opt/agvslam/bin/agvslamd --config"),
             std::string::npos);
+  // The installed configuration names the installed CAN DBC (the shipped one names it in the source tree).
+  EXPECT_NE(read_text(dir + "/etc/agvslam/agvslamd.yaml").find("dbc: /opt/agvslam/share/agvslam/agvslam.dbc"),
+            std::string::npos);
   // The installed configuration passes --check with the installed binary.
   EXPECT_EQ(test::run_command(dir + "/opt/agvslam/bin/agvslamd --config " + dir + "/etc/agvslam/agvslamd.yaml --check", &out), 0)
       << out;
