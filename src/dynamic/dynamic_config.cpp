@@ -25,7 +25,7 @@ DynamicDetectorConfig load_dynamic_config(const std::string& path) {
 
   in.check_keys("tracking", {"window_px", "levels", "min_levels", "motion_margin", "max_iterations", "epsilon",
                              "fb_max_error_px", "min_eigen_threshold", "persistent", "min_track_distance_px",
-                             "max_tracks"});
+                             "max_tracks", "predict_min_px"});
   in.read("tracking", "window_px", c.tracking.window_px, "an integer (px)");
   in.read("tracking", "levels", c.tracking.levels, integer);
   in.read("tracking", "min_levels", c.tracking.min_levels, integer);
@@ -37,6 +37,7 @@ DynamicDetectorConfig load_dynamic_config(const std::string& path) {
   in.read("tracking", "persistent", c.tracking.persistent, flag);
   in.read("tracking", "min_track_distance_px", c.tracking.min_track_distance_px, px);
   in.read("tracking", "max_tracks", c.tracking.max_tracks, integer);
+  in.read("tracking", "predict_min_px", c.tracking.predict_min_px, px);
 
   in.check_keys("epipolar", {"a_epi_px", "b_epi", "ransac_threshold_px", "ransac_confidence", "ransac_max_iterations",
                              "min_tracks", "min_parallax_px", "adaptive", "adaptive_k", "a_epi_max_px"});
