@@ -7,8 +7,8 @@
 
 namespace agvslam::drivers::can {
 
-CanPosePublisher::CanPosePublisher(const CanConfig& config)
-    : config_(config), backoff_(std::chrono::milliseconds(config.reopen_min_ms)) {
+CanPosePublisher::CanPosePublisher(const CanConfig& config, std::vector<CanId> receive)
+    : config_(config), receive_(std::move(receive)), backoff_(std::chrono::milliseconds(config.reopen_min_ms)) {
   config_.validate("CanConfig");
   try_open(Clock::now());
 }
@@ -16,7 +16,7 @@ CanPosePublisher::CanPosePublisher(const CanConfig& config)
 bool CanPosePublisher::try_open(Clock::time_point now) {
   ++stats_.reopen_attempts;
   std::string error;
-  if (socket_.open(config_.interface, config_.fd, &error)) {
+  if (socket_.open(config_.interface, config_.fd, &error, receive_)) {
     if (stats_.reopens > 0) spdlog::info("can: {} reopened after '{}'", config_.interface, last_error_);
     ++stats_.reopens;
     backoff_ = std::chrono::milliseconds(config_.reopen_min_ms);
@@ -55,20 +55,22 @@ CanPublishResult CanPosePublisher::publish(const PoseSample& sample) {
   counter_ = static_cast<uint8_t>((counter_ + 1) & 0xFU);
 
   std::size_t n = 0;
+  const bool with_status = cycle % static_cast<uint64_t>(config_.status_every) == 0;
   if (config_.fd) {
     frames_[0] = encode_fd_frame(sample, result.counter, config_.layout());
     n = 1;
   } else {
-    const bool with_status = cycle % static_cast<uint64_t>(config_.status_every) == 0;
+    std::array<CanFrameBytes, kMaxClassicFrames> classic;
     n = encode_classic_frames(sample, result.counter, config_.layout(), config_.send_velocity, config_.send_stddev,
-                              with_status, frames_);
+                              with_status, classic);
+    std::copy(classic.begin(), classic.begin() + static_cast<std::ptrdiff_t>(n), frames_.begin());
+  }
+  if (with_status && sample.odometry_check.state != OdometryCheckState::kOff) {
+    frames_[n++] = encode_odometry_check_frame(sample.odometry_check, result.counter, config_.layout());
   }
 
   const Clock::time_point now = Clock::now();
-  if (!socket_.is_open() && now >= next_reopen_) try_open(now);
-  if (socket_.is_open() && socket_.drain_error_frames(stats_.error_frames)) {
-    mark_down(now, "controller reported bus-off");
-  }
+  read_pending(now);
   if (!socket_.is_open()) {
     stats_.frames_dropped_down += n;
     return result;
@@ -97,6 +99,28 @@ CanPublishResult CanPosePublisher::publish(const PoseSample& sample) {
   result.sent = result.frames_sent == static_cast<int>(n);
   if (result.sent) ++stats_.cycles_sent;
   return result;
+}
+
+void CanPosePublisher::read_pending(Clock::time_point now) {
+  if (!socket_.is_open() && now >= next_reopen_) try_open(now);
+  if (!socket_.is_open()) return;
+  const std::size_t before = received_.size();
+  const bool bus_off = socket_.drain(stats_.error_frames, receive_.empty() ? nullptr : &received_);
+  stats_.frames_received += received_.size() - before;
+  if (received_.size() > kMaxReceivedPending) {
+    const std::size_t excess = received_.size() - kMaxReceivedPending;
+    received_.erase(received_.begin(), received_.begin() + static_cast<std::ptrdiff_t>(excess));
+    stats_.frames_received_dropped += excess;
+  }
+  if (bus_off) mark_down(now, "controller reported bus-off");
+}
+
+void CanPosePublisher::poll() { read_pending(Clock::now()); }
+
+std::vector<ReceivedCanFrame> CanPosePublisher::take_received() {
+  std::vector<ReceivedCanFrame> out;
+  out.swap(received_);
+  return out;
 }
 
 CanPublisherStats CanPosePublisher::stats() const {

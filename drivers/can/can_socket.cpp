@@ -9,10 +9,19 @@
 #include <sys/socket.h>
 #include <unistd.h>
 
+#include <algorithm>
 #include <cstring>
+#include <ctime>
 
 namespace agvslam::drivers::can {
 namespace {
+
+// Fallback stamp when the kernel sent none.
+int64_t realtime_ns() {
+  timespec ts{};
+  ::clock_gettime(CLOCK_REALTIME, &ts);
+  return static_cast<int64_t>(ts.tv_sec) * 1000000000LL + ts.tv_nsec;
+}
 
 std::string errno_message(const std::string& interface, const char* call, int err) {
   return interface + ": " + call + ": " + std::strerror(err);
@@ -37,7 +46,8 @@ void CanSocket::close() {
   fd_ = -1;
 }
 
-bool CanSocket::open(const std::string& interface, bool fd_frames, std::string* error) {
+bool CanSocket::open(const std::string& interface, bool fd_frames, std::string* error,
+                     const std::vector<CanId>& receive) {
   close();
   auto fail = [&](const char* call, int err) {
     if (error != nullptr) *error = errno_message(interface, call, err);
@@ -56,8 +66,22 @@ bool CanSocket::open(const std::string& interface, bool fd_frames, std::string* 
   if (::ioctl(fd_, SIOCGIFFLAGS, &ifr) < 0) return fail("SIOCGIFFLAGS", errno);
   if ((ifr.ifr_flags & IFF_UP) == 0) return fail("interface state", ENETDOWN);
 
-  // No data frames in (we only send), every error class in.
-  if (::setsockopt(fd_, SOL_CAN_RAW, CAN_RAW_FILTER, nullptr, 0) < 0) return fail("setsockopt(CAN_RAW_FILTER)", errno);
+  // Data frames: only the ids asked for (none: the socket only sends); every error class in.
+  std::vector<can_filter> filters;
+  for (const CanId& r : receive) {
+    can_filter f{};
+    f.can_id = r.id | (r.extended ? CAN_EFF_FLAG : 0U);
+    f.can_mask = (r.extended ? CAN_EFF_MASK : CAN_SFF_MASK) | CAN_EFF_FLAG | CAN_RTR_FLAG;
+    filters.push_back(f);
+  }
+  if (::setsockopt(fd_, SOL_CAN_RAW, CAN_RAW_FILTER, filters.empty() ? nullptr : filters.data(),
+                   static_cast<socklen_t>(filters.size() * sizeof(can_filter))) < 0) {
+    return fail("setsockopt(CAN_RAW_FILTER)", errno);
+  }
+  if (!receive.empty()) {
+    const int on = 1;
+    if (::setsockopt(fd_, SOL_SOCKET, SO_TIMESTAMPNS, &on, sizeof on) < 0) return fail("setsockopt(SO_TIMESTAMPNS)", errno);
+  }
   const can_err_mask_t err_mask = CAN_ERR_MASK;
   if (::setsockopt(fd_, SOL_CAN_RAW, CAN_RAW_ERR_FILTER, &err_mask, sizeof err_mask) < 0) {
     return fail("setsockopt(CAN_RAW_ERR_FILTER)", errno);
@@ -116,14 +140,39 @@ SendResult CanSocket::send(const CanFrameBytes& f, int* err) {
   }
 }
 
-bool CanSocket::drain_error_frames(ErrorFrameCounts& counts) {
+bool CanSocket::drain(ErrorFrameCounts& counts, std::vector<ReceivedCanFrame>* received) {
   bool bus_off = false;
   if (fd_ < 0) return false;
   for (;;) {
     canfd_frame frame{};
-    const ssize_t n = ::recv(fd_, &frame, sizeof frame, MSG_DONTWAIT);
+    iovec iov{&frame, sizeof frame};
+    alignas(cmsghdr) char control[CMSG_SPACE(sizeof(timespec))];
+    msghdr msg{};
+    msg.msg_iov = &iov;
+    msg.msg_iovlen = 1;
+    msg.msg_control = control;
+    msg.msg_controllen = sizeof control;
+    const ssize_t n = ::recvmsg(fd_, &msg, MSG_DONTWAIT);
     if (n <= 0) break;
-    if ((frame.can_id & CAN_ERR_FLAG) == 0) continue;
+    if ((frame.can_id & CAN_ERR_FLAG) == 0) {
+      if (received == nullptr || (frame.can_id & CAN_RTR_FLAG) != 0) continue;
+      ReceivedCanFrame r;
+      r.frame.extended = (frame.can_id & CAN_EFF_FLAG) != 0;
+      r.frame.id = frame.can_id & (r.frame.extended ? CAN_EFF_MASK : CAN_SFF_MASK);
+      r.frame.fd = n == static_cast<ssize_t>(CANFD_MTU);
+      r.frame.len = std::min<uint8_t>(frame.len, r.frame.fd ? CANFD_MAX_DLEN : CAN_MAX_DLEN);
+      std::memcpy(r.frame.data.data(), frame.data, r.frame.len);
+      r.t_ns = realtime_ns();
+      for (cmsghdr* c = CMSG_FIRSTHDR(&msg); c != nullptr; c = CMSG_NXTHDR(&msg, c)) {
+        if (c->cmsg_level == SOL_SOCKET && c->cmsg_type == SCM_TIMESTAMPNS) {
+          timespec ts{};
+          std::memcpy(&ts, CMSG_DATA(c), sizeof ts);
+          r.t_ns = static_cast<int64_t>(ts.tv_sec) * 1000000000LL + ts.tv_nsec;
+        }
+      }
+      received->push_back(r);
+      continue;
+    }
     ++counts.total;
     const canid_t cls = frame.can_id & CAN_ERR_MASK;
     bool known = false;

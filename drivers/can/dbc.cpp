@@ -1,5 +1,7 @@
 #include "agvslam/drivers/can/dbc.h"
 
+#include <algorithm>
+#include <cmath>
 #include <fstream>
 #include <regex>
 #include <sstream>
@@ -38,6 +40,28 @@ std::optional<int64_t> DbcSignal::raw(const uint8_t* data, std::size_t len) cons
   }
   if (is_signed && length < 64 && ((v >> (length - 1)) & 1U) != 0) v |= ~((1ULL << length) - 1);
   return static_cast<int64_t>(v);
+}
+
+void DbcSignal::encode(double physical_value, uint8_t* data) const {
+  const double lo = is_signed ? -std::ldexp(1.0, static_cast<int>(length) - 1) : 0.0;
+  const double hi = is_signed ? std::ldexp(1.0, static_cast<int>(length) - 1) - 1 : std::ldexp(1.0, static_cast<int>(length)) - 1;
+  double q = factor != 0.0 ? std::round((physical_value - offset) / factor) : 0.0;
+  if (std::isnan(q)) q = 0.0;
+  q = std::clamp(q, lo, hi);
+  const uint64_t mask = length >= 64 ? ~0ULL : ((1ULL << length) - 1);
+  const uint64_t v = static_cast<uint64_t>(static_cast<int64_t>(q)) & mask;
+  if (little_endian) {
+    put_bits_le(data, start_bit, length, v);
+    return;
+  }
+  // Motorola: the same walk as raw(), MSB first.
+  unsigned bit = start_bit;
+  for (unsigned i = 0; i < length; ++i) {
+    const auto m = static_cast<uint8_t>(1U << (bit % 8));
+    const bool set = ((v >> (length - 1 - i)) & 1U) != 0;
+    data[bit / 8] = static_cast<uint8_t>(set ? (data[bit / 8] | m) : (data[bit / 8] & ~m));
+    bit = (bit % 8 == 0) ? bit + 15 : bit - 1;
+  }
 }
 
 const DbcSignal* DbcMessage::signal(const std::string& signal_name) const {

@@ -176,6 +176,23 @@ std::size_t encode_classic_frames(const PoseSample& s, uint8_t counter, const Fr
   return n;
 }
 
+CanFrameBytes encode_odometry_check_frame(const OdometryCheck& check, uint8_t counter, const FrameLayout& layout) {
+  constexpr int64_t kRatioNotAvailable = 0xFFFF;
+  CanFrameBytes f = classic(kOdometryCheckOffset, layout);
+  const int64_t ratio = std::isfinite(check.distance_ratio)
+                            ? quantize(check.distance_ratio, 1e-3, 0, kRatioNotAvailable - 1)
+                            : kRatioNotAvailable;
+  put_bits_le(f.data.data(), 0, 16, to_raw(ratio, 16));
+  put_bits_le(f.data.data(), 16, 16, to_raw(quantize(check.speed_rmse_mps, 1e-3, 0, 65535), 16));
+  put_bits_le(f.data.data(), 32, 16,
+              to_raw(quantize(check.heading_difference_deg, 0.01, std::numeric_limits<int16_t>::min(),
+                              std::numeric_limits<int16_t>::max()),
+                     16));
+  put_bits_le(f.data.data(), 48, 4, to_raw(static_cast<int64_t>(check.state) & 0xF, 4));
+  seal_classic(f, counter);
+  return f;
+}
+
 CanFrameBytes encode_fd_frame(const PoseSample& s, uint8_t counter, const FrameLayout& layout) {
   const Fields q = quantize_sample(s);
   CanFrameBytes f;

@@ -1,5 +1,7 @@
 #include "agvslam/drivers/dds/ros_messages.h"
 
+#include <cmath>
+
 #include <Eigen/Geometry>
 #include <nlohmann/json.hpp>
 
@@ -102,6 +104,10 @@ void fill_status_msg(const PoseSample& s, const FrameIds& frames, StatusMsg& out
   out.fps = s.fps;
   out.dynamic_pixel_fraction = s.dynamic_pixel_fraction;
   out.latency_ms = static_cast<float>(static_cast<double>(s.latency_ns) * 1e-6);
+  out.odometry_check_state = static_cast<uint8_t>(s.odometry_check.state);
+  out.odometry_distance_ratio = static_cast<float>(s.odometry_check.distance_ratio);
+  out.odometry_speed_rmse_mps = static_cast<float>(s.odometry_check.speed_rmse_mps);
+  out.odometry_heading_difference_deg = static_cast<float>(s.odometry_check.heading_difference_deg);
 }
 
 nlohmann::json to_json(const PoseMsg& m) {
@@ -128,7 +134,13 @@ nlohmann::json to_json(const StatusMsg& m) {
           {"frames_dropped", m.frames_dropped},
           {"fps", m.fps},
           {"dynamic_pixel_fraction", m.dynamic_pixel_fraction},
-          {"latency_ms", m.latency_ms}};
+          {"latency_ms", m.latency_ms},
+          {"odometry_check_state", m.odometry_check_state},
+          // NaN (no ratio) as null, so that two JSON copies of one message compare equal.
+          {"odometry_distance_ratio", std::isnan(m.odometry_distance_ratio) ? nlohmann::json()
+                                                                           : nlohmann::json(m.odometry_distance_ratio)},
+          {"odometry_speed_rmse_mps", m.odometry_speed_rmse_mps},
+          {"odometry_heading_difference_deg", m.odometry_heading_difference_deg}};
 }
 
 }  // namespace agvslam::drivers::dds

@@ -15,7 +15,7 @@ for seed in $(seq "$first" "$last"); do
   for scenario in static scene1 scene2 scene3 scene4 scene5; do
     dir="$out/${scenario}_s${seed}"
     if [[ -f "$dir/scenario.json" && -f "$dir/poses.txt" ]]; then continue; fi
-    "$sim" --scenario "$scenario" --seed "$seed" --frames "$frames" --threads 1 --out "$dir" 2>/dev/null
+    "$sim" --scenario "$scenario" --seed "$seed" --squeeze-to "$frames" --threads 1 --out "$dir" 2>/dev/null
     echo "$dir" >&2
   done
 done

@@ -1,12 +1,15 @@
 // agvslam-sim: renders a synthetic stereo warehouse sequence with moving people and vehicles.
 //
-//   agvslam-sim --scenario NAME --out DIR [--frames N] [--seed S] [--layout-seed L] [--start-offset M]
-//               [--params params/sim.yaml] [--threads N]
+//   agvslam-sim --scenario NAME --out DIR [--frames N] [--squeeze-to N] [--seed S] [--layout-seed L]
+//               [--start-offset M] [--params params/sim.yaml] [--threads N]
 //   agvslam-sim --list
 //
 // Writes the KITTI layout (image_0/ image_1/ calib.txt times.txt poses.txt) plus disp_0/ (16-bit disparity*256),
-// mask_0/ (255 = moving object), instance_0/ (the actor id seen at each pixel, 0 = none), objects.txt and
-// scenario.json (what was generated, with its seeds).
+// mask_0/ (255 = moving object), instance_0/ (the actor id seen at each pixel, 0 = none), class_0/ (the semantic
+// class of each pixel, agvslam/sim/semantic_classes.h), objects.txt and scenario.json (what was generated, with
+// its seeds, and the class ids).
+// --frames N writes the first N frames of the scenario's timeline at its own speed; --squeeze-to N plays the whole
+// timeline over N frames (faster or slower; --frames then cuts that).
 // The output is identical for any --threads. Exit status: 0 on success, 2 on bad input (the message names the
 // option, file or folder), 1 on any other failure.
 
@@ -21,6 +24,7 @@
 
 #include "agvslam/core/error.h"
 #include "agvslam/io/trajectory_io.h"
+#include "agvslam/sim/semantic_classes.h"
 #include "agvslam/sim/sim_config.h"
 #include "agvslam/sim/simulator.h"
 #include "tool_main.h"
@@ -34,6 +38,8 @@ struct Options {
   std::string scenario, out_dir, params_path;
   int frames = 0;
   bool frames_given = false;
+  int squeeze_to = 0;
+  bool squeeze_given = false;
   uint64_t seed = 1;
   uint64_t layout_seed = 0;
   bool layout_seed_given = false;
@@ -50,14 +56,19 @@ nlohmann::json describe(const sim::Simulator& s) {
   j["layout_seed"] = sc.layout_seed;
   j["start_offset_m"] = sc.start_offset_m;
   j["frames"] = sc.frames;
+  j["timeline_frames"] = sc.timeline_frames;  // the whole timeline is played over these (--squeeze-to)
+  j["speed_factor"] = 1.0 / sc.time_scale;    // 1: the scenario's own speed
   j["rate_hz"] = sc.rate_hz;
   j["duration_s"] = sc.frames / sc.rate_hz;
   j["agv"] = {{"stationary", sc.agv.stationary},
               {"path_length_m", sc.agv_path_length_m()},
               {"cruise_speed_mps", sc.agv_speed_mps()}};
   nlohmann::json actors = nlohmann::json::array();
-  for (const auto& a : sc.actors)
-    actors.push_back({{"id", a.id}, {"class", sim::to_string(a.cls)}, {"role", a.role}});
+  for (const auto& a : sc.actors) {
+    nlohmann::json moving = nlohmann::json::array();  // [first, last] frames (inclusive) while it moves
+    for (const auto& [first, last] : s.moving_frames(a)) moving.push_back({first, last});
+    actors.push_back({{"id", a.id}, {"class", sim::to_string(a.cls)}, {"role", a.role}, {"moving_frames", moving}});
+  }
   j["actors"] = actors;
   j["min_camera_clearance_m"] = sc.actors.empty() ? nlohmann::json(nullptr) : nlohmann::json(sc.min_camera_clearance_m);
   const sim::SimConfig& c = s.config();
@@ -66,13 +77,20 @@ nlohmann::json describe(const sim::Simulator& s) {
                  {"baseline_m", c.baseline_m}, {"height_above_floor_m", c.camera_height_m}};
   j["conventions"] = "poses.txt: T_w_cam0 (world = left camera at frame 0; camera x right, y down, z forward); "
                      "disp_0: uint16 disparity*256 of the left image, 0 = none; mask_0: 255 = moving object; "
-                     "instance_0: uint8 actor id (objects.txt) of each pixel, 0 = none";
+                     "instance_0: uint8 actor id (objects.txt) of each pixel, 0 = none; class_0: uint8 class id "
+                     "(classes) of each pixel";
+  nlohmann::json classes = nlohmann::json::array();
+  for (int id = 0; id < sim::kSemanticClassCount; ++id)
+    classes.push_back({{"id", id}, {"name", sim::semantic_class_name(static_cast<sim::SemanticClass>(id))}});
+  j["classes"] = classes;
   return j;
 }
 
 int run(const Options& o) {
   if (o.frames_given && o.frames <= 0)
     throw InputError("--frames", std::to_string(o.frames), "expected a number of frames > 0");
+  if (o.squeeze_given && o.squeeze_to <= 0)
+    throw InputError("--squeeze-to", std::to_string(o.squeeze_to), "expected a number of frames > 0");
   if (o.threads < 1 || o.threads > 256)
     throw InputError("--threads", std::to_string(o.threads), "expected a thread count in [1, 256]");
   sim::find_scenario(o.scenario);  // fail early on an unknown name
@@ -86,6 +104,7 @@ int run(const Options& o) {
   sim::ScenarioOptions so;
   so.name = o.scenario;
   so.frames = o.frames_given ? o.frames : 0;
+  so.squeeze_to_frames = o.squeeze_given ? o.squeeze_to : 0;
   so.seed = o.seed;
   if (o.layout_seed_given) so.layout_seed = o.layout_seed;
   so.start_offset_m = o.start_offset_m;
@@ -93,15 +112,20 @@ int run(const Options& o) {
   const auto t0 = std::chrono::steady_clock::now();
   const sim::Simulator simulator(config, so);
   const sim::Scenario& sc = simulator.scenario();
+  if (sc.frames > sc.timeline_frames)
+    throw InputError("--frames", std::to_string(sc.frames),
+                     "expected at most " + std::to_string(sc.timeline_frames) + " frames (" + sc.name +
+                         "'s whole timeline" + (o.squeeze_given ? " as squeezed" : " at its own speed") +
+                         "; --squeeze-to plays it over more frames)");
   spdlog::info("scenario {}: {}", sc.name, sc.description);
   spdlog::info("  seed {}, layout seed {}, start offset {:.2f} m, {} frames at {:.1f} Hz ({:.2f} s){}", sc.seed,
                sc.layout_seed, sc.start_offset_m, sc.frames, sc.rate_hz, sc.frames / sc.rate_hz,
-               o.frames_given ? "" : " (scenario default)");
+               sc.frames == sc.timeline_frames ? " (the whole timeline)" : " (the start of the timeline)");
   if (sc.agv.stationary) {
     spdlog::info("  AGV speed: 0.00 m/s (stationary)");
   } else {
-    spdlog::info("  AGV speed: {:.3f} m/s cruise over a {:.2f} m path (timeline scaled x{:.3f})", sc.agv_speed_mps(),
-                 sc.agv_path_length_m(), 1.0 / sc.time_scale);
+    spdlog::info("  AGV speed: {:.3f} m/s cruise over a {:.2f} m path (timeline played x{:.3f} its own speed)",
+                 sc.agv_speed_mps(), sc.agv_path_length_m(), 1.0 / sc.time_scale);
     if (sc.agv_speed_mps() > 2.5)
       spdlog::warn("  the AGV drives unusually fast ({:.2f} m/s) for so few frames", sc.agv_speed_mps());
   }
@@ -131,7 +155,7 @@ int run(const Options& o) {
 
 void list_scenarios() {
   for (const auto& s : sim::scenario_catalogue())
-    std::printf("%-7s %4.0f frames at 20 Hz  %s\n", s.name.c_str(), s.nominal_duration_s * 20.0, s.description.c_str());
+    std::printf("%-8s %5.0f frames at 20 Hz  %s\n", s.name.c_str(), s.nominal_duration_s * 20.0, s.description.c_str());
 }
 
 }  // namespace
@@ -146,7 +170,10 @@ int main(int argc, char** argv) {
   for (const auto& s : sim::scenario_catalogue()) names += (names.empty() ? "" : "|") + s.name;
   app.add_option("--scenario", o.scenario, "scenario: " + names);
   app.add_option("--out", o.out_dir, "output folder (created if missing)");
-  app.add_option("--frames", o.frames, "number of frames the scenario's timeline is played over (default: its own)");
+  app.add_option("--frames", o.frames,
+                 "write the first N frames of the scenario's timeline, at its own speed (default: all of it)");
+  app.add_option("--squeeze-to", o.squeeze_to,
+                 "play the whole timeline over N frames, faster or slower than its own speed (--frames cuts that)");
   app.add_option("--seed", o.seed, "seed of the people/vehicles, sensor noise (and of the layout by default)")
       ->capture_default_str();
   app.add_option("--layout-seed", o.layout_seed, "seed of the warehouse layout and textures (default: --seed)");
@@ -162,6 +189,7 @@ int main(int argc, char** argv) {
       return 0;
     }
     o.frames_given = app.count("--frames") > 0;
+    o.squeeze_given = app.count("--squeeze-to") > 0;
     o.layout_seed_given = app.count("--layout-seed") > 0;
     if (o.scenario.empty()) throw InputError("--scenario", "", "expected a scenario name: " + names);
     if (o.out_dir.empty()) throw InputError("--out", "", "expected an output folder");

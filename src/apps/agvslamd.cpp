@@ -75,7 +75,13 @@ nlohmann::json stats_json(const daemon::PipelineStats& s, double run_s) {
           {"can", {{"enabled", s.outputs.can_enabled}, {"cycles", s.outputs.can.cycles}, {"cycles_sent", s.outputs.can.cycles_sent},
                    {"frames_sent", s.outputs.can.frames_sent}, {"dropped_down", s.outputs.can.frames_dropped_down},
                    {"dropped_no_buffer", s.outputs.can.frames_dropped_no_buffer}, {"reopens", s.outputs.can.reopens},
-                   {"last_error", s.outputs.can_last_error}}}};
+                   {"last_error", s.outputs.can_last_error}}},
+          {"odometry", {{"enabled", s.outputs.odometry_enabled}, {"samples", s.outputs.odometry_samples},
+                        {"can_frames", s.outputs.can_odometry.frames}, {"crc_bad", s.outputs.can_odometry.crc_bad},
+                        {"counter_repeated", s.outputs.can_odometry.counter_repeated},
+                        {"counter_gaps", s.outputs.can_odometry.counter_gaps},
+                        {"disagreements", s.outputs.odometry_disagreements},
+                        {"check", daemon::odometry_check_json(s.outputs.odometry_check)}}}};
 }
 
 // Signals: blocked in every thread (the pipeline's, Cyclone's) and taken by the main thread with sigtimedwait.

@@ -201,6 +201,16 @@ void read_id(const File& file, const std::string& section, const std::string& ke
   }
 }
 
+void read_uint32(const File& file, const std::string& section, const std::string& key, uint32_t& value,
+                 const std::string& expectation) {
+  uint64_t wide = value;
+  if (!file.read(section, key, wide, expectation)) return;
+  if (wide > std::numeric_limits<uint32_t>::max()) {
+    fail(file.path(), field(section, key), expectation, "'" + std::to_string(wide) + "'");
+  }
+  value = static_cast<uint32_t>(wide);
+}
+
 std::string field(const std::string& section, const std::string& key) { return section + "." + key; }
 
 void fail(const std::string& source, const std::string& where, const std::string& expectation, const std::string& got) {

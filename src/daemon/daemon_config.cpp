@@ -140,6 +140,37 @@ const params::Table<OutputsConfig>& can_section_params() {
   return table;
 }
 
+const params::Table<OdometryMonitorConfig>& odometry_check_params() {
+  using M = OdometryMonitorConfig;
+  static const params::Table<M> table("odometry", {
+      {"window_s", &M::window_s, Range::closed(1, 60), "s",
+       "long against the pose noise and the odometry's stamp jitter, short enough to flag a divergence in seconds"},
+      {"min_distance_m", &M::min_distance_m, Range::closed(0.05, 100), "m",
+       "travel a window needs before its distance ratio is judged"},
+      {"tolerance", &M::tolerance, Range::open(0, 1), "", "fraction: 0.2 flags a ratio outside 0.8..1.2"},
+      {"min_yaw_rate_degps", &M::min_yaw_rate_degps, Range::closed(0.1, 180), "deg/s",
+       "heading differences are judged against at least this rate times the window"},
+      {"stale_ms", &M::stale_ms, Range::closed(10, 60000), "ms"},
+      {"warn_every_s", &M::warn_every_s, Range::at_least(0), "s", "0: every time the state turns to disagrees"},
+  });
+  return table;
+}
+
+const params::Table<OdometryConfig>& odometry_params() {
+  static const params::EnumNames<OdometrySource> source_names{{"none", OdometrySource::kNone},
+                                                              {"can", OdometrySource::kCan}};
+  static const params::Table<OdometryConfig> table =
+      params::Table<OdometryConfig>("odometry", {{"source", &OdometryConfig::source, source_names}})
+          .include(&OdometryConfig::check, odometry_check_params());
+  return table;
+}
+
+const params::Table<OdometryConfig>& can_odometry_section_params() {
+  static const params::Table<OdometryConfig> table =
+      params::Table<OdometryConfig>("can_odometry", {}).include(&OdometryConfig::can, drivers::can::can_odometry_params());
+  return table;
+}
+
 const params::Table<TrajectoryConfig>& trajectory_params() {
   using T = TrajectoryConfig;
   static const params::EnumNames<TrajectoryFrame> frame_names{{"base_link", TrajectoryFrame::kBaseLink},
@@ -231,6 +262,14 @@ void DaemonConfig::validate() const {
   covariance_params().validate(p, covariance);
   dds_section_params().validate(p, outputs);
   can_section_params().validate(p, outputs);
+  odometry_params().validate(p, odometry);
+  if (odometry.source == OdometrySource::kCan) {
+    if (!outputs.can_enabled) {
+      throw InputError(p, "odometry.source", "expected none, or can.enabled true (the odometry frames are read on "
+                                             "the CAN output's interface), got can");
+    }
+    can_odometry_section_params().validate(p, odometry);
+  }
   trajectory_params().validate(p, trajectory);
   log_params().validate(p, log);
   systemd_params().validate(p, systemd);
@@ -264,6 +303,8 @@ std::vector<std::string> DaemonConfig::describe() const {
   out.push_back(covariance.describe());
   out.push_back(dds_section_params().describe(outputs));
   out.push_back(can_section_params().describe(outputs));
+  out.push_back(odometry_params().describe(odometry));
+  if (odometry.source == OdometrySource::kCan) out.push_back(can_odometry_section_params().describe(odometry));
   out.push_back(trajectory_params().describe(trajectory));
   out.push_back(log_params().describe(log));
   out.push_back(systemd_params().describe(systemd));
@@ -306,15 +347,18 @@ DaemonConfig load_daemon_config(const std::string& path) {
                              stages_params().reader(c.stage_files), pipeline_params().reader(c.pipeline),
                              base_link_params().reader(c.base_link), covariance_params().reader(c.covariance),
                              dds_section_params().reader(c.outputs), can_section_params().reader(c.outputs),
+                             odometry_params().reader(c.odometry), can_odometry_section_params().reader(c.odometry),
                              trajectory_params().reader(c.trajectory), log_params().reader(c.log),
                              systemd_params().reader(c.systemd), map_params().reader(c.map)});
   const fs::path dir = fs::absolute(fs::path(path)).parent_path();
   for (std::string* f : {&c.source.dataset, &c.calibration_file, &c.stage_files.features, &c.stage_files.slam,
                          &c.stage_files.dynamic, &c.stage_files.stereo, &c.stage_files.place, &c.trajectory.file,
-                         &c.trajectory.final_file, &c.log.file, &c.log.pose_log, &c.map.file}) {
+                         &c.trajectory.final_file, &c.log.file, &c.log.pose_log, &c.map.file, &c.odometry.can.dbc}) {
     *f = resolve(dir, *f);
   }
   c.validate();
+  // The DBC, its message and signals: wrong ones stop the daemon here, not when the first frame arrives.
+  if (c.odometry.source == OdometrySource::kCan) drivers::can::CanOdometryDecoder(c.odometry.can, c.outputs.can.layout(), path);
 
   // The stage files (their own errors name them and their fields).
   if (!c.stage_files.slam.empty()) c.system.slam = slam::load_slam_config(c.stage_files.slam);

@@ -42,7 +42,19 @@ std::string PipelineStats::one_line() const {
                 static_cast<unsigned long long>(published), static_cast<unsigned long long>(outputs.dds_pose.published),
                 static_cast<unsigned long long>(outputs.dds_status.published),
                 static_cast<unsigned long long>(outputs.can.cycles_sent));
-  return buf;
+  std::string line = buf;
+  if (outputs.odometry_enabled) {
+    const drivers::OdometryCheck& c = outputs.odometry_check;
+    std::snprintf(buf, sizeof buf,
+                  ", odometry %s (ratio %.3f, heading %+.1f deg, speed RMSE %.3f m/s over %.1f s; %llu samples, "
+                  "%llu rejected)",
+                  drivers::to_string(c.state), c.distance_ratio, c.heading_difference_deg, c.speed_rmse_mps, c.window_s,
+                  static_cast<unsigned long long>(outputs.odometry_samples),
+                  static_cast<unsigned long long>(outputs.can_odometry.crc_bad + outputs.can_odometry.counter_repeated +
+                                                  outputs.can_odometry.too_short));
+    line += buf;
+  }
+  return line;
 }
 
 // ---------------------------------------------------------------------------------------------------------------

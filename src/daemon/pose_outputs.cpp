@@ -14,6 +14,15 @@ namespace agvslam::daemon {
 
 namespace dds = drivers::dds;
 
+nlohmann::json odometry_check_json(const drivers::OdometryCheck& c) {
+  // NaN (no ratio) is written as null.
+  return {{"state", drivers::to_string(c.state)},
+          {"distance_ratio", c.distance_ratio},
+          {"speed_rmse_mps", c.speed_rmse_mps},
+          {"heading_difference_deg", c.heading_difference_deg},
+          {"window_s", c.window_s}};
+}
+
 TextFile::TextFile(const std::string& path, const std::string& source, const std::string& field) : path_(path) {
   file_ = std::fopen(path.c_str(), "w");
   if (file_ == nullptr) {
@@ -61,8 +70,18 @@ PoseOutputs::PoseOutputs(const DaemonConfig& config) : config_(config) {
       dds_pose_ = std::make_unique<dds::DdsPosePublisher>(c);
     }
   }
+  if (config.odometry.source == OdometrySource::kCan) {
+    can_odometry_ = std::make_unique<drivers::can::CanOdometryDecoder>(config.odometry.can, config.outputs.can.layout(),
+                                                                       config.path);
+    spdlog::info("odometry: reading {} on {}", can_odometry_->describe(), config.outputs.can.interface);
+  }
+  if (config.odometry.source != OdometrySource::kNone) {
+    odometry_monitor_ = std::make_unique<OdometryMonitor>(config.odometry.check);
+  }
   if (config.outputs.can_enabled) {
-    can_ = std::make_unique<drivers::can::CanPosePublisher>(config.outputs.can);
+    std::vector<drivers::can::CanId> receive;
+    if (can_odometry_) receive.push_back(drivers::can::CanId{can_odometry_->id(), can_odometry_->extended()});
+    can_ = std::make_unique<drivers::can::CanPosePublisher>(config.outputs.can, receive);
     if (!can_->is_open()) {
       spdlog::warn("can: {} not available yet ({}); retrying with back-off", config.outputs.can.interface,
                    can_->last_error());
@@ -78,9 +97,38 @@ PoseOutputs::~PoseOutputs() {
   dds_status_.reset();
 }
 
+void PoseOutputs::check_odometry(OutputItem& item, bool tracking) {
+  drivers::PoseSample& s = item.sample;
+  if (can_ && can_odometry_) {
+    can_->poll();
+    for (const drivers::can::ReceivedCanFrame& r : can_->take_received()) {
+      if (r.frame.id != can_odometry_->id() || r.frame.extended != can_odometry_->extended()) continue;
+      if (auto rate = can_odometry_->decode(r.frame, r.t_ns)) odometry_monitor_->add_odometry(*rate);
+    }
+  }
+  s.odometry_check = item.heartbeat ? odometry_monitor_->status_at(s.t_ns)
+                                    : odometry_monitor_->add_pose(s.t_ns, s.T_map_base, tracking);
+  const drivers::OdometryCheck& c = s.odometry_check;
+  if (c.state != odometry_state_ && c.state == drivers::OdometryCheckState::kDisagrees) {
+    ++odometry_disagreements_;
+    const auto now = std::chrono::steady_clock::now();
+    const auto every = std::chrono::duration<double>(config_.odometry.check.warn_every_s);
+    if (odometry_disagreements_ == 1 || now - last_odometry_warning_ >= every) {
+      spdlog::warn("odometry: the pose disagrees with the wheel odometry over the last {:.1f} s: distance ratio {:.3f} "
+                   "(SLAM / odometry), heading difference {:.1f} deg, speed RMSE {:.3f} m/s (tolerance {:.0f} %; "
+                   "{} time(s) so far)",
+                   c.window_s, c.distance_ratio, c.heading_difference_deg, c.speed_rmse_mps,
+                   config_.odometry.check.tolerance * 100.0, odometry_disagreements_);
+      last_odometry_warning_ = now;
+    }
+  }
+  odometry_state_ = c.state;
+}
+
 void PoseOutputs::publish(OutputItem& item) {
   drivers::PoseSample& s = item.sample;
   const bool tracking = s.tracking_state == drivers::TrackingState::kTracking && !item.heartbeat;
+  if (odometry_monitor_) check_odometry(item, tracking);
   s.latency_ns = item.heartbeat ? 0 : dds::realtime_now_ns() - s.t_ns;
   if (tracking && dds_pose_) dds_pose_->publish(s);
   if (dds_status_) dds_status_->publish(s);
@@ -120,6 +168,7 @@ void PoseOutputs::publish(OutputItem& item) {
       j["can"] = {{"due", can_result.due}, {"sent", can_result.sent}, {"counter", can_result.counter},
                   {"frames_sent", can_result.frames_sent}};
     }
+    if (odometry_monitor_) j["odometry_check"] = odometry_check_json(s.odometry_check);
     const std::string text = j.dump();
     pose_log_.write_line(text.data(), text.size());
     pose_log_.flush();  // a test or an operator tailing the file sees each sample as it goes
@@ -131,6 +180,12 @@ void PoseOutputs::publish(OutputItem& item) {
   if (can_) {
     can_stats_ = can_->stats();
     if (can_last_error_ != can_->last_error()) can_last_error_ = can_->last_error();
+  }
+  if (can_odometry_) can_odometry_stats_ = can_odometry_->stats();
+  if (odometry_monitor_) {
+    odometry_check_ = s.odometry_check;
+    odometry_samples_copy_ = odometry_monitor_->odometry_samples();
+    odometry_disagreements_copy_ = odometry_disagreements_;
   }
 }
 
@@ -158,6 +213,11 @@ OutputStats PoseOutputs::stats() const {
   s.can_enabled = can_ != nullptr;
   s.can = can_stats_;
   s.can_last_error = can_last_error_;
+  s.odometry_enabled = odometry_monitor_ != nullptr;
+  s.can_odometry = can_odometry_stats_;
+  s.odometry_check = odometry_check_;
+  s.odometry_disagreements = odometry_disagreements_copy_;
+  s.odometry_samples = odometry_samples_copy_;
   return s;
 }
 

@@ -2,63 +2,14 @@
 
 #include <algorithm>
 #include <cmath>
-#include <cstdio>
 #include <limits>
 #include <opencv2/features2d.hpp>
 #include <opencv2/imgproc.hpp>
 
-#include "agvslam/core/error.h"
 #include "agvslam/dynamic/bilinear.h"
 #include "agvslam/dynamic/static_warp.h"
 
 namespace agvslam::dynamic {
-
-void BandSegmenterConfig::validate(const std::string& source) const {
-  auto require = [&](bool ok, const char* field, const char* expected) {
-    if (!ok) throw InputError(source, std::string("band.") + field, expected);
-  };
-  require(strip_px >= 8 && strip_px <= 512, "strip_px", "expected an integer in [8, 512] px");
-  require(max_disparity_px > 0 && max_disparity_px <= 1024, "max_disparity_px", "expected a number in (0, 1024] px");
-  require(max_static_segment_px > 0 && max_static_segment_px <= 64, "max_static_segment_px",
-          "expected a number in (0, 64] px");
-  require(segment_step_px >= 0.05 && segment_step_px <= 8, "segment_step_px", "expected a number in [0.05, 8] px");
-  require(border_px >= 2 && border_px <= 64, "border_px", "expected an integer in [2, 64] px");
-  require(fast_threshold >= 1 && fast_threshold <= 255, "fast_threshold", "expected an integer in [1, 255] grey levels");
-  require(cell_px >= 2 && cell_px <= 128, "cell_px", "expected an integer in [2, 128] px");
-  require(seed_offset_px > 0 && seed_offset_px <= 50, "seed_offset_px", "expected a number in (0, 50] px");
-  require(min_seeds >= 1 && min_seeds <= 1000, "min_seeds", "expected an integer in [1, 1000]");
-  require(max_seeds >= min_seeds && max_seeds <= 1000, "max_seeds", "expected an integer in [min_seeds, 1000]");
-  require(nearest_seeds >= 1 && nearest_seeds <= 16, "nearest_seeds", "expected an integer in [1, 16]");
-  require(evidence_dn > 0 && evidence_dn <= 255, "evidence_dn", "expected a number in (0, 255] grey levels");
-  require(max_object_error_dn > 0 && max_object_error_dn <= 255, "max_object_error_dn",
-          "expected a number in (0, 255] grey levels");
-  require(edge_fill_px >= 0 && edge_fill_px <= 64, "edge_fill_px", "expected an integer in [0, 64] px");
-  require(close_px >= 1 && close_px <= 63, "close_px", "expected an integer in [1, 63] px");
-  require(reach_px >= 1 && reach_px <= 1000, "reach_px", "expected an integer in [1, 1000] px");
-  require(min_pixels >= 1 && min_pixels <= 10000000, "min_pixels", "expected an integer in [1, 10000000] px");
-  require(min_height_px >= 1 && min_height_px <= 10000, "min_height_px", "expected an integer in [1, 10000] px");
-  require(stack_gap_px >= 0 && stack_gap_px <= 1000, "stack_gap_px", "expected an integer in [0, 1000] px");
-  require(merge_distance_px >= 0 && merge_distance_px <= 64, "merge_distance_px", "expected an integer in [0, 64] px");
-  require(driving_seed_offset_px >= 0 && driving_seed_offset_px <= 50, "driving_seed_offset_px",
-          "expected a number in [0, 50] px (0 = off)");
-  require(driving_cell_px >= 2 && driving_cell_px <= 128, "driving_cell_px", "expected an integer in [2, 128] px");
-}
-
-std::string BandSegmenterConfig::describe() const {
-  char buf[800];
-  std::snprintf(buf, sizeof(buf),
-                "band: %s, strip x < %d px, run when the static segments (d 0..%.0f px) are <= %.1f px (sampled every "
-                "%.2f px); FAST %d, one corner per %d px cell, >= %d px from the edges; seeds >= %.2f px off their "
-                "segment, %d..%d, each pixel's %d nearest; evidence > %.2f grey levels where a seed's error <= %.1f, "
-                "within %d px of its seeds, closed over %d px, filled to the edge from %d px; "
-                "a region alone >= %d px, >= %d px tall and taller than wide; joins an object within %d px or stacked within %d px; "
-                "driving: the corners of %d px cells without a track > %.2f px off their segment are candidate movers%s",
-                enabled ? "on" : "off", strip_px, max_disparity_px, max_static_segment_px, segment_step_px,
-                fast_threshold, cell_px, border_px, seed_offset_px, min_seeds, max_seeds, nearest_seeds, evidence_dn,
-                max_object_error_dn, reach_px, close_px, edge_fill_px, min_pixels, min_height_px, merge_distance_px, stack_gap_px,
-                driving_cell_px, driving_seed_offset_px, driving_seed_offset_px > 0 ? "" : " (off)");
-  return buf;
-}
 
 namespace {
 

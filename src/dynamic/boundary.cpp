@@ -1,9 +1,6 @@
 #include "agvslam/dynamic/boundary.h"
 
 #include <algorithm>
-#include <cstdio>
-
-#include "agvslam/core/error.h"
 
 namespace agvslam::dynamic {
 
@@ -16,22 +13,6 @@ const char* to_string(BoundaryType type) {
     case BoundaryType::kUnknown: return "unknown";
   }
   return "?";
-}
-
-void BoundaryConfig::validate(const std::string& source) const {
-  auto require = [&](bool ok, const char* field, const char* expected) {
-    if (!ok) throw InputError(source, std::string("boundaries.") + field, expected);
-  };
-  require(lambda_hinge > 0 && lambda_hinge <= 1e4, "lambda_hinge", "expected a number in (0, 1e4] px^2");
-  require(lambda_occ > lambda_hinge && lambda_occ <= 1e4, "lambda_occ", "expected a number > lambda_hinge (eq. 11), <= 1e4");
-  require(lambda_pen > 0 && lambda_pen <= 1e6, "lambda_pen", "expected a number in (0, 1e6] px^2");
-}
-
-std::string BoundaryConfig::describe() const {
-  char buf[160];
-  std::snprintf(buf, sizeof(buf), "boundaries: lambda_occ %.2f, lambda_hinge %.2f, lambda_pen %.2f (px^2)", lambda_occ,
-                lambda_hinge, lambda_pen);
-  return buf;
 }
 
 int SuperpixelGraph::add_or_get(int a, int b) {

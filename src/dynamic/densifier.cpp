@@ -2,46 +2,12 @@
 
 #include <algorithm>
 #include <cmath>
-#include <cstdio>
 #include <opencv2/features2d.hpp>
 #include <opencv2/video/tracking.hpp>
 
-#include "agvslam/core/error.h"
 #include "agvslam/dynamic/median.h"
 
 namespace agvslam::dynamic {
-
-void DensifyOptions::validate(const std::string& source) const {
-  auto require = [&](bool ok, const char* field, const char* expected) {
-    if (!ok) throw InputError(source, std::string("densify.") + field, expected);
-  };
-  require(radius_px >= 0 && radius_px <= 500, "radius_px", "expected a number in [0, 500] px");
-  require(radius_disparity_factor >= 0 && radius_disparity_factor <= 50, "radius_disparity_factor",
-          "expected a number in [0, 50]");
-  require(max_points >= 0 && max_points <= 1000, "max_points", "expected an integer in [0, 1000]");
-  require(min_distance_px >= 0 && min_distance_px <= 100, "min_distance_px", "expected a number in [0, 100] px");
-  require(min_seeds >= 1 && min_seeds <= 100, "min_seeds", "expected an integer in [1, 100]");
-  require(depth_seed_factor >= 0 && depth_seed_factor <= 100, "depth_seed_factor",
-          "expected a number in [0, 100] (0: depth-test points alone never seed)");
-  require(extra_tracks >= 0 && extra_tracks <= 10000, "extra_tracks", "expected an integer in [0, 10000]");
-  require(multiframe_levels >= -1 && multiframe_levels <= 5, "multiframe_levels",
-          "expected an integer in [-1, 5] (-1: off)");
-  require(multiframe_agreement > 0 && multiframe_agreement <= 2, "multiframe_agreement", "expected a number in (0, 2]");
-  require(multiframe_factor >= 1 && multiframe_factor <= 20, "multiframe_factor", "expected a number in [1, 20]");
-}
-
-std::string DensifyOptions::describe() const {
-  if (!enabled) return "densify: off";
-  char buf[400];
-  std::snprintf(buf, sizeof(buf),
-                "densify: <= %d points within %.0f + %.2f d px, %.0f px apart, >= %d seeds (depth-test points alone at "
-                ">= %.2fx its threshold, 0 = never), <= %d tracks beyond the cap, static ones kept %s, multi-frame test "
-                "%s (%d levels)",
-                max_points, radius_px, radius_disparity_factor, min_distance_px, min_seeds, depth_seed_factor,
-                extra_tracks, keep_static ? "yes" : "no", multiframe_levels >= 0 ? "on" : "off",
-                std::max(0, multiframe_levels));
-  return buf;
-}
 
 Densifier::Densifier(const DensifyOptions& options, const DensifierContext& context,
                      const StereoCalibration& calibration)

@@ -2,46 +2,12 @@
 
 #include <algorithm>
 #include <cmath>
-#include <cstdio>
 #include <opencv2/calib3d.hpp>
 #include <opencv2/core/eigen.hpp>
 
-#include "agvslam/core/error.h"
 #include "agvslam/dynamic/epipolar.h"
 
 namespace agvslam::dynamic {
-
-void DepthTestConfig::validate(const std::string& source) const {
-  auto require = [&](bool ok, const char* field, const char* expected) {
-    if (!ok) throw InputError(source, std::string("depth_test.") + field, expected);
-  };
-  require(min_points >= 6 && min_points <= 10000, "min_points", "expected an integer in [6, 10000]");
-  require(min_disparity_px > 0 && min_disparity_px <= 100, "min_disparity_px", "expected a number in (0, 100] px");
-  require(ransac_reprojection_px > 0 && ransac_reprojection_px <= 20, "ransac_reprojection_px",
-          "expected a number in (0, 20] px");
-  require(ransac_iterations >= 10 && ransac_iterations <= 100000, "ransac_iterations", "expected an integer in [10, 100000]");
-  require(ransac_confidence > 0.5 && ransac_confidence < 1, "ransac_confidence", "expected a number in (0.5, 1)");
-  require(a_reproj_px > 0 && a_reproj_px <= 50, "a_reproj_px", "expected a number in (0, 50] px");
-  require(b_reproj >= 0 && b_reproj <= 1, "b_reproj", "expected a number in [0, 1]");
-  require(a_disp_px > 0 && a_disp_px <= 50, "a_disp_px", "expected a number in (0, 50] px");
-  require(b_disp >= 0 && b_disp <= 1, "b_disp", "expected a number in [0, 1]");
-  require(adaptive_k > 0 && adaptive_k <= 20, "adaptive_k", "expected a number in (0, 20]");
-  require(max_scale >= 1 && max_scale <= 100, "max_scale", "expected a number in [1, 100]");
-  require(prior_min_inlier_fraction >= 0 && prior_min_inlier_fraction <= 1, "prior_min_inlier_fraction",
-          "expected a fraction in [0, 1] (0: always RANSAC)");
-}
-
-std::string DepthTestConfig::describe() const {
-  char buf[440];
-  std::snprintf(buf, sizeof(buf),
-                "depth_test: P3P RANSAC %.2f px / <= %d samples on >= %d tracks with d >= %.1f px; dynamic if "
-                "reprojection > %.2f + %.3f d px or disparity residual > %.2f + %.3f d px (adaptive %s, k %.1f, "
-                "<= %.1fx); a motion prior's inliers replace RANSAC when >= %.0f %% of the tracks (0: never)",
-                ransac_reprojection_px, ransac_iterations, min_points, min_disparity_px,
-                a_reproj_px, b_reproj, a_disp_px, b_disp, adaptive ? "on" : "off", adaptive_k, max_scale,
-                100 * prior_min_inlier_fraction);
-  return buf;
-}
 
 namespace {
 
@@ -119,6 +85,77 @@ void ransac_p3p(const std::vector<cv::Point3f>& object, const std::vector<cv::Po
   }
 }
 
+// The result before a motion is fitted: no motion, every track untested, the configured thresholds.
+void reset(DepthTestResult& result, std::size_t n, const DepthTestConfig& config) {
+  result.valid = false;
+  result.T_cur_prev = SE3d::Identity();
+  result.used = 0;
+  result.inliers = 0;
+  result.from_prior = false;
+  result.a_reproj_used_px = config.a_reproj_px;
+  result.a_disp_used_px = config.a_disp_px;
+  result.reprojection_px.assign(n, -1.0);
+  result.disparity_residual_px.assign(n, -1.0);
+  result.dynamic.assign(n, 0);
+}
+
+// The prior's inliers, as RANSAC would count them for that motion, and the prior as rvec / tvec, when they are at
+// least min_points (and 6) and prior_min_inlier_fraction of the `used` tracks; false (no inliers) otherwise.
+bool inliers_of_prior(const std::vector<cv::Point3f>& object, const std::vector<cv::Point2f>& image,
+                      const PinholeCamera& camera, const SE3d& T_cur_prev_prior, const DepthTestConfig& config,
+                      int used, cv::Mat& rvec, cv::Mat& tvec, std::vector<int>& inliers) {
+  inliers_of(object, image, camera, T_cur_prev_prior, config.ransac_reprojection_px, inliers);
+  if (static_cast<int>(inliers.size()) < std::max(6, config.min_points) ||
+      static_cast<double>(inliers.size()) < config.prior_min_inlier_fraction * static_cast<double>(used)) {
+    inliers.clear();
+    return false;
+  }
+  cv::Matx33d R_p;
+  cv::eigen2cv(Eigen::Matrix3d(T_cur_prev_prior.linear()), R_p);
+  const Eigen::Vector3d t_p = T_cur_prev_prior.translation();
+  cv::Rodrigues(R_p, rvec);
+  tvec = (cv::Mat_<double>(3, 1) << t_p.x(), t_p.y(), t_p.z());
+  return true;
+}
+
+// Least-squares refinement of rvec / tvec on the inliers.
+void refine_on_inliers(const std::vector<cv::Point3f>& object, const std::vector<cv::Point2f>& image,
+                       const std::vector<int>& inliers, const cv::Matx33d& K, cv::Mat& rvec, cv::Mat& tvec) {
+  std::vector<cv::Point3f> obj_in;
+  std::vector<cv::Point2f> img_in;
+  obj_in.reserve(inliers.size());
+  img_in.reserve(inliers.size());
+  for (int k : inliers) {
+    obj_in.push_back(object[static_cast<std::size_t>(k)]);
+    img_in.push_back(image[static_cast<std::size_t>(k)]);
+  }
+  cv::solvePnPRefineLM(obj_in, img_in, K, cv::noArray(), rvec, tvec);
+}
+
+// The thresholds' constants for this frame: the configured ones, or with `adaptive` adaptive_k x the robust sigma of
+// the tested tracks' residuals, between the configured constant and max_scale times it.
+void set_constants(const DepthTestConfig& config, const std::vector<int>& tested, std::vector<double>& scratch,
+                   DepthTestResult& result) {
+  double a_reproj = config.a_reproj_px, a_disp = config.a_disp_px;
+  if (config.adaptive) {
+    scratch.clear();
+    for (int idx : tested) scratch.push_back(result.reprojection_px[static_cast<std::size_t>(idx)]);
+    a_reproj = std::clamp(config.adaptive_k * robust_sigma(scratch), config.a_reproj_px,
+                          config.max_scale * config.a_reproj_px);
+    scratch.clear();
+    for (int idx : tested) {
+      const double r = result.disparity_residual_px[static_cast<std::size_t>(idx)];
+      if (r >= 0) scratch.push_back(r);
+    }
+    if (!scratch.empty()) {
+      a_disp = std::clamp(config.adaptive_k * robust_sigma(scratch), config.a_disp_px,
+                          config.max_scale * config.a_disp_px);
+    }
+  }
+  result.a_reproj_used_px = a_reproj;
+  result.a_disp_used_px = a_disp;
+}
+
 }  // namespace
 
 DepthConsistencyTest::DepthConsistencyTest(const DepthTestConfig& config) : config_(config) {
@@ -131,18 +168,10 @@ void DepthConsistencyTest::run(const PinholeCamera& camera, double bf_px_m, cons
                                DepthTestResult& result, const SE3d* T_cur_prev_prior) {
   const std::size_t n = prev_pts.size();
   CV_Assert(cur_pts.size() == n && usable.size() == n && prev_disparity_px.size() == n && cur_disparity_px.size() == n);
-  result.valid = false;
-  result.T_cur_prev = SE3d::Identity();
-  result.used = 0;
-  result.inliers = 0;
-  result.from_prior = false;
-  result.a_reproj_used_px = config_.a_reproj_px;
-  result.a_disp_used_px = config_.a_disp_px;
-  result.reprojection_px.assign(n, -1.0);
-  result.disparity_residual_px.assign(n, -1.0);
-  result.dynamic.assign(n, 0);
+  reset(result, n, config_);
   if (!(bf_px_m > 0) || !camera.valid()) return;
 
+  // The tested tracks: their previous 3-D points and current image points.
   object_.clear();
   image_.clear();
   index_.clear();
@@ -157,70 +186,29 @@ void DepthConsistencyTest::run(const PinholeCamera& camera, double bf_px_m, cons
   result.used = static_cast<int>(index_.size());
   if (result.used < config_.min_points) return;
 
-  const cv::Matx33d K = camera.K();
+  // The motion: the prior's when enough tracks agree with it, else P3P RANSAC's; refined on its inliers.
   cv::Mat rvec, tvec;
   inliers_.clear();
-  bool ok = false;
-  if (T_cur_prev_prior && config_.prior_min_inlier_fraction > 0) {
-    // The prior's inliers, as RANSAC would count them for that motion.
-    inliers_of(object_, image_, camera, *T_cur_prev_prior, config_.ransac_reprojection_px, inliers_);
-    if (static_cast<int>(inliers_.size()) >= std::max(6, config_.min_points) &&
-        static_cast<double>(inliers_.size()) >= config_.prior_min_inlier_fraction * static_cast<double>(result.used)) {
-      cv::Matx33d R_p;
-      cv::eigen2cv(Eigen::Matrix3d(T_cur_prev_prior->linear()), R_p);
-      const Eigen::Vector3d t_p = T_cur_prev_prior->translation();
-      cv::Rodrigues(R_p, rvec);
-      tvec = (cv::Mat_<double>(3, 1) << t_p.x(), t_p.y(), t_p.z());
-      ok = true;
-      result.from_prior = true;
-    } else {
-      inliers_.clear();
-    }
-  }
-  if (!ok) {
+  result.from_prior = T_cur_prev_prior && config_.prior_min_inlier_fraction > 0 &&
+                      inliers_of_prior(object_, image_, camera, *T_cur_prev_prior, config_, result.used, rvec, tvec,
+                                       inliers_);
+  if (!result.from_prior) {
     ransac_p3p(object_, image_, camera, config_.ransac_reprojection_px, config_.ransac_confidence,
                config_.ransac_iterations, rvec, tvec, inliers_);
-    ok = !inliers_.empty();
   }
-  if (!ok || static_cast<int>(inliers_.size()) < 6) return;
-  // Least-squares refinement on the inliers.
-  std::vector<cv::Point3f> obj_in;
-  std::vector<cv::Point2f> img_in;
-  obj_in.reserve(inliers_.size());
-  img_in.reserve(inliers_.size());
-  for (int k : inliers_) {
-    obj_in.push_back(object_[static_cast<std::size_t>(k)]);
-    img_in.push_back(image_[static_cast<std::size_t>(k)]);
-  }
-  cv::solvePnPRefineLM(obj_in, img_in, K, cv::noArray(), rvec, tvec);
+  if (static_cast<int>(inliers_.size()) < 6) return;
+  refine_on_inliers(object_, image_, inliers_, camera.K(), rvec, tvec);
   result.inliers = static_cast<int>(inliers_.size());
-
   result.T_cur_prev = pose_of(rvec, tvec);
   result.valid = true;
 
-  // Residuals of every tested track, then the (adaptive) thresholds.
+  // Residuals of every tested track, then the (adaptive) thresholds and the decisions.
   for (int idx : index_) {
     const std::size_t i = static_cast<std::size_t>(idx);
     residuals(camera, bf_px_m, result.T_cur_prev, prev_pts[i], prev_disparity_px[i], cur_pts[i], cur_disparity_px[i],
               result.reprojection_px[i], result.disparity_residual_px[i]);
   }
-  double a_reproj = config_.a_reproj_px, a_disp = config_.a_disp_px;
-  if (config_.adaptive) {
-    scratch_.clear();
-    for (int idx : index_) scratch_.push_back(result.reprojection_px[static_cast<std::size_t>(idx)]);
-    a_reproj = std::clamp(config_.adaptive_k * robust_sigma(scratch_), config_.a_reproj_px,
-                          config_.max_scale * config_.a_reproj_px);
-    scratch_.clear();
-    for (int idx : index_) {
-      const double r = result.disparity_residual_px[static_cast<std::size_t>(idx)];
-      if (r >= 0) scratch_.push_back(r);
-    }
-    if (!scratch_.empty()) {
-      a_disp = std::clamp(config_.adaptive_k * robust_sigma(scratch_), config_.a_disp_px, config_.max_scale * config_.a_disp_px);
-    }
-  }
-  result.a_reproj_used_px = a_reproj;
-  result.a_disp_used_px = a_disp;
+  set_constants(config_, index_, scratch_, result);
   for (int idx : index_) {
     const std::size_t i = static_cast<std::size_t>(idx);
     result.dynamic[i] = is_dynamic(result, result.reprojection_px[i], result.disparity_residual_px[i],
@@ -263,6 +251,5 @@ bool DepthConsistencyTest::is_dynamic(const DepthTestResult& fitted, double repr
   const bool off_2d = reprojection_px > reprojection_threshold_px(fitted, disparity_px);
   return off_2d || disparity_off(fitted, disparity_residual_px, disparity_px);
 }
-
 
 }  // namespace agvslam::dynamic

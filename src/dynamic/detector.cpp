@@ -3,7 +3,6 @@
 
 #include <algorithm>
 #include <chrono>
-#include <cstdio>
 #include <opencv2/imgproc.hpp>
 
 #include "agvslam/core/error.h"
@@ -54,60 +53,6 @@ RoiOutlinerContext roi_outliner_context(const DynamicDetectorConfig& c) {
   r.merge_stacked_regions = c.detector.merge_stacked_regions;
   r.split_side_by_side = c.detector.split_side_by_side;
   return r;
-}
-
-void DetectorOptions::validate(const std::string& source) const {
-  auto require = [&](bool ok, const char* field, const char* expected) {
-    if (!ok) throw InputError(source, std::string("detector.") + field, expected);
-  };
-  require(use_epipolar_test || use_depth_test, "use_epipolar_test", "expected at least one of the two tests enabled");
-  require(max_rois >= 0 && max_rois <= 256, "max_rois", "expected an integer in [0, 256]");
-  require(mask_dilation_px >= 0 && mask_dilation_px <= 64, "mask_dilation_px", "expected an integer in [0, 64] px");
-}
-
-std::string DetectorOptions::describe() const {
-  char buf[400];
-  std::snprintf(buf, sizeof(buf),
-                "detector: epipolar test %s, depth test %s, disparity %s, <= %d ROIs, side-by-side pieces split %s, "
-                "stacked regions merged %s, mask dilation %d px",
-                use_epipolar_test ? "on" : "off", use_depth_test ? "on" : "off",
-                full_frame_disparity ? "whole frame (debug)" : "points + ROIs", max_rois,
-                split_side_by_side ? "on" : "off", merge_stacked_regions ? "on" : "off", mask_dilation_px);
-  return buf;
-}
-
-void DynamicDetectorConfig::validate(const std::string& source) const {
-  features.validate(source);
-  tracking.validate(source);
-  epipolar.validate(source);
-  depth_test.validate(source);
-  multiframe.validate(source);
-  grouping.validate(source);
-  slic.validate(source);
-  planes.validate(source);
-  boundaries.validate(source);
-  regions.validate(source);
-  outline.validate(source);
-  edge_refine.validate(source);
-  photometric.validate(source);
-  motion_carve.validate(source);
-  band.validate(source);
-  detector.validate(source);
-  roi.validate(source);
-  densify.validate(source);
-  objects.validate(source);
-  band_carry.validate(source);
-  static_carve.validate(source);
-  confirm.validate(source);
-}
-
-std::vector<std::string> DynamicDetectorConfig::describe() const {
-  return {features.describe(),   tracking.describe(),     epipolar.describe(),     depth_test.describe(),
-          multiframe.describe(), grouping.describe(),     slic.describe(),         planes.describe(),
-          boundaries.describe(), regions.describe(),      outline.describe(),      edge_refine.describe(),
-          photometric.describe(), motion_carve.describe(), band.describe(),        detector.describe(),
-          roi.describe(),        densify.describe(),      objects.describe(),      band_carry.describe(),
-          static_carve.describe(), confirm.describe()};
 }
 
 DynamicDetector::DynamicDetector(const StereoCalibration& calibration, const DynamicDetectorConfig& config,

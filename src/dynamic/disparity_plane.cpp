@@ -3,34 +3,8 @@
 #include <Eigen/Dense>
 #include <algorithm>
 #include <cmath>
-#include <cstdio>
-
-#include "agvslam/core/error.h"
 
 namespace agvslam::dynamic {
-
-void PlaneFitConfig::validate(const std::string& source) const {
-  auto require = [&](bool ok, const char* field, const char* expected) {
-    if (!ok) throw InputError(source, std::string("planes.") + field, expected);
-  };
-  require(ransac_iterations >= 1 && ransac_iterations <= 10000, "ransac_iterations", "expected an integer in [1, 10000]");
-  require(confidence > 0 && confidence < 1, "confidence", "expected a number in (0, 1)");
-  require(inlier_threshold_px > 0 && inlier_threshold_px <= 20, "inlier_threshold_px", "expected a number in (0, 20] px");
-  require(min_valid_pixels >= 3 && min_valid_pixels <= 100000, "min_valid_pixels", "expected an integer >= 3");
-  require(min_valid_fraction >= 0 && min_valid_fraction <= 1, "min_valid_fraction", "expected a number in [0, 1]");
-  require(min_inlier_fraction >= 0 && min_inlier_fraction <= 1, "min_inlier_fraction", "expected a number in [0, 1]");
-  require(max_samples >= 10 && max_samples <= 1000000, "max_samples", "expected an integer >= 10");
-}
-
-std::string PlaneFitConfig::describe() const {
-  char buf[260];
-  std::snprintf(buf, sizeof(buf),
-                "planes: RANSAC <= %d iterations (confidence %.3f), inliers within %.2f px, >= %d pixels and %.0f %% "
-                "with a disparity, >= %.0f %% inliers, <= %d samples",
-                ransac_iterations, confidence, inlier_threshold_px, min_valid_pixels, 100 * min_valid_fraction,
-                100 * min_inlier_fraction, max_samples);
-  return buf;
-}
 
 namespace {
 

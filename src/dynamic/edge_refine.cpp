@@ -2,36 +2,10 @@
 
 #include <algorithm>
 #include <cmath>
-#include <cstdio>
 
-#include "agvslam/core/error.h"
 #include "agvslam/dynamic/median.h"
 
 namespace agvslam::dynamic {
-
-void EdgeRefineConfig::validate(const std::string& source) const {
-  auto require = [&](bool ok, const char* field, const char* expected) {
-    if (!ok) throw InputError(source, std::string("edge_refine.") + field, expected);
-  };
-  require(band_px >= 0 && band_px <= 32, "band_px", "expected an integer in [0, 32] px (0: off)");
-  require(half_rows >= 0 && half_rows <= 16, "half_rows", "expected an integer in [0, 16] rows");
-  require(background_px >= 1 && background_px <= 64, "background_px", "expected an integer in [1, 64] px");
-  require(min_disparity_gap_px >= 0 && min_disparity_gap_px <= 100, "min_disparity_gap_px",
-          "expected a number in [0, 100] px");
-  require(occlusion_cost > 0 && occlusion_cost <= 255, "occlusion_cost", "expected a number in (0, 255] grey levels");
-  require(min_gain >= 0 && min_gain <= 255, "min_gain", "expected a number in [0, 255] grey levels per px");
-}
-
-std::string EdgeRefineConfig::describe() const {
-  if (band_px == 0) return "edge_refine: off";
-  char buf[400];
-  std::snprintf(buf, sizeof(buf),
-                "edge_refine: each side of each outline row moves within %d px, split by 1 x %d windows at the "
-                "object's and the background's disparity (background: median of %d px outside, at least %.2f px "
-                "behind), background cost capped at %.1f, a move must gain %.2f per px",
-                band_px, 2 * half_rows + 1, background_px, min_disparity_gap_px, occlusion_cost, min_gain);
-  return buf;
-}
 
 EdgeRefiner::EdgeRefiner(const EdgeRefineConfig& config) : config_(config) { config_.validate("EdgeRefineConfig"); }
 
@@ -85,6 +59,95 @@ bool run_costs(const cv::Mat& left, const cv::Mat& right, float xl0, float xr0, 
   return true;
 }
 
+// The object's disparity of the row run [xs, xe]: the median away from its ends (where SGBM fattened it), else of
+// the whole run, at most ~16 samples; 0 when the run has none.
+float run_disparity(const float* disp, int xs, int xe, int band_px, std::vector<float>& values) {
+  values.clear();
+  const bool long_run = xe - xs + 1 > 2 * band_px + 2;
+  const int k0 = long_run ? xs + band_px : xs, k1 = long_run ? xe - band_px : xe;
+  const int stride = std::max(1, (k1 - k0 + 1) / 16);
+  for (int k = k0; k <= k1; k += stride) {
+    if (disp[k] > 0.0f) values.push_back(disp[k]);
+  }
+  return median_in_place(values, 0.0f);
+}
+
+// One end of a row run: the ROI columns [lo, hi] that may change, and where the run ends now (as a split of them).
+struct Side {
+  bool left;  // the run's left end
+  int lo, hi;
+  int e0;  // the split the outline has, counted from lo: the run's first column, or the one after its last
+};
+
+// The side of the run [xs, xe] that may move: band_px either way, but not past the run's middle nor past half the gap
+// to the previous run (ending at prev_end, -1: none) or the next one (starting at next_start, w: none).
+Side side_of(bool left, int xs, int xe, int prev_end, int next_start, int w, int band_px) {
+  const int mid = (xs + xe) / 2;
+  Side s{left, 0, 0, 0};
+  if (left) {
+    s.lo = std::max(xs - band_px, prev_end < 0 ? 0 : (prev_end + xs) / 2 + 1);
+    s.hi = std::min(xs + band_px, mid);
+    s.e0 = xs - s.lo;
+  } else {
+    s.lo = std::max(xe - band_px, mid + 1);
+    s.hi = std::min(xe + band_px, next_start >= w ? w - 1 : (xe + next_start) / 2);
+    s.e0 = xe + 1 - s.lo;
+  }
+  return s;
+}
+
+// The background's disparity beside a side: the median of the first background_px disparities outside the outline
+// beyond it, searched up to 4 * background_px outward (left of an object's left side lies the strip the object
+// hides from the right camera, without disparity); 0 when there are none.
+float background_disparity(const float* disp, const uint8_t* outline_row, int w, const Side& s, int background_px,
+                           std::vector<float>& values) {
+  values.clear();
+  for (int k = s.left ? s.lo - 1 : s.hi + 1, steps = 0;
+       k >= 0 && k < w && steps < 4 * background_px && static_cast<int>(values.size()) < background_px;
+       k += s.left ? -1 : 1, ++steps) {
+    if (!outline_row[k] && disp[k] > 0.0f) values.push_back(disp[k]);
+  }
+  return values.empty() ? 0.0f : median_in_place(values, 0.0f);
+}
+
+// The split e in [0, n] with the least cost first[0, e) + second[e, n), ties going to the one nearest e0; gain: the
+// cost at e0 less the best one's.
+int best_split(const std::vector<float>& first, const std::vector<float>& second, int n, int e0, double& gain) {
+  double total = 0.0;
+  for (int i = 0; i < n; ++i) total += second[static_cast<std::size_t>(i)];
+  double best = total, at_e0 = total;  // split 0 (for e0 = 0 the split as it is)
+  int best_e = 0;
+  for (int e = 1; e <= n; ++e) {
+    total += first[static_cast<std::size_t>(e - 1)] - second[static_cast<std::size_t>(e - 1)];
+    if (e == e0) at_e0 = total;
+    if (total < best - 1e-6 || (std::fabs(total - best) <= 1e-6 && std::abs(e - e0) < std::abs(best_e - e0))) {
+      best = total;
+      best_e = e;
+    }
+  }
+  gain = at_e0 - best;
+  return best_e;
+}
+
+// The matching costs of the side's columns (from image column roi_x + s.lo) at the object's disparity d_f (cost_fg)
+// and at the background's d_b (cost_bg, capped at occlusion_cost); false when a column leaves an image.
+bool side_costs(const cv::Mat& left, const cv::Mat& right, int roi_x, const Side& s, float d_f, float d_b, int y0,
+                int y1, double occlusion_cost, std::vector<float>& cost_fg, std::vector<float>& cost_bg) {
+  const int n = s.hi - s.lo + 1;
+  cost_fg.resize(static_cast<std::size_t>(n));
+  cost_bg.resize(static_cast<std::size_t>(n));
+  // Object: left pixel x against right x - d_f. Background beside the right side: left x against right x - d_b.
+  // Beside the left side the left camera sees background the right one does not (the object hides it there), so
+  // the split is made in the right image, where the side lies at x - d_f: right x - d_f against left x - d_f + d_b.
+  const float x0 = static_cast<float>(roi_x + s.lo);
+  const bool ok = run_costs(left, right, x0, x0 - d_f, n, y0, y1, cost_fg.data()) &&
+                  (s.left ? run_costs(left, right, x0 - d_f + d_b, x0 - d_f, n, y0, y1, cost_bg.data())
+                          : run_costs(left, right, x0, x0 - d_b, n, y0, y1, cost_bg.data()));
+  if (!ok) return false;
+  for (float& cost : cost_bg) cost = std::min(cost, static_cast<float>(occlusion_cost));
+  return true;
+}
+
 }  // namespace
 
 EdgeRefineStats EdgeRefiner::refine(const cv::Mat& left, const cv::Mat& right, cv::Rect roi, const cv::Mat& disparity_px,
@@ -96,12 +159,11 @@ EdgeRefineStats EdgeRefiner::refine(const cv::Mat& left, const cv::Mat& right, c
   CV_Assert(outline.type() == CV_8UC1 && disparity_px.type() == CV_32FC1 && outline.size() == disparity_px.size());
   CV_Assert(outline.size() == roi.size() && (roi & cv::Rect(cv::Point(0, 0), left.size())) == roi);
   const int w = outline.cols;
-  const int band = c.band_px;
   row_.resize(static_cast<std::size_t>(w));
   for (int y = 0; y < outline.rows; ++y) {
     uint8_t* out = outline.ptr<uint8_t>(y);
     const float* disp = disparity_px.ptr<float>(y);
-    std::copy(out, out + w, row_.begin());
+    std::copy(out, out + w, row_.begin());  // the runs and the background are read from the row as it was
     const int img_y = roi.y + y;
     const int y0 = std::max(0, img_y - c.half_rows), y1 = std::min(left.rows - 1, img_y + c.half_rows);
     int x = 0;
@@ -114,79 +176,25 @@ EdgeRefineStats EdgeRefiner::refine(const cv::Mat& left, const cv::Mat& right, c
       const int xe = x - 1;
       int next_start = x;
       while (next_start < w && !row_[static_cast<std::size_t>(next_start)]) ++next_start;
-      // The object's disparity: the run away from its ends (where SGBM fattened it), else the whole run.
-      values_.clear();
-      const bool long_run = xe - xs + 1 > 2 * band + 2;
-      const int k0 = long_run ? xs + band : xs, k1 = long_run ? xe - band : xe;
-      const int stride = std::max(1, (k1 - k0 + 1) / 16);  // at most ~16 samples
-      for (int k = k0; k <= k1; k += stride) {
-        if (disp[k] > 0.0f) values_.push_back(disp[k]);
-      }
-      const float d_f = median_in_place(values_, 0.0f);
-      const int mid = (xs + xe) / 2;
-      for (int side = 0; side < 2 && d_f > 0.0f; ++side) {
-        const bool left_side = side == 0;
-        int lo, hi;
-        if (left_side) {
-          lo = std::max(xs - band, prev_end < 0 ? 0 : (prev_end + xs) / 2 + 1);  // gaps between runs: halved
-          hi = std::min(xs + band, mid);
-        } else {
-          lo = std::max(xe - band, mid + 1);
-          hi = std::min(xe + band, next_start >= w ? w - 1 : (xe + next_start) / 2);
-        }
-        if (lo > hi) continue;
+      const float d_f = run_disparity(disp, xs, xe, c.band_px, values_);
+      for (int end = 0; end < 2 && d_f > 0.0f; ++end) {
+        const Side s = side_of(end == 0, xs, xe, prev_end, next_start, w, c.band_px);
+        if (s.lo > s.hi) continue;
         ++stats.sides;
-        // The background's disparity: beside the band, outside the outline.
-        values_.clear();
-        // (Left of an object's left side lies the strip the object hides from the right camera, without
-        // disparity: the search goes on outward, up to 4 * background_px.)
-        for (int k = left_side ? lo - 1 : hi + 1, steps = 0;
-             k >= 0 && k < w && steps < 4 * c.background_px && static_cast<int>(values_.size()) < c.background_px;
-             k += left_side ? -1 : 1, ++steps) {
-          if (!row_[static_cast<std::size_t>(k)] && disp[k] > 0.0f) values_.push_back(disp[k]);
-        }
-        if (values_.empty()) continue;
-        const float d_b = median_in_place(values_, 0.0f);
-        if (d_f - d_b < c.min_disparity_gap_px) continue;
-        const int n = hi - lo + 1;
-        cost_fg_.resize(static_cast<std::size_t>(n));
-        cost_bg_.resize(static_cast<std::size_t>(n));
-        // Object: left pixel x against right x - d_f. Background beside the right side: left x against right
-        // x - d_b. Beside the left side the left camera sees background the right one does not (the object hides
-        // it there), so the split is made in the right image, where the side lies at x - d_f: right x - d_f
-        // against left x - d_f + d_b.
-        const float x0 = static_cast<float>(roi.x + lo);
-        bool ok = run_costs(left, right, x0, x0 - d_f, n, y0, y1, cost_fg_.data()) &&
-                  (left_side ? run_costs(left, right, x0 - d_f + d_b, x0 - d_f, n, y0, y1, cost_bg_.data())
-                             : run_costs(left, right, x0, x0 - d_b, n, y0, y1, cost_bg_.data()));
-        for (int i = 0; i < n && ok; ++i) {
-          cost_bg_[static_cast<std::size_t>(i)] = std::min(cost_bg_[static_cast<std::size_t>(i)], static_cast<float>(c.occlusion_cost));
-        }
-        if (!ok) continue;
-        // Split e in [0, n]: left side: [0, e) background, [e, n) object; right side: the other way round.
-        const std::vector<float>& first = left_side ? cost_bg_ : cost_fg_;
-        const std::vector<float>& second = left_side ? cost_fg_ : cost_bg_;
-        double total = 0.0;
-        for (int i = 0; i < n; ++i) total += second[static_cast<std::size_t>(i)];
-        const int e0 = (left_side ? xs : xe + 1) - lo;  // the split as it is
-        double best = total, at_e0 = total;  // split 0 (for e0 = 0 the split as it is)
-        int best_e = 0;
-        for (int e = 1; e <= n; ++e) {
-          total += first[static_cast<std::size_t>(e - 1)] - second[static_cast<std::size_t>(e - 1)];
-          if (e == e0) at_e0 = total;
-          if (total < best - 1e-6 || (std::fabs(total - best) <= 1e-6 && std::abs(e - e0) < std::abs(best_e - e0))) {
-            best = total;
-            best_e = e;
-          }
-        }
-        if (best_e == e0 || at_e0 - best < c.min_gain * std::abs(best_e - e0)) continue;
+        const float d_b = background_disparity(disp, row_.data(), w, s, c.background_px, values_);
+        if (!(d_b > 0.0f) || d_f - d_b < c.min_disparity_gap_px) continue;
+        const int n = s.hi - s.lo + 1;
+        if (!side_costs(left, right, roi.x, s, d_f, d_b, y0, y1, c.occlusion_cost, cost_fg_, cost_bg_)) continue;
+        // Left end: [0, e) background, [e, n) object; right end: the other way round.
+        double gain = 0.0;
+        const int best_e = best_split(s.left ? cost_bg_ : cost_fg_, s.left ? cost_fg_ : cost_bg_, n, s.e0, gain);
+        if (best_e == s.e0 || gain < c.min_gain * std::abs(best_e - s.e0)) continue;
         ++stats.moved;
         for (int i = 0; i < n; ++i) {
-          const bool object = left_side ? i >= best_e : i < best_e;
-          uint8_t& px = out[lo + i];
-          const bool was = px != 0;
-          if (object && !was) ++stats.pixels_added;
-          if (!object && was) ++stats.pixels_removed;
+          const bool object = s.left ? i >= best_e : i < best_e;
+          uint8_t& px = out[s.lo + i];
+          if (object && !px) ++stats.pixels_added;
+          if (!object && px) ++stats.pixels_removed;
           px = object ? 255 : 0;
         }
       }

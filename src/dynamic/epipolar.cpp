@@ -2,57 +2,10 @@
 
 #include <algorithm>
 #include <cmath>
-#include <cstdio>
 #include <opencv2/calib3d.hpp>
 #include <opencv2/video/tracking.hpp>
 
-#include "agvslam/core/error.h"
-
 namespace agvslam::dynamic {
-
-void LkTrackerConfig::validate(const std::string& source) const {
-  auto require = [&](bool ok, const char* field, const char* expected) {
-    if (!ok) throw InputError(source, std::string("tracking.") + field, expected);
-  };
-  require(window_px >= 5 && window_px <= 63, "window_px", "expected an integer in [5, 63] px");
-  require(levels >= 0 && levels <= 6, "levels", "expected an integer in [0, 6]");
-  require(min_levels >= 0 && min_levels <= 6, "min_levels", "expected an integer in [0, 6] (above `levels`: `levels`)");
-  require(motion_margin >= 1 && motion_margin <= 10, "motion_margin", "expected a number in [1, 10]");
-  require(max_iterations >= 1 && max_iterations <= 200, "max_iterations", "expected an integer in [1, 200]");
-  require(epsilon > 0 && epsilon <= 1, "epsilon", "expected a number in (0, 1] px");
-  require(fb_max_error_px > 0 && fb_max_error_px <= 20, "fb_max_error_px", "expected a number in (0, 20] px");
-  require(min_eigen_threshold >= 0 && min_eigen_threshold <= 1, "min_eigen_threshold", "expected a number in [0, 1]");
-  require(min_track_distance_px >= 0 && min_track_distance_px <= 200, "min_track_distance_px",
-          "expected a number in [0, 200] px");
-  require(max_tracks >= 1 && max_tracks <= 100000, "max_tracks", "expected an integer in [1, 100000]");
-  require(predict_min_px >= 0 && predict_min_px <= 1000, "predict_min_px", "expected a number in [0, 1000] px (0 = off)");
-}
-
-std::string LkTrackerConfig::describe() const {
-  char buf[512];
-  char persistence[120] = "tracks end after one frame";
-  char level_text[120];
-  if (min_levels < levels) {
-    std::snprintf(level_text, sizeof(level_text),
-                  "%d-%d levels (the fewest that follow %.1fx the last frame's largest motion)", min_levels, levels,
-                  motion_margin);
-  } else {
-    std::snprintf(level_text, sizeof(level_text), "%d levels", levels);
-  }
-  if (persistent) {
-    std::snprintf(persistence, sizeof(persistence), "tracks persist, new corners >= %.1f px from them, <= %d tracks",
-                  min_track_distance_px, max_tracks);
-  }
-  char prediction[80] = "searches start at the old position";
-  if (predict_min_px > 0) {
-    std::snprintf(prediction, sizeof(prediction), "searches start at the static prediction beyond %.1f px",
-                  predict_min_px);
-  }
-  std::snprintf(buf, sizeof(buf),
-                "tracking: pyramidal LK %dx%d, %s, %d iterations / %.3f px, forward-backward <= %.2f px, %s, %s",
-                window_px, window_px, level_text, max_iterations, epsilon, fb_max_error_px, persistence, prediction);
-  return buf;
-}
 
 LkTracker::LkTracker(const LkTrackerConfig& config) : config_(config) { config_.validate("LkTrackerConfig"); }
 
@@ -106,32 +59,6 @@ void LkTracker::track(const std::vector<cv::Mat>& prev_pyramid, const std::vecto
     if (e.dot(e) > max_fb2) continue;
     ok[i] = 1;
   }
-}
-
-void EpipolarTestConfig::validate(const std::string& source) const {
-  auto require = [&](bool ok, const char* field, const char* expected) {
-    if (!ok) throw InputError(source, std::string("epipolar.") + field, expected);
-  };
-  require(a_epi_px > 0 && a_epi_px <= 50, "a_epi_px", "expected a number in (0, 50] px");
-  require(b_epi >= 0 && b_epi <= 1, "b_epi", "expected a number in [0, 1]");
-  require(ransac_threshold_px > 0 && ransac_threshold_px <= 20, "ransac_threshold_px", "expected a number in (0, 20] px");
-  require(ransac_confidence > 0.5 && ransac_confidence < 1, "ransac_confidence", "expected a number in (0.5, 1)");
-  require(ransac_max_iterations >= 10 && ransac_max_iterations <= 100000, "ransac_max_iterations",
-          "expected an integer in [10, 100000]");
-  require(min_tracks >= 8 && min_tracks <= 10000, "min_tracks", "expected an integer in [8, 10000]");
-  require(min_parallax_px >= 0 && min_parallax_px <= 20, "min_parallax_px", "expected a number in [0, 20] px");
-  require(adaptive_k > 0 && adaptive_k <= 20, "adaptive_k", "expected a number in (0, 20]");
-  require(a_epi_max_px >= a_epi_px && a_epi_max_px <= 100, "a_epi_max_px", "expected a number in [a_epi_px, 100] px");
-}
-
-std::string EpipolarTestConfig::describe() const {
-  char buf[320];
-  std::snprintf(buf, sizeof(buf),
-                "epipolar: T_epi = %.2f + %.3f d px (adaptive %s: k %.1f, a <= %.2f px), F RANSAC %.2f px / %.3f / "
-                "%d iterations, >= %d tracks, static camera below %.2f px median track",
-                a_epi_px, b_epi, adaptive ? "on" : "off", adaptive_k, a_epi_max_px, ransac_threshold_px,
-                ransac_confidence, ransac_max_iterations, min_tracks, min_parallax_px);
-  return buf;
 }
 
 double epipolar_distance_px(const cv::Matx33d& F, const cv::Point2f& p_prev, const cv::Point2f& p_cur) {

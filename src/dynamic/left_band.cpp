@@ -2,10 +2,7 @@
 
 #include <algorithm>
 #include <cmath>
-#include <cstdio>
 #include <opencv2/imgproc.hpp>
-
-#include "agvslam/core/error.h"
 
 namespace agvslam::dynamic {
 
@@ -24,23 +21,6 @@ int most_counted(const std::vector<int>& counts, int& best_count) {
   return best;
 }
 }  // namespace
-
-void BandCarryOptions::validate(const std::string& source) const {
-  auto require = [&](bool ok, const char* field, const char* expected) {
-    if (!ok) throw InputError(source, std::string("band_carry.") + field, expected);
-  };
-  require(max_frames >= 0 && max_frames <= 100, "max_frames", "expected an integer in [0, 100] frames (0: off)");
-  require(min_tracks >= 1 && min_tracks <= 1000, "min_tracks", "expected an integer in [1, 1000]");
-  require(min_dynamic >= 0 && min_dynamic <= 1000, "min_dynamic", "expected an integer in [0, 1000]");
-}
-
-std::string BandCarryOptions::describe() const {
-  if (max_frames <= 0) return "band_carry: off";
-  char buf[160];
-  std::snprintf(buf, sizeof(buf), "band_carry: <= %d frames alone, >= %d tracks, >= %d dynamic", max_frames, min_tracks,
-                min_dynamic);
-  return buf;
-}
 
 LeftBand::LeftBand(const BandSegmenterConfig& band, const BandCarryOptions& carry, int min_region_pixels,
                    const StereoCalibration& calibration)

@@ -2,43 +2,12 @@
 
 #include <algorithm>
 #include <cmath>
-#include <cstdio>
 #include <opencv2/imgproc.hpp>
 
-#include "agvslam/core/error.h"
 #include "agvslam/dynamic/bilinear.h"
 #include "agvslam/dynamic/static_warp.h"
 
 namespace agvslam::dynamic {
-
-void MotionCarveConfig::validate(const std::string& source) const {
-  auto require = [&](bool ok, const char* field, const char* expected) {
-    if (!ok) throw InputError(source, std::string("motion_carve.") + field, expected);
-  };
-  require(block_px >= 2 && block_px <= 64, "block_px", "expected an integer in [2, 64] px");
-  require(sample_step_px >= 1 && sample_step_px <= block_px, "sample_step_px", "expected an integer in [1, block_px]");
-  require(search_px >= 0 && search_px <= 8, "search_px", "expected an integer in [0, 8] px");
-  require(min_gradient >= 0 && min_gradient <= 255, "min_gradient", "expected a number in [0, 255] grey levels/px");
-  require(min_samples >= 2 && min_samples <= 4096, "min_samples", "expected an integer in [2, 4096]");
-  require(max_static_ratio > 0 && max_static_ratio <= 1, "max_static_ratio", "expected a number in (0, 1]");
-  require(min_object_error_dn >= 0 && min_object_error_dn <= 255, "min_object_error_dn",
-          "expected a number in [0, 255] grey levels");
-  require(max_static_error_dn > 0 && max_static_error_dn <= 255, "max_static_error_dn",
-          "expected a number in (0, 255] grey levels");
-  require(min_separation_px >= 0 && min_separation_px <= 100, "min_separation_px", "expected a number in [0, 100] px");
-  require(seed_radius_px >= 0 && seed_radius_px <= 32, "seed_radius_px", "expected an integer in [0, 32] px");
-}
-
-std::string MotionCarveConfig::describe() const {
-  char buf[400];
-  std::snprintf(buf, sizeof(buf),
-                "motion_carve: %s, %d px blocks sampled every %d px (gradient >= %.1f /px, >= %d samples), static when "
-                "its error <= %.2f x the object's (motion +- %d px) and <= %.1f, the object's >= %.1f grey levels; objects >= %.1f px off "
-                "the ego-motion; parts within %d px of an object point stay",
-                enabled ? "on" : "off", block_px, sample_step_px, min_gradient, min_samples, max_static_ratio, search_px,
-                max_static_error_dn, min_object_error_dn, min_separation_px, seed_radius_px);
-  return buf;
-}
 
 namespace {
 
@@ -52,6 +21,96 @@ double spread(const double* diff, int n) {
   double s = 0;
   for (int i = 0; i < n; ++i) s += std::abs(diff[i] - mean);
   return s / n;
+}
+
+// One block's samples: the current grey value, its difference to the previous image under the static hypothesis,
+// and its position in the previous image moved back by the object's motion.
+struct BlockSamples {
+  explicit BlockSamples(std::size_t capacity)
+      : value(capacity), d_static(capacity), d_object(capacity), object_px(capacity) {}
+  std::vector<double> value, d_static, d_object;
+  std::vector<cv::Point> object_px;
+  int n = 0;
+};
+
+// Samples the outline (at `origin` in the images) in `block`, every sample_step_px: its pixels with a disparity and a
+// gradient >= min_gradient whose every shift of the object's motion (+- search_px) stays inside the previous image
+// and whose static warp lands inside it.
+void sample_block(const cv::Mat& cur_left, const cv::Mat& prev_left, const StaticWarp& warp, const cv::Mat& outline,
+                  const cv::Mat& disparity_px, cv::Point origin, const cv::Rect& block, cv::Point object_motion_px,
+                  const MotionCarveConfig& config, BlockSamples& samples) {
+  const int w = cur_left.cols, h = cur_left.rows;
+  const int step = config.sample_step_px, r = config.search_px;
+  samples.n = 0;
+  for (int ly = block.y; ly < block.br().y; ly += step) {
+    const int y = ly + origin.y;
+    if (y < 1 || y >= h - 1) continue;
+    const uint8_t* m_row = outline.ptr<uint8_t>(ly);
+    const float* d_row = disparity_px.ptr<float>(ly);
+    const uint8_t* c0 = cur_left.ptr<uint8_t>(y);
+    const uint8_t* cm = cur_left.ptr<uint8_t>(y - 1);
+    const uint8_t* cp = cur_left.ptr<uint8_t>(y + 1);
+    for (int lx = block.x; lx < block.br().x; lx += step) {
+      if (!m_row[lx]) continue;
+      const double d = d_row[lx];
+      if (!(d > 0.5)) continue;
+      const int x = lx + origin.x;
+      if (x < 1 || x >= w - 1) continue;
+      const double gx = 0.5 * (c0[x + 1] - c0[x - 1]), gy = 0.5 * (cp[x] - cm[x]);
+      if (std::sqrt(gx * gx + gy * gy) < config.min_gradient) continue;
+      const int ox = x - object_motion_px.x, oy = y - object_motion_px.y;
+      if (ox - r < 0 || oy - r < 0 || ox + r >= w || oy + r >= h) continue;
+      double u, v;
+      if (!warp.at(x, y, d, u, v, kMinDepthM)) continue;
+      if (!(u >= 0 && v >= 0 && u < w - 1 && v < h - 1)) continue;
+      const auto k = static_cast<std::size_t>(samples.n);
+      samples.value[k] = c0[x];
+      samples.d_static[k] = samples.value[k] - bilinear_u8(prev_left, u, v);
+      samples.object_px[k] = cv::Point(ox, oy);
+      ++samples.n;
+    }
+  }
+}
+
+// Whether some shift of the object's motion within +- search_px fits the samples with a spread below e_needed
+// (stops at the first that does).
+bool object_motion_fits(const cv::Mat& prev_left, int search_px, double e_needed, BlockSamples& samples) {
+  const int r = search_px;
+  for (int dy = -r; dy <= r; ++dy) {
+    for (int dx = -r; dx <= r; ++dx) {
+      for (int i = 0; i < samples.n; ++i) {
+        const auto k = static_cast<std::size_t>(i);
+        const cv::Point q = samples.object_px[k];
+        samples.d_object[k] = samples.value[k] - prev_left.ptr<uint8_t>(q.y + dy)[q.x + dx];
+      }
+      if (spread(samples.d_object.data(), samples.n) < e_needed) return true;
+    }
+  }
+  return false;
+}
+
+// Clears the connected parts of the outline (at `origin` in the image) without an object point within radius_px.
+void keep_parts_with_object_points(cv::Mat& outline, const std::vector<cv::Point2f>& object_points, cv::Point origin,
+                                   int radius_px) {
+  cv::Mat labels;
+  const int n_labels = cv::connectedComponents(outline, labels, 8, CV_32S);
+  std::vector<uint8_t> keep(static_cast<std::size_t>(n_labels), 0);
+  for (const cv::Point2f& p : object_points) {
+    const int cx = cvRound(p.x) - origin.x, cy = cvRound(p.y) - origin.y;
+    for (int y = std::max(0, cy - radius_px); y <= std::min(outline.rows - 1, cy + radius_px); ++y) {
+      const int* l = labels.ptr<int>(y);
+      for (int x = std::max(0, cx - radius_px); x <= std::min(outline.cols - 1, cx + radius_px); ++x) {
+        if (l[x] > 0) keep[static_cast<std::size_t>(l[x])] = 1;
+      }
+    }
+  }
+  for (int y = 0; y < outline.rows; ++y) {
+    uint8_t* o = outline.ptr<uint8_t>(y);
+    const int* l = labels.ptr<int>(y);
+    for (int x = 0; x < outline.cols; ++x) {
+      if (o[x] && !keep[static_cast<std::size_t>(l[x])]) o[x] = 0;
+    }
+  }
 }
 
 }  // namespace
@@ -69,95 +128,34 @@ MotionCarveStats carve_by_motion(const cv::Mat& cur_left, const cv::Mat& prev_le
   }
   stats.ran = true;
   const StaticWarp warp(camera, bf_px_m, T_cur_prev);
-  const int w = cur_left.cols, h = cur_left.rows;
-  const int B = config.block_px, step = config.sample_step_px, r = config.search_px;
-  const int mx = static_cast<int>(std::lround(object_motion_px.x)), my = static_cast<int>(std::lround(object_motion_px.y));
-  const auto max_samples = static_cast<std::size_t>(((B + step - 1) / step) * ((B + step - 1) / step));
-  std::vector<double> d_static(max_samples), d_object(max_samples), value(max_samples);
-  std::vector<cv::Point> object_px(max_samples);  // each sample's position moved back by the object's motion
+  const int B = config.block_px, step = config.sample_step_px;
+  const cv::Point motion_px(static_cast<int>(std::lround(object_motion_px.x)),
+                            static_cast<int>(std::lround(object_motion_px.y)));
+  BlockSamples samples(static_cast<std::size_t>(((B + step - 1) / step) * ((B + step - 1) / step)));
   cv::Mat removed = cv::Mat::zeros(outline.size(), CV_8UC1);
   bool any_static = false;
   // The blocks tile the outline's bounding box.
   const cv::Rect box = cv::boundingRect(outline);
   for (int by = box.y; by < box.br().y; by += B) {
     for (int bx = box.x; bx < box.br().x; bx += B) {
-      int n = 0;
-      const int y_end = std::min(by + B, box.br().y), x_end = std::min(bx + B, box.br().x);
-      for (int ly = by; ly < y_end; ly += step) {
-        const int y = ly + origin.y;
-        if (y < 1 || y >= h - 1) continue;
-        const uint8_t* m_row = outline.ptr<uint8_t>(ly);
-        const float* d_row = disparity_px.ptr<float>(ly);
-        const uint8_t* c0 = cur_left.ptr<uint8_t>(y);
-        const uint8_t* cm = cur_left.ptr<uint8_t>(y - 1);
-        const uint8_t* cp = cur_left.ptr<uint8_t>(y + 1);
-        for (int lx = bx; lx < x_end; lx += step) {
-          if (!m_row[lx]) continue;
-          const double d = d_row[lx];
-          if (!(d > 0.5)) continue;
-          const int x = lx + origin.x;
-          if (x < 1 || x >= w - 1) continue;
-          const double gx = 0.5 * (c0[x + 1] - c0[x - 1]), gy = 0.5 * (cp[x] - cm[x]);
-          if (std::sqrt(gx * gx + gy * gy) < config.min_gradient) continue;
-          // The object hypothesis: every shift must stay inside the previous image.
-          const int ox = x - mx, oy = y - my;
-          if (ox - r < 0 || oy - r < 0 || ox + r >= w || oy + r >= h) continue;
-          double u, v;
-          if (!warp.at(x, y, d, u, v, kMinDepthM)) continue;
-          if (!(u >= 0 && v >= 0 && u < w - 1 && v < h - 1)) continue;
-          const auto k = static_cast<std::size_t>(n);
-          value[k] = c0[x];
-          d_static[k] = value[k] - bilinear_u8(prev_left, u, v);
-          object_px[k] = cv::Point(ox, oy);
-          ++n;
-        }
-      }
-      if (n < config.min_samples) continue;
+      const cv::Rect block(bx, by, std::min(bx + B, box.br().x) - bx, std::min(by + B, box.br().y) - by);
+      sample_block(cur_left, prev_left, warp, outline, disparity_px, origin, block, motion_px, config, samples);
+      if (samples.n < config.min_samples) continue;
       ++stats.blocks_tested;
-      const double e_static = spread(d_static.data(), n);
+      const double e_static = spread(samples.d_static.data(), samples.n);
       if (e_static > config.max_static_error_dn) continue;
-      // Static when every shift of the object's motion fits worse than this (stops at the first that fits).
+      // Static when every shift of the object's motion fits worse than this.
       const double e_needed = std::max(config.min_object_error_dn, e_static / config.max_static_ratio);
-      bool object_fits = false;
-      for (int dy = -r; dy <= r && !object_fits; ++dy) {
-        for (int dx = -r; dx <= r && !object_fits; ++dx) {
-          for (int i = 0; i < n; ++i) {
-            const cv::Point q = object_px[static_cast<std::size_t>(i)];
-            d_object[static_cast<std::size_t>(i)] = value[static_cast<std::size_t>(i)] - prev_left.ptr<uint8_t>(q.y + dy)[q.x + dx];
-          }
-          object_fits = spread(d_object.data(), n) < e_needed;
-        }
-      }
-      if (object_fits) continue;
+      if (object_motion_fits(prev_left, config.search_px, e_needed, samples)) continue;
       ++stats.blocks_static;
-      removed(cv::Rect(bx, by, x_end - bx, y_end - by)).setTo(255);
+      removed(block).setTo(255);
       any_static = true;
     }
   }
   if (!any_static) return stats;
   const int before = cv::countNonZero(outline);
   outline.setTo(0, removed);
-  // The connected parts holding an object point stay.
-  cv::Mat labels;
-  const int n_labels = cv::connectedComponents(outline, labels, 8, CV_32S);
-  std::vector<uint8_t> keep(static_cast<std::size_t>(n_labels), 0);
-  const int rad = config.seed_radius_px;
-  for (const cv::Point2f& p : object_points) {
-    const int cx = cvRound(p.x) - origin.x, cy = cvRound(p.y) - origin.y;
-    for (int y = std::max(0, cy - rad); y <= std::min(outline.rows - 1, cy + rad); ++y) {
-      const int* l = labels.ptr<int>(y);
-      for (int x = std::max(0, cx - rad); x <= std::min(outline.cols - 1, cx + rad); ++x) {
-        if (l[x] > 0) keep[static_cast<std::size_t>(l[x])] = 1;
-      }
-    }
-  }
-  for (int y = 0; y < outline.rows; ++y) {
-    uint8_t* o = outline.ptr<uint8_t>(y);
-    const int* l = labels.ptr<int>(y);
-    for (int x = 0; x < outline.cols; ++x) {
-      if (o[x] && !keep[static_cast<std::size_t>(l[x])]) o[x] = 0;
-    }
-  }
+  keep_parts_with_object_points(outline, object_points, origin, config.seed_radius_px);  // the parts that stay
   stats.pixels_removed = before - cv::countNonZero(outline);
   return stats;
 }

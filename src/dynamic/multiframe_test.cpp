@@ -2,64 +2,9 @@
 
 #include <algorithm>
 #include <cmath>
-#include <cstdio>
 #include <opencv2/video/tracking.hpp>
 
-#include "agvslam/core/error.h"
-
 namespace agvslam::dynamic {
-
-void MultiFrameTestConfig::validate(const std::string& source) const {
-  auto require = [&](bool ok, const char* field, const char* expected) {
-    if (!ok) throw InputError(source, std::string("multiframe.") + field, expected);
-  };
-  require(max_frames >= 2 && max_frames <= 120, "max_frames", "expected an integer in [2, 120]");
-  require(min_frames >= 1 && min_frames <= max_frames, "min_frames", "expected an integer in [1, max_frames]");
-  require(min_translation_m >= 0 && min_translation_m <= 10, "min_translation_m", "expected a number in [0, 10] m");
-  require(max_rotation_deg > 0 && max_rotation_deg <= 90, "max_rotation_deg", "expected a number in (0, 90] deg");
-  require(min_points >= 6 && min_points <= 10000, "min_points", "expected an integer in [6, 10000]");
-  require(min_disparity_px > 0 && min_disparity_px <= 100, "min_disparity_px", "expected a number in (0, 100] px");
-  require(ransac_reprojection_px > 0 && ransac_reprojection_px <= 20, "ransac_reprojection_px",
-          "expected a number in (0, 20] px");
-  require(a_reproj_px > 0 && a_reproj_px <= 50, "a_reproj_px", "expected a number in (0, 50] px");
-  require(b_reproj >= 0 && b_reproj <= 1, "b_reproj", "expected a number in [0, 1]");
-  require(a_disp_px > 0 && a_disp_px <= 50, "a_disp_px", "expected a number in (0, 50] px");
-  require(b_disp >= 0 && b_disp <= 1, "b_disp", "expected a number in [0, 1]");
-  require(adaptive_k > 0 && adaptive_k <= 20, "adaptive_k", "expected a number in (0, 20]");
-  require(max_scale >= 1 && max_scale <= 100, "max_scale", "expected a number in [1, 100]");
-  require(verify_levels >= 0 && verify_levels <= 6, "verify_levels", "expected an integer in [0, 6]");
-  require(verify_fb_px > 0 && verify_fb_px <= 20, "verify_fb_px", "expected a number in (0, 20] px");
-  require(verify_max_shift_px >= 0 && verify_max_shift_px <= 20, "verify_max_shift_px", "expected a number in [0, 20] px");
-  require(edge_check_px >= 0 && edge_check_px <= 50, "edge_check_px", "expected an integer in [0, 50] px");
-  require(edge_tolerance_px >= 0 && edge_tolerance_px <= 100, "edge_tolerance_px", "expected a number in [0, 100] px");
-  require(edge_tolerance_rel >= 0 && edge_tolerance_rel <= 10, "edge_tolerance_rel", "expected a number in [0, 10]");
-  require(check_half_window >= 0 && check_half_window <= 20, "check_half_window", "expected an integer in [0, 20]");
-  require(check_uniqueness_margin >= 0 && check_uniqueness_margin <= 10, "check_uniqueness_margin",
-          "expected a number in [0, 10]");
-  require(aperture_ratio >= 0 && aperture_ratio < 1, "aperture_ratio", "expected a number in [0, 1)");
-  require(chain_stereo_factor >= 1 && chain_stereo_factor <= 20, "chain_stereo_factor", "expected a number in [1, 20]");
-  require(prior_min_inlier_fraction >= 0 && prior_min_inlier_fraction <= 1, "prior_min_inlier_fraction",
-          "expected a fraction in [0, 1] (0: always RANSAC)");
-}
-
-std::string MultiFrameTestConfig::describe() const {
-  char buf[900];
-  std::snprintf(buf, sizeof(buf),
-                "multiframe: %s; reference %d..%d frames back, the newest >= %.2f m away, rotation <= %.1f deg, >= %d "
-                "tracks with d >= %.1f px in both; PnP %.2f px; dynamic if offset > %.2f + %.3f d px or disparity "
-                "residual > %.2f + %.3f d px (adaptive k %.1f, <= %.1fx); verified by LK into the reference (%d levels, "
-                "fb <= %.2f px, same point within %.2f px); not at depth edges (disparity %d px away within %.2f + "
-                "%.3f d px); disparity confirmed with a %dx%d window, uniqueness %.2f; aperture ratio %.2f; histories "
-                "chained on %s (tracks the per-frame test flagged need %.1fx the thresholds); the chained motion's "
-                "inliers replace RANSAC when >= %.0f %% of the tracks (0: never)",
-                enabled ? "on" : "off", min_frames, max_frames, min_translation_m, max_rotation_deg, min_points,
-                min_disparity_px, ransac_reprojection_px, a_reproj_px, b_reproj, a_disp_px, b_disp, adaptive_k, max_scale,
-                verify_levels, verify_fb_px, verify_max_shift_px, edge_check_px, edge_tolerance_px, edge_tolerance_rel,
-                2 * check_half_window + 1, 2 * check_half_window + 1, check_uniqueness_margin, aperture_ratio,
-                chain_stereo_only ? "stereo" : "the per-frame depth test", chain_stereo_factor,
-                100 * prior_min_inlier_fraction);
-  return buf;
-}
 
 // ---- TrackHistory --------------------------------------------------------------------------------------------
 

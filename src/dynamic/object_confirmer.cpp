@@ -1,10 +1,7 @@
 #include "agvslam/dynamic/object_confirmer.h"
 
 #include <algorithm>
-#include <cstdio>
 #include <opencv2/core.hpp>
-
-#include "agvslam/core/error.h"
 
 namespace agvslam::dynamic {
 
@@ -12,30 +9,6 @@ bool ConfirmOptions::near_moving(double roi_disparity_px, double median_offset_p
                                  int roi_area_px) const {
   return near_min_px > 0 && roi_disparity_px >= near_min_disparity_px && median_offset_px >= near_min_offset_px &&
          static_cast<double>(box_area_px) >= near_min_roi_fill * roi_area_px;
-}
-
-void ConfirmOptions::validate(const std::string& source) const {
-  auto require = [&](bool ok, const char* field, const char* expected) {
-    if (!ok) throw InputError(source, std::string("confirm.") + field, expected);
-  };
-  require(min_box_iou >= 0 && min_box_iou <= 1, "min_box_iou", "expected a number in [0, 1] (0: off)");
-  require(below_px >= 0, "below_px", "expected an integer >= 0 px (0: every object waits)");
-  require(near_min_disparity_px >= 0 && near_min_disparity_px <= 1024, "near_min_disparity_px",
-          "expected a number in [0, 1024] px");
-  require(near_min_offset_px >= 0 && near_min_offset_px <= 1000, "near_min_offset_px", "expected a number in [0, 1000] px");
-  require(near_min_px >= 0, "near_min_px", "expected an integer >= 0 px (0: off)");
-  require(near_min_roi_fill >= 0 && near_min_roi_fill <= 1, "near_min_roi_fill", "expected a number in [0, 1]");
-}
-
-std::string ConfirmOptions::describe() const {
-  char buf[400];
-  std::snprintf(buf, sizeof(buf),
-                "confirm: objects reported when their box overlaps one of the previous frame by IoU >= %.2f (0: always) "
-                "or they hold >= %d px (0: none) or, near (points' disparity >= %.1f px), >= %d px (0: none) with "
-                "their tracks' median offset >= %.2f px, their box filling >= %.2f of the ROI and not half inside "
-                "another object's",
-                min_box_iou, below_px, near_min_disparity_px, near_min_px, near_min_offset_px, near_min_roi_fill);
-  return buf;
 }
 
 bool lies_half_inside_another(const std::vector<cv::Rect>& boxes, std::size_t k) {

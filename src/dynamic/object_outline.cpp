@@ -2,65 +2,11 @@
 
 #include <algorithm>
 #include <cmath>
-#include <cstdio>
 #include <opencv2/imgproc.hpp>
 
-#include "agvslam/core/error.h"
 #include "agvslam/dynamic/median.h"
 
 namespace agvslam::dynamic {
-
-void OutlineConfig::validate(const std::string& source) const {
-  auto require = [&](bool ok, const char* field, const char* expected) {
-    if (!ok) throw InputError(source, std::string("outline.") + field, expected);
-  };
-  require(seed_radius_px >= 0 && seed_radius_px <= 50, "seed_radius_px", "expected an integer in [0, 50] px");
-  require(seed_tolerance_px > 0 && seed_tolerance_px <= 100, "seed_tolerance_px", "expected a number in (0, 100] px");
-  require(seed_tolerance_rel >= 0 && seed_tolerance_rel <= 10, "seed_tolerance_rel", "expected a number in [0, 10]");
-  require(step_tolerance_px > 0 && step_tolerance_px <= 100, "step_tolerance_px", "expected a number in (0, 100] px");
-  require(step_tolerance_rel >= 0 && step_tolerance_rel <= 10, "step_tolerance_rel", "expected a number in [0, 10]");
-  require(depth_band_m > 0 && depth_band_m <= 100, "depth_band_m", "expected a number in (0, 100] m");
-  require(ground_tolerance_px >= 0 && ground_tolerance_px <= 100, "ground_tolerance_px", "expected a number in [0, 100] px");
-  require(ground_tolerance_rel >= 0 && ground_tolerance_rel <= 10, "ground_tolerance_rel", "expected a number in [0, 10]");
-  require(max_hole_invalid_fraction >= 0 && max_hole_invalid_fraction <= 1, "max_hole_invalid_fraction",
-          "expected a number in [0, 1]");
-  require(min_hole_fill_px >= 0 && min_hole_fill_px <= 1000000, "min_hole_fill_px", "expected an integer in [0, 1000000] px");
-  require(erode_px >= 0 && erode_px <= 10, "erode_px", "expected an integer in [0, 10] px");
-  require(min_pixels >= 0 && min_pixels <= 1000000, "min_pixels", "expected an integer in [0, 1000000] px");
-  require(min_dynamic_fraction >= 0 && min_dynamic_fraction <= 1, "min_dynamic_fraction", "expected a number in [0, 1]");
-  require(max_height_m >= 0 && max_height_m <= 100, "max_height_m", "expected a number in [0, 100] m");
-  require(close_far_m >= 0 && close_far_m <= 2, "close_far_m", "expected a size in [0, 2] m (0: off)");
-  require(close_max_disparity_px >= 0 && close_max_disparity_px <= 500, "close_max_disparity_px",
-          "expected a disparity in [0, 500] px");
-  require(left_band_touch_px >= -1 && left_band_touch_px <= 100, "left_band_touch_px",
-          "expected an integer in [-1, 100] px (-1: off)");
-  require(min_tracked_for_fraction >= 1 && min_tracked_for_fraction <= 100000, "min_tracked_for_fraction",
-          "expected an integer in [1, 100000]");
-  require(aggregate_min_tracks >= 0 && aggregate_min_tracks <= 10000, "aggregate_min_tracks",
-          "expected an integer in [0, 10000] (0: off)");
-  require(aggregate_ratio >= 0 && aggregate_ratio <= 1000, "aggregate_ratio", "expected a number in [0, 1000] (0: off)");
-  require(aggregate_min_px >= 0 && aggregate_min_px <= 100, "aggregate_min_px", "expected a number in [0, 100] px");
-  require(aggregate_multiframe_fraction >= 0 && aggregate_multiframe_fraction <= 1, "aggregate_multiframe_fraction",
-          "expected a number in [0, 1] (0: off)");
-  require(aggregate_multiframe_min_px >= 0 && aggregate_multiframe_min_px <= 100, "aggregate_multiframe_min_px",
-          "expected a number in [0, 100] px");
-}
-
-std::string OutlineConfig::describe() const {
-  char buf[1400];
-  std::snprintf(buf, sizeof(buf),
-                "outline: seeds within %d px agreeing to %.2f + %.3f d px; flood steps <= %.2f + %.3f d px within "
-                "%.2f m of the seed's depth; floor within %.2f + %.3f d px of the ground plane; static competition %s; "
-                "enclosed parts join when >= %.0f %% without disparity or < %d px; eroded by %d px; kept when >= %d px "
-                "and (< %d tracks inside or >= %.0f %% of them dynamic or their median offset >= %.2f px and %.1fx the "
-                "static tracks', 0: off; or >= %.0f %% of those the multi-frame test measured flagged by it and median offset >= %.2f px, 0: off; an outline with >= %d such tracks must always move so, 0: off) and <= %.1f m tall; far ones (d <= %.1f px) closed "
-                "over %.2f m; rows within %d px of the unmatched left band filled to the border (-1: off)",
-                seed_radius_px, seed_tolerance_px, seed_tolerance_rel, step_tolerance_px, step_tolerance_rel, depth_band_m,
-                ground_tolerance_px, ground_tolerance_rel, static_competition ? "on" : "off",
-                100 * max_hole_invalid_fraction, min_hole_fill_px, erode_px, min_pixels, min_tracked_for_fraction,
-                100 * min_dynamic_fraction, aggregate_min_px, aggregate_ratio, 100 * aggregate_multiframe_fraction, aggregate_multiframe_min_px, aggregate_min_tracks, max_height_m, close_max_disparity_px, close_far_m, left_band_touch_px);
-  return buf;
-}
 
 bool tracks_move_together(double median_offset_px, double static_median_px, const OutlineConfig& config) {
   if (!(config.aggregate_ratio > 0) || median_offset_px < 0) return false;

@@ -2,10 +2,8 @@
 
 #include <algorithm>
 #include <cmath>
-#include <cstdio>
 #include <opencv2/imgproc.hpp>
 
-#include "agvslam/core/error.h"
 #include "agvslam/dynamic/median.h"
 
 namespace agvslam::dynamic {
@@ -19,33 +17,6 @@ auto find_object(Entries& entries, int id) {
   return it != entries.end() && it->first == id ? it : entries.end();
 }
 }  // namespace
-
-void ObjectTrackerOptions::validate(const std::string& source) const {
-  auto require = [&](bool ok, const char* field, const char* expected) {
-    if (!ok) throw InputError(source, std::string("objects.") + field, expected);
-  };
-  require(continue_min_points >= 1 && continue_min_points <= 1000, "continue_min_points", "expected an integer in [1, 1000]");
-  require(coast_max_frames >= 0 && coast_max_frames <= 100, "coast_max_frames", "expected an integer in [0, 100] frames");
-  require(coast_min_detections >= 1 && coast_min_detections <= 1000, "coast_min_detections",
-          "expected an integer in [1, 1000] frames");
-  require(coast_min_tracks >= 1 && coast_min_tracks <= 1000, "coast_min_tracks", "expected an integer in [1, 1000]");
-  require(coast_min_area_ratio >= 0 && coast_min_area_ratio <= 1, "coast_min_area_ratio", "expected a number in [0, 1]");
-  require(growth_max_ratio == 0 || (growth_max_ratio >= 1 && growth_max_ratio <= 100), "growth_max_ratio",
-          "expected 0 (off) or a number in [1, 100]");
-  require(growth_margin >= 0 && growth_margin <= 2, "growth_margin", "expected a number in [0, 2]");
-}
-
-std::string ObjectTrackerOptions::describe() const {
-  if (!enabled) return "objects: off";
-  char buf[400];
-  std::snprintf(buf, sizeof(buf),
-                "objects: >= %d points continue one; after >= %d detections it coasts <= %d frames on >= %d tracks, "
-                ">= %.2f of its area; an outline grown > %.2fx in a frame is cut to its last pixels + %.2f of its size "
-                "(0: off)",
-                continue_min_points, coast_min_detections, coast_max_frames, coast_min_tracks, coast_min_area_ratio,
-                growth_max_ratio, growth_margin);
-  return buf;
-}
 
 int cut_to_moved_pixels(cv::Mat& outline, cv::Point outline_origin, const cv::Mat& last_pixels, cv::Point last_origin,
                         cv::Point shift_px, cv::Size grow_px) {

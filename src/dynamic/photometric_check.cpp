@@ -1,9 +1,7 @@
 #include "agvslam/dynamic/photometric_check.h"
 
 #include <cmath>
-#include <cstdio>
 
-#include "agvslam/core/error.h"
 #include "agvslam/dynamic/bilinear.h"
 #include "agvslam/dynamic/static_warp.h"
 
@@ -13,31 +11,6 @@ namespace {
 constexpr double kMinDepthM = 0.1;  // a warped point nearer than this to the earlier camera is not sampled
 
 }  // namespace
-
-void PhotometricCheckConfig::validate(const std::string& source) const {
-  auto require = [&](bool ok, const char* field, const char* expected) {
-    if (!ok) throw InputError(source, std::string("photometric.") + field, expected);
-  };
-  require(max_motion_px > 0 && max_motion_px <= 20, "max_motion_px", "expected a number in (0, 20] px");
-  require(min_gradient >= 0 && min_gradient <= 255, "min_gradient", "expected a number in [0, 255] grey levels/px");
-  require(sample_step_px >= 1 && sample_step_px <= 16, "sample_step_px", "expected an integer in [1, 16]");
-  require(min_samples >= 3 && min_samples <= 100000, "min_samples", "expected an integer in [3, 100000]");
-  require(multiframe_max_motion_px > 0 && multiframe_max_motion_px <= 20, "multiframe_max_motion_px",
-          "expected a number in (0, 20] px");
-  require(multiframe_min_disparity_px >= 0 && multiframe_min_disparity_px <= 1000, "multiframe_min_disparity_px",
-          "expected a number in [0, 1000] px");
-  require(region_inset_px >= 0 && region_inset_px <= 20, "region_inset_px", "expected an integer in [0, 20] px");
-}
-
-std::string PhotometricCheckConfig::describe() const {
-  char buf[420];
-  std::snprintf(buf, sizeof(buf),
-                "photometric: %s, static when apparent motion <= %.2f px (multi-frame reference %.2f px, consulted for "
-                "regions with d >= %.1f px) with gradient >= %.1f /px, every %d px, >= %d samples, regions sampled %d px inside",
-                enabled ? "on" : "off", max_motion_px, multiframe_max_motion_px, multiframe_min_disparity_px, min_gradient, sample_step_px,
-                min_samples, region_inset_px);
-  return buf;
-}
 
 void check_superpixel_motion(const cv::Mat& cur_left, const cv::Mat& prev_left, const PinholeCamera& camera,
                              double bf_px_m, const SE3d& T_cur_prev, const cv::Mat& labels, cv::Point origin,

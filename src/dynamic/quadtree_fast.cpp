@@ -2,31 +2,9 @@
 
 #include <algorithm>
 #include <cmath>
-#include <cstdio>
 #include <opencv2/features2d.hpp>
 
-#include "agvslam/core/error.h"
-
 namespace agvslam::dynamic {
-
-void QuadtreeFastConfig::validate(const std::string& source) const {
-  auto require = [&](bool ok, const char* field, const char* expected) {
-    if (!ok) throw InputError(source, std::string("features.") + field, expected);
-  };
-  require(target_count >= 8 && target_count <= 20000, "target_count", "expected an integer in [8, 20000]");
-  require(cell_size_px >= 8 && cell_size_px <= 512, "cell_size_px", "expected an integer in [8, 512] px");
-  require(threshold >= 1 && threshold <= 255, "threshold", "expected an integer in [1, 255] grey levels");
-  require(min_threshold >= 1 && min_threshold <= threshold, "min_threshold",
-          "expected an integer in [1, threshold] grey levels");
-  require(border_px >= 3 && border_px <= 256, "border_px", "expected an integer in [3, 256] px");
-}
-
-std::string QuadtreeFastConfig::describe() const {
-  char buf[200];
-  std::snprintf(buf, sizeof(buf), "features: quadtree FAST, N = %d, cells %d px, threshold %d (fallback %d), border %d px",
-                target_count, cell_size_px, threshold, min_threshold, border_px);
-  return buf;
-}
 
 namespace {
 

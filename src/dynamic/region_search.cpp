@@ -2,67 +2,9 @@
 
 #include <algorithm>
 #include <cmath>
-#include <cstdio>
 #include <opencv2/imgproc.hpp>
 
-#include "agvslam/core/error.h"
-
 namespace agvslam::dynamic {
-
-std::string to_string(MaskMode mode) {
-  switch (mode) {
-    case MaskMode::kRectangle: return "rectangle";
-    case MaskMode::kSuperpixels: return "superpixels";
-    case MaskMode::kDisparity: return "disparity";
-  }
-  return "unknown";
-}
-
-bool parse_mask_mode(const std::string& text, MaskMode& mode) {
-  if (text == "rectangle") {
-    mode = MaskMode::kRectangle;
-    return true;
-  }
-  if (text == "superpixels") {
-    mode = MaskMode::kSuperpixels;
-    return true;
-  }
-  if (text == "disparity") {
-    mode = MaskMode::kDisparity;
-    return true;
-  }
-  return false;
-}
-
-void RegionSearchConfig::validate(const std::string& source) const {
-  auto require = [&](bool ok, const char* field, const char* expected) {
-    if (!ok) throw InputError(source, std::string("regions.") + field, expected);
-  };
-  require(start_radius_px >= 0 && start_radius_px <= 50, "start_radius_px", "expected an integer in [0, 50] px");
-  require(start_tolerance_px > 0 && start_tolerance_px <= 100, "start_tolerance_px", "expected a number in (0, 100] px");
-  require(start_tolerance_rel >= 0 && start_tolerance_rel <= 10, "start_tolerance_rel", "expected a number in [0, 10]");
-  require(band_tolerance_px >= 0 && band_tolerance_px <= 100, "band_tolerance_px", "expected a number in [0, 100] px");
-  require(band_tolerance_rel >= 0 && band_tolerance_rel <= 10, "band_tolerance_rel", "expected a number in [0, 10]");
-  require(ground_tolerance_px >= 0 && ground_tolerance_px <= 100, "ground_tolerance_px", "expected a number in [0, 100] px");
-  require(ground_tolerance_rel >= 0 && ground_tolerance_rel <= 10, "ground_tolerance_rel", "expected a number in [0, 10]");
-  require(ground_slope_tolerance >= 0 && ground_slope_tolerance <= 10, "ground_slope_tolerance",
-          "expected a number in [0, 10]");
-}
-
-std::string RegionSearchConfig::describe() const {
-  char buf[512];
-  char band[80] = "off";
-  if (disparity_band) std::snprintf(band, sizeof(band), "+-(%.2f + %.3f d) px", band_tolerance_px, band_tolerance_rel);
-  std::snprintf(buf, sizeof(buf),
-                "regions: start superpixel within %d px agreeing to %.2f + %.2f d px, unknown boundaries %s, "
-                "disparity band %s (local %s), static veto %s, ground veto %s (%.2f + %.3f d px, slope +-%.0f %%), planeless "
-                "superpixels %s, mask = %s",
-                start_radius_px, start_tolerance_px, start_tolerance_rel, stop_at_unknown ? "stop" : "pass", band,
-                local_band ? "on" : "off", static_veto ? "on" : "off", ground_veto ? "on" : "off", ground_tolerance_px, ground_tolerance_rel,
-                100 * ground_slope_tolerance, enclosed_unknown_only ? "only when enclosed" : "always",
-                to_string(mask_mode).c_str());
-  return buf;
-}
 
 namespace {
 bool stops(const SuperpixelGraph& graph, int a, int b, bool stop_at_unknown) {
@@ -516,6 +458,5 @@ int label_region_objects(const cv::Mat& region_mask, bool split_side_by_side, in
   }
   return next;
 }
-
 
 }  // namespace agvslam::dynamic

@@ -2,37 +2,9 @@
 
 #include <algorithm>
 #include <cmath>
-#include <cstdio>
 #include <numeric>
 
-#include "agvslam/core/error.h"
-
 namespace agvslam::dynamic {
-
-void RoiGroupingConfig::validate(const std::string& source) const {
-  auto require = [&](bool ok, const char* field, const char* expected) {
-    if (!ok) throw InputError(source, std::string("grouping.") + field, expected);
-  };
-  require(a_s_px > 0 && a_s_px <= 2000, "a_s_px", "expected a number in (0, 2000] px");
-  require(b_s >= 0 && b_s <= 100, "b_s", "expected a number in [0, 100]");
-  require(t_disp_px >= 0 && t_disp_px <= 500, "t_disp_px", "expected a number in [0, 500] px");
-  require(t_disp_rel >= 0 && t_disp_rel <= 10, "t_disp_rel", "expected a number in [0, 10]");
-  require(min_points >= 1 && min_points <= 1000, "min_points", "expected an integer in [1, 1000]");
-  require(margin_px >= 0 && margin_px <= 1000, "margin_px", "expected an integer in [0, 1000] px");
-  require(margin_disparity_factor >= 0 && margin_disparity_factor <= 100, "margin_disparity_factor",
-          "expected a number in [0, 100]");
-  require(merge_side_gap_m >= 0 && merge_side_gap_m <= 5, "merge_side_gap_m", "expected a distance in [0, 5] m (0: off)");
-}
-
-std::string RoiGroupingConfig::describe() const {
-  char buf[384];
-  std::snprintf(buf, sizeof(buf),
-                "grouping: T_s = %.1f + %.2f d px, T_disp = %.2f + %.3f d px, ROI when >= %d points, margin %d + %.2f d px, "
-                "overlapping groups %s, side by side within %.2f m merged",
-                a_s_px, b_s, t_disp_px, t_disp_rel, min_points, margin_px, margin_disparity_factor,
-                merge_overlapping ? "merged" : "kept apart", merge_overlapping ? merge_side_gap_m : 0.0);
-  return buf;
-}
 
 namespace {
 int find_root(std::vector<int>& parent, int i) {

@@ -4,10 +4,8 @@
 #include <algorithm>
 #include <chrono>
 #include <cmath>
-#include <cstdio>
 #include <opencv2/imgproc.hpp>
 
-#include "agvslam/core/error.h"
 #include "agvslam/dynamic/median.h"
 
 namespace agvslam::dynamic {
@@ -34,44 +32,6 @@ SlicConfig halved(const SlicConfig& slic) {
   return half;
 }
 }  // namespace
-
-void RoiOptions::validate(const std::string& source) const {
-  auto require = [&](bool ok, const char* field, const char* expected) {
-    if (!ok) throw InputError(source, std::string("roi.") + field, expected);
-  };
-  require(disparity_margin_px >= 0 && disparity_margin_px <= 1024, "disparity_margin_px",
-          "expected a number in [0, 1024] px (a large value searches the whole configured range)");
-  require(scale == 1.0 || scale == 0.5, "scale", "expected 1 or 0.5");
-  require(row_step == 1 || row_step == 2, "row_step", "expected 1 or 2 (rows per matched row)");
-  require(row_step_min_area_px >= 0, "row_step_min_area_px", "expected an integer >= 0 px");
-  require(half_scale_min_area_px >= 0, "half_scale_min_area_px", "expected an integer >= 0 px");
-  require(half_scale_erode_px >= 0 && half_scale_erode_px <= 10, "half_scale_erode_px", "expected an integer in [0, 10] px");
-  require(extend_to_height_m >= 0 && extend_to_height_m <= 20, "extend_to_height_m", "expected a number in [0, 20] m");
-  require(extend_max_rounds >= 0 && extend_max_rounds <= 100, "extend_max_rounds",
-          "expected an integer in [0, 100] (0: off)");
-  require(extend_min_rows >= 1 && extend_min_rows <= 10000, "extend_min_rows", "expected an integer in [1, 10000]");
-  require(extend_step_m > 0 && extend_step_m <= 100, "extend_step_m", "expected a number in (0, 100] m");
-  require(extend_static_guard_px >= 0 && extend_static_guard_px <= 10000, "extend_static_guard_px",
-          "expected an integer in [0, 10000] px (0: off)");
-}
-
-std::string RoiOptions::describe() const {
-  char widen_text[200] = "off";
-  if (extend_max_rounds > 0) {
-    std::snprintf(widen_text, sizeof(widen_text),
-                  "<= %d times by %.2f m when the outline reaches a side over >= %d rows without a static track within %d px",
-                  extend_max_rounds, extend_step_m, extend_min_rows, extend_static_guard_px);
-  }
-  char buf[700];
-  std::snprintf(buf, sizeof(buf),
-                "roi: searched up to max point disparity + %.1f px at scale %.1f, %d row(s) per matched row for ROIs "
-                ">= %d px (half scale above %d px, 0 = never, eroded %d px more), speckle filter %s, left border "
-                "padded %s, extended to the floor %s and %.2f m above it, widened %s",
-                disparity_margin_px, scale, row_step, row_step_min_area_px, half_scale_min_area_px, half_scale_erode_px,
-                speckle_filter ? "on" : "off", pad_left_border ? "on" : "off", extend_to_floor ? "on" : "off",
-                extend_to_height_m, widen_text);
-  return buf;
-}
 
 RoiOutliner::RoiOutliner(const RoiOptions& options, const RoiOutlinerContext& context,
                          const StereoCalibration& calibration, const stereo::SgbmConfig& sgbm)

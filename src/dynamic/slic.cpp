@@ -2,36 +2,10 @@
 
 #include <algorithm>
 #include <cmath>
-#include <cstdio>
 #include <cstring>
 #include <limits>
 
-#include "agvslam/core/error.h"
-
 namespace agvslam::dynamic {
-
-void SlicConfig::validate(const std::string& source) const {
-  auto require = [&](bool ok, const char* field, const char* expected) {
-    if (!ok) throw InputError(source, std::string("slic.") + field, expected);
-  };
-  require(superpixel_size_px >= 3 && superpixel_size_px <= 200, "superpixel_size_px", "expected an integer in [3, 200] px");
-  require(max_superpixels >= 1 && max_superpixels <= 100000, "max_superpixels", "expected an integer in [1, 100000]");
-  require(max_color_distance > 0 && max_color_distance <= 255, "max_color_distance",
-          "expected a number in (0, 255] grey levels");
-  require(iterations >= 1 && iterations <= 100, "iterations", "expected an integer in [1, 100]");
-  require(min_change_fraction >= 0 && min_change_fraction < 1, "min_change_fraction", "expected a number in [0, 1)");
-  require(min_segment_fraction >= 0 && min_segment_fraction <= 1, "min_segment_fraction", "expected a number in [0, 1]");
-}
-
-std::string SlicConfig::describe() const {
-  char buf[240];
-  std::snprintf(buf, sizeof(buf),
-                "slic: %s, S = %d px (at most %d per ROI), N_c = %.1f grey levels, <= %d iterations (until < %.1f %% "
-                "change), fragments < %.2f S^2 merged",
-                incremental ? "incremental (unstable pixels only)" : "plain", superpixel_size_px, max_superpixels,
-                max_color_distance, iterations, 100 * min_change_fraction, min_segment_fraction);
-  return buf;
-}
 
 Slic::Slic(const SlicConfig& config) : config_(config) { config_.validate("SlicConfig"); }
 

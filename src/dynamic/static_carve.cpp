@@ -3,33 +3,10 @@
 #include <algorithm>
 #include <cmath>
 #include <cstdint>
-#include <cstdio>
 #include <limits>
 #include <opencv2/imgproc.hpp>
 
-#include "agvslam/core/error.h"
-
 namespace agvslam::dynamic {
-
-void StaticCarveOptions::validate(const std::string& source) const {
-  auto require = [&](bool ok, const char* field, const char* expected) {
-    if (!ok) throw InputError(source, std::string("static_carve.") + field, expected);
-  };
-  require(min_tracks >= 0 && min_tracks <= 1000, "min_tracks", "expected an integer in [0, 1000] (0: off)");
-  require(max_offset_px >= 0 && max_offset_px <= 100, "max_offset_px", "expected a number in [0, 100] px");
-  require(max_multiframe_px >= 0 && max_multiframe_px <= 100, "max_multiframe_px", "expected a number in [0, 100] px");
-  require(min_distance_px >= 0 && min_distance_px <= 1000, "min_distance_px", "expected a number in [0, 1000] px");
-}
-
-std::string StaticCarveOptions::describe() const {
-  if (min_tracks <= 0) return "static_carve: off";
-  char buf[240];
-  std::snprintf(buf, sizeof(buf),
-                "static_carve: an outline holding >= %d static tracks (offset <= %.2f px, multi-frame <= %.2f px, "
-                ">= %.0f px from its dynamic points) loses their cells",
-                min_tracks, max_offset_px, max_multiframe_px, min_distance_px);
-  return buf;
-}
 
 namespace {
 float squared_distance(cv::Point2f a, cv::Point2f b) {
@@ -63,7 +40,6 @@ float nearest_distance(const std::vector<cv::Point2f>& points, cv::Point2f c) {
   return std::sqrt(best);
 }
 }  // namespace
-
 
 namespace {
 constexpr int kBlock = 4;

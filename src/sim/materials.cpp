@@ -254,100 +254,35 @@ AGVSLAM_SIM_CLONES float box_albedo(Material material, uint8_t variant, const Fa
 
 AGVSLAM_SIM_CLONES float actor_albedo(const DynamicObject& obj, const DynamicPrimitive& prim, const V3& p, const V3& n, float axis_param,
                    float w) {
-  const PersonLook& look = obj.look;
-  if (prim.shape == PrimitiveShape::kBox) {
-    // Face coordinates in the box's own frame.
-    const V3 center = obj.to_local(prim.a);
-    const V3 q = p - center + prim.half;  // [0, 2 * half]
-    const V3 size = prim.half * 2.0f;
-    FaceSample f;
-    f.box_size = size;
-    f.footprint_m = w;
-    const float ax = std::fabs(n.x), ay = std::fabs(n.y), az = std::fabs(n.z);
-    int axis = 2;
-    if (ax >= ay && ax >= az) axis = 0;
-    else if (ay >= az) axis = 1;
-    const bool positive = n[axis] > 0;
-    f.face = axis * 2 + (positive ? 1 : 0);
-    if (axis == 2) {
-      f.u = q.x; f.v = q.y; f.su = size.x; f.sv = size.y;
-    } else if (axis == 0) {
-      f.u = q.y; f.v = q.z; f.su = size.y; f.sv = size.z;
-    } else {
-      f.u = q.x; f.v = q.z; f.su = size.x; f.sv = size.z;
-    }
-    f.seed = hash32(obj.seed + prim.part * 131U, static_cast<uint32_t>(f.face)) & ~7U;
-    f.seed |= static_cast<uint32_t>(f.face);
-    if (prim.material == Material::kPersonShirt) {
-      // Torso: handled below with the shirt pattern.
-    } else if (prim.material == Material::kVehicleBody) {
-      return vehicle_body(f, obj.cls == ActorClass::kAgv ? 0.58f : 0.72f, obj.cls == ActorClass::kAgv);
-    } else {
-      return box_albedo(prim.material, 0, f);
-    }
+  const bool person_part = prim.material == Material::kPersonShirt || prim.material == Material::kPersonTrousers ||
+                           prim.material == Material::kPersonSkin || prim.material == Material::kPersonHead;
+  if (person_part || (obj.cls == ActorClass::kPerson && prim.material == Material::kTyre))
+    return person_albedo(obj, prim, p, n, axis_param, w);
+  if (prim.shape != PrimitiveShape::kBox) return 0.5f;
+  // Face coordinates in the box's own frame.
+  const V3 center = obj.to_local(prim.a);
+  const V3 q = p - center + prim.half;  // [0, 2 * half]
+  const V3 size = prim.half * 2.0f;
+  FaceSample f;
+  f.box_size = size;
+  f.footprint_m = w;
+  const float ax = std::fabs(n.x), ay = std::fabs(n.y), az = std::fabs(n.z);
+  int axis = 2;
+  if (ax >= ay && ax >= az) axis = 0;
+  else if (ay >= az) axis = 1;
+  const bool positive = n[axis] > 0;
+  f.face = axis * 2 + (positive ? 1 : 0);
+  if (axis == 2) {
+    f.u = q.x; f.v = q.y; f.su = size.x; f.sv = size.y;
+  } else if (axis == 0) {
+    f.u = q.y; f.v = q.z; f.su = size.y; f.sv = size.z;
+  } else {
+    f.u = q.x; f.v = q.z; f.su = size.x; f.sv = size.z;
   }
-  const float h = look.height_m;
-  switch (prim.material) {
-    case Material::kPersonShirt: {
-      // Forearm ends are hands.
-      if (prim.part == 4 && axis_param > 0.78f) return look.skin_shade;
-      const float u = p.y + 0.6f * p.x, v = p.z;
-      float c = look.shirt_shade + 0.12f * fractal_noise(u, v, 0.12f, 4, 0.65f, w, obj.seed + 3U);
-      switch (look.shirt_pattern) {
-        case 1: c = lerp(c, c > 0.5f ? c - 0.35f : c + 0.35f, stripe_coverage(v, 0.09f, 0.04f, w)); break;
-        case 2: {
-          const float a = stripe_coverage(u, 0.1f, 0.05f, w), b = stripe_coverage(v, 0.1f, 0.05f, w);
-          c = lerp(c, c > 0.5f ? c - 0.3f : c + 0.3f, a + b - 2 * a * b);
-          break;
-        }
-        case 3:
-          if (prim.part == 0) {  // hi-vis vest over the torso, two reflective bands
-            c = 0.8f + 0.05f * fractal_noise(u, v, 0.1f, 3, 0.6f, w, obj.seed + 5U);
-            const float z0 = 0.56f * h, z1 = 0.68f * h;
-            const float band = interval_coverage(v, z0, z0 + 0.05f, w) + interval_coverage(v, z1, z1 + 0.05f, w);
-            c = lerp(c, 0.98f, band);
-            const float edges = stripe_coverage(v - z0 + 0.005f, z1 - z0, 0.01f, w) * interval_coverage(v, z0 - 0.02f, z1 + 0.07f, w);
-            c = lerp(c, 0.3f, edges);
-          }
-          break;
-        default: break;
-      }
-      if (prim.part == 0 && p.x < -0.05f) {  // print on the back
-        c = lerp(c, c > 0.5f ? 0.1f : 0.9f, text_coverage(p.y, p.z, -0.12f, 0.12f, 0.7f * h, 0.76f * h, 0.035f, w, obj.seed));
-      }
-      return std::clamp(c, 0.03f, 1.0f);
-    }
-    case Material::kPersonTrousers: {
-      float c = look.trousers_shade + 0.08f * fractal_noise(p.y + p.x, p.z, 0.12f, 3, 0.65f, w, obj.seed + 7U);
-      c += 0.04f * stripe_coverage(p.x + p.y + p.z, 0.01f, 0.005f, w);  // weave
-      if (prim.part == 5 && axis_param < 0.12f) c -= 0.05f;           // belt line
-      return std::clamp(c, 0.03f, 1.0f);
-    }
-    case Material::kPersonSkin: return look.skin_shade;
-    case Material::kPersonHead: {
-      const V3 c_local = obj.to_local(prim.a);
-      const V3 d = p - c_local;  // on the sphere
-      const float r = prim.radius;
-      float c = look.skin_shade + 0.04f * fractal_noise(d.y, d.z, 0.05f, 3, 0.6f, w, obj.seed + 9U);
-      if (look.helmet) {
-        const float cov = smoothstep(-0.1f * r - w, -0.1f * r + w, d.z);
-        c = lerp(c, 0.85f, cov);
-        c = lerp(c, 0.6f, interval_coverage(d.z, -0.15f * r, -0.05f * r, w));
-      } else {
-        // Hair: top and back of the head.
-        const float hair = std::max(smoothstep(0.15f * r - w, 0.15f * r + w, d.z),
-                                    smoothstep(-0.2f * r - w, -0.2f * r + w, -d.x) * smoothstep(-0.6f * r - w, -0.6f * r + w, d.z));
-        c = lerp(c, look.hair_shade, hair);
-      }
-      if (d.x > 0.5f * r) {  // eyes and mouth
-        c = lerp(c, 0.05f, rect_coverage(std::fabs(d.y), d.z, 0.25f * r, 0.5f * r, 0.02f * r, 0.18f * r, w));
-        c = lerp(c, c * 0.6f, rect_coverage(d.y, d.z, -0.25f * r, 0.25f * r, -0.5f * r, -0.42f * r, w));
-      }
-      return c;
-    }
-    case Material::kTyre: return 0.07f + 0.03f * fractal_noise(p.x, p.z, 0.05f, 3, 0.6f, w, obj.seed + 11U);
-    default: return 0.5f;
-  }
+  f.seed = hash32(obj.seed + prim.part * 131U, static_cast<uint32_t>(f.face)) & ~7U;
+  f.seed |= static_cast<uint32_t>(f.face);
+  if (prim.material == Material::kVehicleBody) return vehicle_body(f, obj.vehicle.body_shade, obj.cls == ActorClass::kAgv);
+  return box_albedo(prim.material, 0, f);
 }
 
 }  // namespace agvslam::sim

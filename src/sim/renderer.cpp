@@ -7,6 +7,7 @@
 
 #include "agvslam/core/parallel_for.h"
 #include "agvslam/sim/cpu_dispatch.h"
+#include "agvslam/sim/semantic_classes.h"
 #include "agvslam/sim/texture.h"
 
 namespace agvslam::sim {
@@ -33,6 +34,23 @@ int32_t surface_key(const RayHit& hit) {
     case RayHit::Kind::kDynamic: return static_cast<int32_t>(0x40000000 + hit.object * 65536 + hit.index * 8);
   }
   return 0;
+}
+
+// Semantic class of the surface hit (see semantic_classes.h).
+SemanticClass hit_class(const RayHit& hit, const std::vector<StaticBox>& boxes,
+                        const std::vector<DynamicObject>& objects) {
+  switch (hit.kind) {
+    case RayHit::Kind::kNone:
+    case RayHit::Kind::kCeiling: return SemanticClass::kBackground;
+    case RayHit::Kind::kFloor: return SemanticClass::kFloor;
+    case RayHit::Kind::kWall: return SemanticClass::kWall;
+    case RayHit::Kind::kBox: return static_box_class(boxes[static_cast<std::size_t>(hit.index)].material);
+    case RayHit::Kind::kDynamic: {
+      const DynamicObject& obj = objects[static_cast<std::size_t>(hit.object)];
+      return actor_part_class(obj.cls, obj.primitives[static_cast<std::size_t>(hit.index)].material);
+    }
+  }
+  return SemanticClass::kBackground;
 }
 
 // The hit on the box face with surface key `key` (>= 16) at ray parameter t.
@@ -583,7 +601,8 @@ std::vector<Renderer::BlobShadow> Renderer::blob_shadows(const std::vector<Dynam
   std::vector<BlobShadow> shadows;
   shadows.reserve(objects.size());
   for (const DynamicObject& obj : objects) {
-    // Radius 0.45 m (people), 1.3 m (forklifts, centred 0.3 m ahead of their origin), 0.75 m (AGVs).
+    // Radius 0.45 m (people), 1.3 m (forklifts, centred 0.3 m ahead of their origin), 0.75 m (AGVs, carts and
+    // pallets).
     const float inv_radius2 = obj.cls == ActorClass::kPerson
                                   ? 1.0f / (0.45f * 0.45f)
                                   : (obj.cls == ActorClass::kForklift ? 1.0f / (1.3f * 1.3f) : 1.0f / (0.75f * 0.75f));
@@ -693,6 +712,7 @@ void Renderer::render(const CameraIntrinsics& cam, const Eigen::Isometry3d& T_m_
   out.radiance.create(height, width, CV_32FC1);
   out.depth_m.create(height, width, CV_32FC1);
   out.object_id.create(height, width, CV_16UC1);
+  out.class_id.create(height, width, CV_8UC1);
   out.surface_key.create(height, width, CV_32SC1);
   out.edge.create(height, width, CV_8UC1);
 
@@ -838,6 +858,7 @@ AGVSLAM_SIM_CLONES void Renderer::render_row(const RenderPass& p, int v) const {
   float* radiance = out.radiance.ptr<float>(v);
   float* depth = out.depth_m.ptr<float>(v);
   uint16_t* ids = out.object_id.ptr<uint16_t>(v);
+  uint8_t* classes = out.class_id.ptr<uint8_t>(v);
   int32_t* keys = out.surface_key.ptr<int32_t>(v);
   const V3 row_dir = col_y * ((static_cast<float>(v) - cy) / fy) + col_z;
   // Columns of this row inside some object's screen rectangle: only there are rays cast against the actors.
@@ -867,6 +888,7 @@ AGVSLAM_SIM_CLONES void Renderer::render_row(const RenderPass& p, int v) const {
     ids[u] = hit.kind == RayHit::Kind::kDynamic
                  ? static_cast<uint16_t>(objects[static_cast<std::size_t>(hit.object)].id)
                  : static_cast<uint16_t>(0);
+    classes[u] = static_cast<uint8_t>(hit_class(hit, warehouse_.boxes, objects));
     keys[u] = surface_key(hit);
   }
   row_footprint_light_haze(width, col_x, row_dir, column_x, focal, s, row.t.data(), row.nx.data(),

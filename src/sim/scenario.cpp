@@ -8,19 +8,11 @@
 
 #include "agvslam/core/error.h"
 #include "agvslam/sim/random.h"
+#include "scenario_builder.h"
 
 namespace agvslam::sim {
-namespace {
 
-constexpr double kPi = 3.14159265358979323846;
-constexpr double kPersonCameraClearanceM = 1.0;   // person's surface to the camera (they come close, as in the paper)
-constexpr double kVehicleCameraClearanceM = 1.5;  // vehicle's surface to the camera
-constexpr double kActorClearanceM = 0.5;   // between actors
-constexpr double kCheckStepS = 0.05;
-
-double wrap_angle(double a) { return std::atan2(std::sin(a), std::cos(a)); }
-
-}  // namespace
+using namespace scenario_detail;
 
 // ---- Catalogue ------------------------------------------------------------------------------------------------
 
@@ -45,6 +37,22 @@ const std::vector<ScenarioInfo>& scenario_catalogue() {
        "AGV waits at a cross-aisle while a forklift crosses 1.6-2.4 m ahead, stopping in front of it (it fills most "
        "of the view), then drives the aisle; a person crosses ahead",
        24.0},
+      {"follow",
+       "AGV follows a tugger train or a loaded forklift 2.6-3.3 m ahead down the main aisle, keeping right; both stop "
+       "at its end",
+       34.0},
+      {"crowd",
+       "AGV stops 2 m before a crossing while a group of 5-7 people crosses 1.6-2.4 m ahead, then a forklift 1.7-2.9 m "
+       "ahead; then it drives on",
+       38.0},
+      {"pallet",
+       "AGV stands at the staging area; a forklift picks up a staged pallet 2.8 m ahead and carries it away, then "
+       "brings another and sets it down",
+       58.0},
+      {"oncoming",
+       "AGV drives down the main aisle keeping right; a loaded forklift, then a tugger train or an AGV come towards it "
+       "in the other lane and pass it",
+       33.0},
   };
   return catalogue;
 }
@@ -61,6 +69,8 @@ const ScenarioInfo& find_scenario(const std::string& name) {
 void ScenarioOptions::validate(const WarehouseLayout& layout) const {
   find_scenario(name);
   if (frames < 0) throw InputError("--frames", std::to_string(frames), "expected a number of frames > 0");
+  if (squeeze_to_frames < 0)
+    throw InputError("--squeeze-to", std::to_string(squeeze_to_frames), "expected a number of frames > 0");
   if (!std::isfinite(start_offset_m))
     throw InputError("--start-offset", std::to_string(start_offset_m), "expected a finite distance in metres");
   const bool line = name == "scene2" || name == "scene3";
@@ -74,6 +84,15 @@ void ScenarioOptions::validate(const WarehouseLayout& layout) const {
   if (name == "scene1" && std::fabs(start_offset_m) > 2.0)
     throw InputError("--start-offset", std::to_string(start_offset_m),
                      "expected a sideways shift in [-2, 2] m of the stationary AGV for scene1");
+  if ((name == "follow" || name == "oncoming") && (start_offset_m < 0 || start_offset_m > 2.0))
+    throw InputError("--start-offset", std::to_string(start_offset_m),
+                     "expected a distance in [0, 2] m along the aisle for " + name);
+  if (name == "crowd" && (start_offset_m < -1.0 || start_offset_m > 0.0))
+    throw InputError("--start-offset", std::to_string(start_offset_m),
+                     "expected a distance in [-1, 0] m (further back from the crossing) for crowd");
+  if (name == "pallet" && (start_offset_m < 0 || start_offset_m > 1.0))
+    throw InputError("--start-offset", std::to_string(start_offset_m),
+                     "expected a shift in [0, 1] m to the right of the stationary AGV for pallet");
 }
 
 // ---- Route and speed profile ----------------------------------------------------------------------------------
@@ -132,7 +151,20 @@ void RoutePath::sample(double s, double& x, double& y, double& heading) const {
   }
 }
 
+double SpeedProfile::stop_begin_s() const {
+  if (stop_at_m < 0 || cruise_mps <= 0) return hold_start_s;
+  return hold_start_s + stop_at_m / cruise_mps + cruise_mps / accel_mps2;
+}
+
 void SpeedProfile::solve() {
+  if (stop_at_m >= 0) {
+    // Two trapezoids of the same cruise speed v: (distance / v + 2 v / a) seconds of motion in all.
+    const double t_move = std::max(1e-3, duration_s - hold_start_s - hold_end_s - stop_s);
+    const double disc = t_move * t_move - 8.0 * distance_m / accel_mps2;
+    if (disc < 0) accel_mps2 = 8.0 * distance_m / (t_move * t_move);
+    cruise_mps = 0.25 * accel_mps2 * (t_move - std::sqrt(std::max(0.0, disc)));
+    return;
+  }
   const double t_move = std::max(1e-3, duration_s - hold_start_s - hold_end_s);
   double a = accel_mps2;
   if (t_move * t_move < 4.0 * distance_m / a) a = 4.0 * distance_m / (t_move * t_move);  // triangular
@@ -142,6 +174,12 @@ void SpeedProfile::solve() {
 }
 
 double SpeedProfile::distance_at(double t) const {
+  if (stop_at_m >= 0) {
+    if (cruise_mps <= 0) return 0;
+    if (t < stop_end_s())
+      return trapezoid_distance(t - hold_start_s, stop_at_m, cruise_mps, accel_mps2);
+    return stop_at_m + trapezoid_distance(t - stop_end_s(), distance_m - stop_at_m, cruise_mps, accel_mps2);
+  }
   const double t_move = std::max(1e-3, duration_s - hold_start_s - hold_end_s);
   const double tau = std::clamp(t - hold_start_s, 0.0, t_move);
   if (cruise_mps <= 0) return 0;
@@ -155,6 +193,11 @@ double SpeedProfile::distance_at(double t) const {
 }
 
 double SpeedProfile::speed_at(double t) const {
+  if (stop_at_m >= 0) {
+    if (cruise_mps <= 0) return 0;
+    if (t < stop_end_s()) return trapezoid_speed(t - hold_start_s, stop_at_m, cruise_mps, accel_mps2);
+    return trapezoid_speed(t - stop_end_s(), distance_m - stop_at_m, cruise_mps, accel_mps2);
+  }
   const double t_move = std::max(1e-3, duration_s - hold_start_s - hold_end_s);
   const double tau = t - hold_start_s;
   if (tau <= 0 || tau >= t_move || cruise_mps <= 0) return 0;
@@ -173,52 +216,117 @@ void AgvMotion::planar_pose(double t_s, double& x_out, double& y_out, double& ya
   route.sample(s_start + s_out, x_out, y_out, yaw_out);
 }
 
-std::vector<Circle> actor_footprint(ActorClass cls, const ActorState& st) {
+std::vector<Circle> actor_footprint(const Actor& a, const ActorState& st) {
   const double c = std::cos(st.yaw_rad), s = std::sin(st.yaw_rad);
   auto at = [&](double fwd, double r) { return Circle{st.x + c * fwd, st.y + s * fwd, r}; };
-  switch (cls) {
-    case ActorClass::kPerson: return {at(0.0, 0.3)};
-    case ActorClass::kForklift: return {at(-0.5, 0.75), at(0.45, 0.75), at(1.5, 0.7)};
-    case ActorClass::kAgv: return {at(-0.3, 0.45), at(0.3, 0.45)};
+  std::vector<Circle> circles;
+  switch (a.cls) {
+    case ActorClass::kPerson: circles = {at(0.0, 0.3)}; break;
+    case ActorClass::kForklift: circles = {at(-0.5, 0.75), at(0.45, 0.75), at(1.5, 0.7)}; break;
+    case ActorClass::kAgv:
+      circles = a.vehicle.tugger_carts > 0 ? std::vector<Circle>{at(-0.1, 0.6)} : std::vector<Circle>{at(-0.3, 0.45), at(0.3, 0.45)};
+      break;
+    case ActorClass::kPallet: circles = {at(-0.3, 0.5), at(0.3, 0.5)}; break;
   }
-  return {at(0, 1.0)};
+  for (int k = 0; k < trailer_count(a); ++k) {  // a cart: 1.6 m x 1.2 m
+    double x, y, heading;
+    actor_track_point(a, st.distance_m - trailer_offset_m(k), x, y, heading);
+    for (double fwd : {-0.45, 0.45}) circles.push_back({x + std::cos(heading) * fwd, y + std::sin(heading) * fwd, 0.6});
+  }
+  return circles;
 }
+
+bool carries(const Actor& a, const Actor& b) { return a.carrier_id == b.id || b.carrier_id == a.id; }
 
 // ---- Scenario construction --------------------------------------------------------------------------------------
 
+namespace scenario_detail {
+
 namespace {
 
-struct PathBuilder {
-  std::vector<Waypoint> pts;
-  PathBuilder(double x, double y) { pts.push_back({0.0, x, y}); }
-  double t() const { return pts.back().t_s; }
-  std::size_t walk_to(double x, double y, double speed) {
-    const Waypoint& last = pts.back();
-    const double d = std::hypot(x - last.x, y - last.y);
-    pts.push_back({last.t_s + d / speed, x, y});
-    return pts.size() - 1;
-  }
-  void wait(double dt) {
-    const Waypoint last = pts.back();
-    pts.push_back({last.t_s + dt, last.x, last.y});
-  }
-  // Shifts the timeline so that waypoint i is reached at t_s.
-  void align(std::size_t i, double t_s) {
-    const double d = t_s - pts[i].t_s;
-    for (auto& p : pts) p.t_s += d;
-  }
-};
+// Albedos of common colours as the grey camera sees them (the luma of the colour times a fabric's or a paint's
+// reflectance), darkest first.
+constexpr float kClothShades[] = {0.04f, 0.08f, 0.14f, 0.2f, 0.26f, 0.3f, 0.38f, 0.48f, 0.58f, 0.7f, 0.8f, 0.86f};
+constexpr float kTrouserShades[] = {0.05f, 0.09f, 0.16f, 0.2f, 0.24f, 0.32f, 0.42f};
+constexpr float kHiVisShades[] = {0.58f, 0.86f};  // orange, yellow
+constexpr float kForkliftShades[] = {0.72f, 0.55f, 0.32f, 0.28f, 0.38f, 0.5f, 0.8f, 0.15f};
+constexpr float kAgvShades[] = {0.58f, 0.75f, 0.55f, 0.7f, 0.3f, 0.2f};
 
-PersonLook random_look(Rng& rng) {
+template <std::size_t N>
+float pick(const float (&shades)[N], double u) {
+  return shades[std::min(N - 1, static_cast<std::size_t>(u * static_cast<double>(N)))];
+}
+// A second colour that stands out against `shade`.
+float contrasting(float shade, Rng& a) {
+  return static_cast<float>(shade < 0.45f ? shade + a.uniform(0.3, 0.55) : shade - a.uniform(0.3, 0.5));
+}
+
+// Clothing, build and what the hands hold: the colours and the pattern from u in [0, 1), the rest from the
+// actor's appearance stream.
+void dress(PersonLook& look, double colour_u, double pattern_u, double trousers_u, Rng& a) {
+  using P = PersonLook;
+  const double top = a.uniform();
+  look.top = top < 0.22 ? P::Top::kTshirt
+                        : top < 0.44 ? P::Top::kLongSleeve
+                                     : top < 0.64 ? P::Top::kJacket
+                                                  : top < 0.76 ? P::Top::kHoodie
+                                                               : top < 0.92 ? P::Top::kHiVisVest : P::Top::kOveralls;
+  look.shirt_shade = std::clamp(pick(kClothShades, colour_u) + static_cast<float>(a.uniform(-0.03, 0.03)), 0.03f, 0.9f);
+  look.inner_shade = pick(kClothShades, a.uniform());
+  if (look.top == P::Top::kHiVisVest) look.shirt_shade = pick(kHiVisShades, a.uniform());
+  look.pattern = pattern_u < 0.3    ? P::Pattern::kPlain
+                 : pattern_u < 0.47 ? P::Pattern::kStripes
+                 : pattern_u < 0.6  ? P::Pattern::kChecks
+                 : pattern_u < 0.75 ? P::Pattern::kPlaid
+                 : pattern_u < 0.88 ? P::Pattern::kBlotches
+                                    : P::Pattern::kDots;
+  look.pattern_shade = contrasting(look.shirt_shade, a);
+  look.pattern_period_m = static_cast<float>(a.uniform(0.05, 0.15));
+  look.prints = 0;
+  if (a.chance(0.5)) look.prints |= P::kChestLogo;
+  if (a.chance(0.45)) look.prints |= P::kBackPrint;
+  if ((look.top == P::Top::kTshirt || look.top == P::Top::kHoodie) && a.chance(0.35)) look.prints |= P::kFrontGraphic;
+  if (a.chance(0.2)) look.prints |= P::kNameBadge;
+  look.pockets = a.chance(0.75);
+  look.folds = a.chance(0.9);
+  const double bottom = a.uniform();
+  look.bottom = bottom < 0.4 ? P::Bottom::kWork : bottom < 0.7 ? P::Bottom::kJeans : bottom < 0.9 ? P::Bottom::kCargo : P::Bottom::kHiVis;
+  look.trousers_shade = look.bottom == P::Bottom::kHiVis ? pick(kHiVisShades, trousers_u) : pick(kTrouserShades, trousers_u);
+  if (look.top == P::Top::kOveralls) look.trousers_shade = look.shirt_shade;
+  look.shoe_shade = static_cast<float>(a.uniform(0.04, 0.2));
+  const double carry = a.uniform();
+  look.carry = carry < 0.7 ? P::Carry::kNothing : carry < 0.82 ? P::Carry::kBox : carry < 0.94 ? P::Carry::kScanner : P::Carry::kPhone;
+  look.arm_swing = static_cast<float>(a.uniform(0.6, 1.25));
+  look.build = static_cast<float>(a.uniform(0.9, 1.12));
+  look.girth = static_cast<float>(a.uniform(0.9, 1.2));
+}
+
+// A forklift driver: everything from the appearance stream, hands on the wheel.
+PersonLook driver_look(Rng& a) {
+  PersonLook look;
+  look.height_m = static_cast<float>(a.uniform(1.6, 1.92));
+  look.skin_shade = static_cast<float>(a.uniform(0.35, 0.75));
+  look.hair_shade = static_cast<float>(a.uniform(0.05, 0.4));
+  look.helmet = a.chance(0.3);
+  const double colour_u = a.uniform(), pattern_u = a.uniform(), trousers_u = a.uniform();
+  dress(look, colour_u, pattern_u, trousers_u, a);
+  look.carry = PersonLook::Carry::kNothing;
+  return look;
+}
+
+}  // namespace
+
+PersonLook random_look(Rng& rng, uint32_t actor_seed) {
+  // Seven draws from the scenario's stream, as many as ever (every later actor's path depends on them); the rest
+  // of the clothing from the actor's own stream.
   PersonLook look;
   look.height_m = static_cast<float>(rng.uniform(1.6, 1.92));
-  look.shirt_shade = static_cast<float>(rng.uniform(0.12, 0.85));
-  const double p = rng.uniform();
-  look.shirt_pattern = p < 0.35 ? 0 : (p < 0.55 ? 1 : (p < 0.7 ? 2 : 3));
-  look.trousers_shade = static_cast<float>(rng.uniform(0.08, 0.4));
+  const double colour_u = rng.uniform(), pattern_u = rng.uniform(), trousers_u = rng.uniform();
   look.skin_shade = static_cast<float>(rng.uniform(0.35, 0.75));
   look.hair_shade = static_cast<float>(rng.uniform(0.05, 0.4));
   look.helmet = rng.chance(0.3);
+  Rng a(actor_seed, RngStream::kAppearance);
+  dress(look, colour_u, pattern_u, trousers_u, a);
   return look;
 }
 
@@ -229,7 +337,15 @@ Actor make_actor(int id, ActorClass cls, const std::string& role, std::vector<Wa
   a.role = role;
   a.path = std::move(path);
   a.seed = rng.next_u32();
-  if (cls == ActorClass::kPerson) a.look = random_look(rng);
+  if (cls == ActorClass::kPerson) a.look = random_look(rng, a.seed);
+  Rng appearance(a.seed, RngStream::kAppearance);
+  if (cls == ActorClass::kForklift) {
+    if ((a.seed & 1U) != 0) a.vehicle.load = {Load::Kind::kWrapped, 0.9f};
+    a.vehicle.body_shade = pick(kForkliftShades, appearance.uniform()) + static_cast<float>(appearance.uniform(-0.03, 0.03));
+    a.look = driver_look(appearance);
+  }
+  if (cls == ActorClass::kAgv)
+    a.vehicle.body_shade = pick(kAgvShades, appearance.uniform()) + static_cast<float>(appearance.uniform(-0.03, 0.03));
   // Facing the first direction of travel until then.
   a.initial_yaw_rad = 0;
   for (std::size_t i = 0; i + 1 < a.path.size(); ++i) {
@@ -242,196 +358,7 @@ Actor make_actor(int id, ActorClass cls, const std::string& role, std::vector<Wa
   prepare_actor(a);
   return a;
 }
-
-class ScenarioBuilder {
- public:
-  ScenarioBuilder(Scenario& sc, const Warehouse& w) : sc_(sc), w_(w), L_(w.layout), rng_(sc.seed, RngStream::kActors) {}
-
-  Rng& rng() { return rng_; }
-
-  void agv_stationary(double x, double y, double yaw) {
-    sc_.agv.stationary = true;
-    sc_.agv.x = x;
-    sc_.agv.y = y;
-    sc_.agv.yaw_rad = yaw;
-  }
-
-  void agv_line(double offset) { agv_line_from(L_.line_x_start + offset, L_.line_length_m, 0.5); }
-
-  // Along the main aisle from x0 for length_m, standing still for the first hold_start_s.
-  void agv_line_from(double x0, double length_m, double hold_start_s) {
-    AgvMotion& m = sc_.agv;
-    m.stationary = false;
-    m.route.add_line(x0, L_.line_y, x0 + length_m, L_.line_y);
-    m.s_start = 0;
-    m.profile.distance_m = length_m;
-    finish_profile(hold_start_s);
-  }
-
-  // Counter-clockwise rounded rectangle, starting 1 m into the south leg (+ offset), one full lap.
-  void agv_loop(double offset) {
-    AgvMotion& m = sc_.agv;
-    m.stationary = false;
-    const double x0 = L_.loop_x0, y0 = L_.loop_y0, x1 = L_.loop_x1, y1 = L_.loop_y1, r = L_.loop_corner_radius_m;
-    RoutePath& p = m.route;
-    p.add_line(x0 + r, y0, x1 - r, y0);
-    p.add_arc(x1 - r, y0 + r, r, -0.5 * kPi, 0.5 * kPi);
-    p.add_line(x1, y0 + r, x1, y1 - r);
-    p.add_arc(x1 - r, y1 - r, r, 0.0, 0.5 * kPi);
-    p.add_line(x1 - r, y1, x0 + r, y1);
-    p.add_arc(x0 + r, y1 - r, r, 0.5 * kPi, 0.5 * kPi);
-    p.add_line(x0, y1 - r, x0, y0 + r);
-    p.add_arc(x0 + r, y0 + r, r, kPi, 0.5 * kPi);
-    p.set_closed(true);
-    m.s_start = std::fmod(1.0 + offset, p.length());
-    if (m.s_start < 0) m.s_start += p.length();
-    m.profile.distance_m = p.length();
-    finish_profile();
-  }
-
-  // Arc length along the loop route of the points where the cross-aisle crosses the south and north legs.
-  double loop_s_south_crossing() const { return L_.loop_cross_x - (L_.loop_x0 + L_.loop_corner_radius_m); }
-  double loop_s_north_crossing() const {
-    const double r = L_.loop_corner_radius_m;
-    return (L_.loop_x1 - L_.loop_x0 - 2 * r) + 0.5 * kPi * r + (L_.loop_y1 - L_.loop_y0 - 2 * r) + 0.5 * kPi * r +
-           (L_.loop_x1 - r - L_.loop_cross_x);
-  }
-
-  // Scenario time at which the AGV has travelled `distance` from its start (clamped to the motion).
-  double time_at_distance(double distance) const {
-    const SpeedProfile& p = sc_.agv.profile;
-    if (distance <= 0) return p.hold_start_s;
-    if (distance >= p.distance_m) return p.duration_s - p.hold_end_s;
-    double lo = 0, hi = p.duration_s;
-    for (int i = 0; i < 60; ++i) {
-      const double mid = 0.5 * (lo + hi);
-      (p.distance_at(mid) < distance ? lo : hi) = mid;
-    }
-    return 0.5 * (lo + hi);
-  }
-  // Distance along the route from the AGV's start to arc length s_target (ahead, wrapped on the loop).
-  double distance_ahead(double s_target) const {
-    const RoutePath& r = sc_.agv.route;
-    double d = s_target - sc_.agv.s_start;
-    if (r.closed()) {
-      d = std::fmod(d, r.length());
-      if (d < 0) d += r.length();
-    }
-    return d;
-  }
-
-  // Worst clearance margin of `cand` against the camera and the actors placed so far (>= 0: acceptable).
-  double margin(const Actor& cand) const {
-    double worst = 1e9;
-    for (double t = 0; t <= sc_.nominal_duration_s + 1e-9; t += kCheckStepS) {
-      const ActorState st = actor_state(cand, t);
-      const std::vector<Circle> circles = actor_footprint(cand.cls, st);
-      double cx, cy, cyaw, cs;
-      sc_.agv.planar_pose(t, cx, cy, cyaw, cs);
-      const double camera_clearance =
-          cand.cls == ActorClass::kPerson ? kPersonCameraClearanceM : kVehicleCameraClearanceM;
-      for (const Circle& c : circles) {
-        worst = std::min(worst, std::hypot(c.x - cx, c.y - cy) - c.r - camera_clearance);
-        for (const Actor& other : sc_.actors) {
-          const ActorState so = actor_state(other, t);
-          for (const Circle& o : actor_footprint(other.cls, so))
-            worst = std::min(worst, std::hypot(c.x - o.x, c.y - o.y) - c.r - o.r - kActorClearanceM);
-        }
-      }
-    }
-    return worst;
-  }
-
-  // Tries candidates 0..n-1 (make(i) builds one) and keeps the first with a non-negative margin, else the best.
-  void add_best(int n, const std::function<Actor(int)>& make) {
-    Actor best;
-    double best_margin = -1e18;
-    for (int i = 0; i < n; ++i) {
-      Actor a = make(i);
-      const double m = margin(a);
-      if (m > best_margin) {
-        best_margin = m;
-        best = a;
-      }
-      if (m >= 0) break;
-    }
-    if (best_margin < 0)
-      spdlog::warn("scenario {}: actor {} ({}) comes {:.2f} m closer than the clearance it should keep", sc_.name,
-                   best.id, best.role, -best_margin);
-    sc_.actors.push_back(best);
-  }
-
-  // Person crossing the main aisle through the cross-aisle at gap_x, at the aisle centre at t_cross.
-  // side: +1 / -1 = comes from and leaves towards +x / -x along the service corridors (0: random).
-  Actor line_crossing_person(int id, double gap_x, bool north_to_south, double t_cross, Rng& r, int side = 0) {
-    const double speed = r.uniform(1.0, 1.3);
-    const double j = r.uniform(-0.5, 0.5);
-    const double a = (side != 0 ? side : (r.chance(0.5) ? 1 : -1)) * r.uniform(2.0, 4.0);
-    const double b = (side != 0 ? side : (r.chance(0.5) ? 1 : -1)) * r.uniform(2.0, 4.0);
-    const double y_from = north_to_south ? L_.north_corridor_y : L_.south_corridor_y;
-    const double y_to = north_to_south ? L_.south_corridor_y : L_.north_corridor_y;
-    PathBuilder pb(gap_x + j + a, y_from);
-    pb.walk_to(gap_x + j, y_from, speed);
-    const std::size_t mid = pb.walk_to(gap_x + j, L_.line_y, speed);
-    pb.walk_to(gap_x + j, y_to, speed);
-    pb.walk_to(gap_x + j + b, y_to, speed);
-    pb.align(mid, t_cross);
-    return make_actor(id, ActorClass::kPerson, north_to_south ? "crosses the aisle southwards" : "crosses the aisle northwards",
-                      pb.pts, r);
-  }
-
-  // Person walking through the loop's cross-aisle (crossing both legs); at leg_y at t_cross.
-  Actor loop_crossing_person(int id, bool north_to_south, double leg_y, double t_cross, Rng& r) {
-    const double speed = r.uniform(1.0, 1.3);
-    const double xc = L_.loop_cross_x + r.uniform(-0.25, 0.25);
-    const double a = (r.chance(0.5) ? 1 : -1) * r.uniform(1.5, 3.5);
-    const double b = (r.chance(0.5) ? 1 : -1) * r.uniform(1.5, 3.5);
-    const double y_n = L_.loop_north_area_y, y_s = L_.north_corridor_y;
-    const double y_from = north_to_south ? y_n : y_s, y_to = north_to_south ? y_s : y_n;
-    PathBuilder pb(xc + a, y_from);
-    pb.walk_to(xc, y_from, speed);
-    const std::size_t mid = pb.walk_to(xc, leg_y, speed);
-    pb.walk_to(xc, y_to, speed);
-    pb.walk_to(xc + b, y_to, speed);
-    pb.align(mid, t_cross);
-    return make_actor(id, ActorClass::kPerson, "crosses the loop through the cross-aisle", pb.pts, r);
-  }
-
-  void finalize_clearances() {
-    double cam = 1e9, act = 1e9;
-    for (double t = 0; t <= sc_.nominal_duration_s + 1e-9; t += kCheckStepS) {
-      double cx, cy, cyaw, cs;
-      sc_.agv.planar_pose(t, cx, cy, cyaw, cs);
-      std::vector<std::vector<Circle>> fp;
-      for (const Actor& a : sc_.actors) fp.push_back(actor_footprint(a.cls, actor_state(a, t)));
-      for (std::size_t i = 0; i < fp.size(); ++i)
-        for (const Circle& c : fp[i]) {
-          cam = std::min(cam, std::hypot(c.x - cx, c.y - cy) - c.r);
-          for (std::size_t j = i + 1; j < fp.size(); ++j)
-            for (const Circle& o : fp[j]) act = std::min(act, std::hypot(c.x - o.x, c.y - o.y) - c.r - o.r);
-        }
-    }
-    sc_.min_camera_clearance_m = cam;
-    sc_.min_actor_clearance_m = act;
-  }
-
- private:
-  void finish_profile(double hold_start_s = 0.5) {
-    SpeedProfile& p = sc_.agv.profile;
-    p.duration_s = sc_.nominal_duration_s;
-    p.hold_start_s = hold_start_s;
-    p.hold_end_s = 0.5;
-    p.accel_mps2 = 0.4;
-    p.solve();
-  }
-
-  Scenario& sc_;
-  const Warehouse& w_;
-  const WarehouseLayout& L_;
-  Rng rng_;
-};
-
-}  // namespace
+}  // namespace scenario_detail
 
 Scenario make_scenario(const ScenarioOptions& options, const Warehouse& warehouse, double rate_hz) {
   options.validate(warehouse.layout);
@@ -444,8 +371,11 @@ Scenario make_scenario(const ScenarioOptions& options, const Warehouse& warehous
   sc.start_offset_m = options.start_offset_m;
   sc.rate_hz = rate_hz;
   sc.nominal_duration_s = info.nominal_duration_s;
-  sc.frames = options.frames > 0 ? options.frames : std::max(1, static_cast<int>(std::lround(info.nominal_duration_s * rate_hz)));
-  sc.time_scale = (sc.frames / rate_hz) / sc.nominal_duration_s;
+  sc.timeline_frames = options.squeeze_to_frames > 0
+                           ? options.squeeze_to_frames
+                           : std::max(1, static_cast<int>(std::lround(info.nominal_duration_s * rate_hz)));
+  sc.frames = options.frames > 0 ? options.frames : sc.timeline_frames;
+  sc.time_scale = (sc.timeline_frames / rate_hz) / sc.nominal_duration_s;
 
   const WarehouseLayout& L = warehouse.layout;
   ScenarioBuilder b(sc, warehouse);
@@ -615,6 +545,14 @@ Scenario make_scenario(const ScenarioOptions& options, const Warehouse& warehous
         return b.line_crossing_person(2, gaps[1], ns, b.time_at_distance(gaps[1] - ahead - x0), ri);
       });
     }
+  } else if (name == "follow") {
+    build_follow(b, options);
+  } else if (name == "crowd") {
+    build_crowd(b, options);
+  } else if (name == "pallet") {
+    build_pallet(b, options);
+  } else if (name == "oncoming") {
+    build_oncoming(b, options);
   } else {  // loops
     b.agv_loop(options.start_offset_m);
     if (name == "scene4" || name == "scene5") {

@@ -45,6 +45,7 @@ const params::Table<SimConfig>& sensor_params() {
   static const params::Table<S> table("sensor", {
       {"noise_sigma_dn", &S::noise_sigma_dn, Range::closed(0, 50), "grey levels"},
       {"exposure_variation", &S::exposure_variation, Range::closed(0, 0.5), "", "relative gain, 0.04 = +-4 %"},
+      {"exposure_spread", &S::exposure_spread, Range::closed(0, 0.5), "", "relative gain between sequences"},
       {"vignetting", &S::vignetting, Range::right_open(0, 1), "", "relative darkening of the corners"},
   });
   return table;
@@ -57,6 +58,7 @@ const params::Table<SimConfig>& rendering_params() {
       {"antialias_edges", &S::antialias_edges},
       {"haze_distance_m", &S::haze_distance_m, Range::finite(), "m", "<= 0: no haze"},
       {"png_compression", &S::png_compression, Range::closed(0, 9), "", "a zlib level"},
+      {"lighting_variation", &S::lighting_variation, Range::closed(0, 0.5), "", "relative, between warehouses"},
   });
   return table;
 }

@@ -51,10 +51,39 @@ AGVSLAM_SIM_CLONES void expose_row(const float* rad, uint8_t* px, int width, int
   }
 }
 
-RenderSettings render_settings(const SimConfig& c) {
+// Mean lighting of the floor and of walls facing the four horizontal directions (RenderSettings' model).
+float mean_lighting(const RenderSettings& s) {
+  float sum = s.ambient + s.sky + s.sun * std::max(0.0f, s.sun_dir.z);
+  for (const V3 n : {V3{1, 0, 0}, V3{-1, 0, 0}, V3{0, 1, 0}, V3{0, -1, 0}})
+    sum += s.ambient + s.sun * std::max(0.0f, dot(n, s.sun_dir));
+  return sum / 5.0f;
+}
+
+// The renderer's settings. The hall's lighting varies between warehouses (layout seeds): the key light's
+// strength against the ambient light and its direction (35 to 70 degrees above the horizon, any azimuth). The
+// lights are then scaled to the default mean lighting, as an auto-exposed camera sees the same mean brightness
+// in any hall; brightness varies through the camera's exposure (SimConfig::exposure_spread).
+RenderSettings render_settings(const SimConfig& c, uint64_t layout_seed) {
   RenderSettings s;
   s.antialias_edges = c.antialias_edges;
   s.haze_distance_m = static_cast<float>(c.haze_distance_m);
+  if (c.lighting_variation > 0) {
+    const float nominal = mean_lighting(s);
+    Rng light(layout_seed, RngStream::kLighting);
+    const float spread = static_cast<float>(c.lighting_variation);
+    const float key = 1.0f + spread * static_cast<float>(light.uniform(-1.0, 1.0));
+    const float ambient = 1.0f + 0.5f * spread * static_cast<float>(light.uniform(-1.0, 1.0));
+    const double azimuth = light.uniform(0.0, 2 * kPi), elevation = light.uniform(35.0, 70.0) * kPi / 180.0;
+    s.ambient *= ambient;
+    s.sun *= key;
+    s.sun_dir = normalized(V3{static_cast<float>(std::cos(azimuth) * std::cos(elevation)),
+                              static_cast<float>(std::sin(azimuth) * std::cos(elevation)),
+                              static_cast<float>(std::sin(elevation))});
+    const float level = nominal / mean_lighting(s);
+    s.ambient *= level;
+    s.sky *= level;
+    s.sun *= level;
+  }
   return s;
 }
 
@@ -70,11 +99,12 @@ Simulator::Simulator(const SimConfig& config, const ScenarioOptions& options)
     : config_((config.validate("simulator settings"), config)),
       warehouse_(generate_warehouse(options.effective_layout_seed())),
       scenario_(make_scenario(options, warehouse_, config.rate_hz)),
-      renderer_(warehouse_, render_settings(config)) {
+      renderer_(warehouse_, render_settings(config, options.effective_layout_seed())) {
   Rng sensor(options.seed, RngStream::kSensor);
   sensor_seed_ = sensor.next_u64();
   exposure_phase_[0] = sensor.uniform(0.0, 2 * kPi);
   exposure_phase_[1] = sensor.uniform(0.0, 2 * kPi);
+  exposure_base_ = 1.0 + config.exposure_spread * sensor.uniform(-1.0, 1.0);
   Rng vehicle(options.seed, RngStream::kVehicle);
   vibration_seed_ = vehicle.next_u32();
   T_w_map_ = T_map_cam(0).inverse();
@@ -128,16 +158,34 @@ Trajectory Simulator::ground_truth() const {
 double Simulator::exposure_gain(int frame) const {
   const double t = frame / config_.rate_hz;
   const double a = config_.exposure_variation;
-  return 1.0 + a * (0.6 * std::sin(2 * kPi * t / 9.7 + exposure_phase_[0]) +
-                    0.4 * std::sin(2 * kPi * t / 3.9 + exposure_phase_[1]));
+  return exposure_base_ * (1.0 + a * (0.6 * std::sin(2 * kPi * t / 9.7 + exposure_phase_[0]) +
+                                      0.4 * std::sin(2 * kPi * t / 3.9 + exposure_phase_[1])));
+}
+
+std::vector<std::pair<int, int>> Simulator::moving_frames(const Actor& actor) const {
+  std::vector<std::pair<int, int>> ranges;
+  for (int k = 0; k < frame_count(); ++k) {
+    if (!actor_state(actor, scenario_.scenario_time(k)).moving) continue;
+    if (!ranges.empty() && ranges.back().second == k - 1)
+      ranges.back().second = k;
+    else
+      ranges.emplace_back(k, k);
+  }
+  return ranges;
 }
 
 void Simulator::pose_objects(int frame, std::vector<DynamicObject>& out) const {
   const double t = scenario_.scenario_time(frame);
-  out.resize(scenario_.actors.size());
-  for (std::size_t i = 0; i < scenario_.actors.size(); ++i) {
+  const std::size_t n = scenario_.actors.size();
+  std::size_t parts = n;
+  for (const Actor& a : scenario_.actors) parts += static_cast<std::size_t>(trailer_count(a));
+  out.resize(parts);
+  std::size_t next = n;  // trailers after the actors, so out[i] is actor i
+  for (std::size_t i = 0; i < n; ++i) {
     const Actor& a = scenario_.actors[i];
-    pose_actor(a, actor_state(a, t), out[i]);
+    const ActorState st = actor_state(a, t);
+    pose_actor(a, st, out[i]);
+    for (int k = 0; k < trailer_count(a); ++k) pose_trailer(a, st, k, out[next++]);
   }
 }
 
@@ -223,6 +271,7 @@ void Simulator::render_frame(int frame, SimFrame& out, int threads) const {
       }
     }
   }
+  out.left_render.class_id.copyTo(out.classes);
   out.objects.clear();
   for (int id = 1; id <= max_id; ++id) {
     VisibleObject b = boxes[static_cast<std::size_t>(id)];
@@ -246,7 +295,7 @@ void prepare_output_dir(const std::string& dir, const std::string& option) {
   fs::create_directories(dir, ec);
   if (ec || !fs::is_directory(dir))
     throw InputError(option, dir, "could not create the output folder: " + (ec ? ec.message() : std::string("unknown")));
-  for (const char* sub : {"image_0", "image_1", "disp_0", "mask_0", "instance_0"}) {
+  for (const char* sub : {"image_0", "image_1", "disp_0", "mask_0", "instance_0", "class_0"}) {
     fs::create_directories(fs::path(dir) / sub, ec);
     if (ec) throw InputError(option, (fs::path(dir) / sub).string(), "could not create the folder: " + ec.message());
   }
@@ -260,8 +309,8 @@ void prepare_output_dir(const std::string& dir, const std::string& option) {
 }
 
 std::string objects_header() {
-  return "# frame id class moving x_min y_min x_max y_max  (class: person|forklift|agv; moving: 1 = moving at this "
-         "frame; bbox of the visible pixels in image_0, inclusive, pixels)";
+  return "# frame id class moving x_min y_min x_max y_max  (class: person|forklift|agv|pallet; moving: 1 = moving at "
+         "this frame; bbox of the visible pixels in image_0, inclusive, pixels)";
 }
 
 std::string format_objects(int frame, const std::vector<VisibleObject>& objects) {
@@ -301,6 +350,7 @@ void write_sequence(const Simulator& sim, const std::string& out_dir, const Writ
     png.write((root / "disp_0" / name).string(), frame.disparity_u16, PngFilter::kPaeth);
     png.write((root / "mask_0" / name).string(), frame.mask, PngFilter::kNone);
     png.write((root / "instance_0" / name).string(), frame.instances, PngFilter::kNone);
+    png.write((root / "class_0" / name).string(), frame.classes, PngFilter::kNone);
     objects += format_objects(k, frame.objects);
     if (options.progress) options.progress(k + 1, sim.frame_count());
   }

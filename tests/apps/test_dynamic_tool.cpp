@@ -24,7 +24,7 @@ const std::string& scene1_sequence() {
   static const std::string dir = [] {
     const std::string d = test::make_temp_dir("agvslam-dynamic-tool") + "/scene1";
     std::string out;
-    const int rc = test::run_command(test::tool_path("agvslam-sim") + " --scenario scene1 --seed 7 --frames 40 --threads 2 --out " + d, &out);
+    const int rc = test::run_command(test::tool_path("agvslam-sim") + " --scenario scene1 --seed 7 --squeeze-to 40 --threads 2 --out " + d, &out);
     EXPECT_EQ(rc, 0) << out;
     return d;
   }();

@@ -98,7 +98,7 @@ const std::string& scene3_sequence() {
   static const std::string dir = [] {
     const std::string d = test::make_temp_dir("agvslam-run-sim") + "/scene3";
     std::string out;
-    const int rc = test::run_command(test::tool_path("agvslam-sim") + " --scenario scene3 --seed 7 --frames 150 --threads 2 --out " + d, &out);
+    const int rc = test::run_command(test::tool_path("agvslam-sim") + " --scenario scene3 --seed 7 --squeeze-to 150 --threads 2 --out " + d, &out);
     EXPECT_EQ(rc, 0) << out;
     return d;
   }();

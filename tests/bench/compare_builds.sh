@@ -4,7 +4,8 @@
 #   tests/bench/compare_builds.sh --ref BUILD_DIR --new BUILD_DIR [--data DIR] [--out DIR] [--seeds "101 102 103"]
 #       [--scenarios "scene1 scene2 scene3 scene4 scene5 scene6"] [--what "sim masks slam"] [--shared DIR]
 #       [--params-dynamic FILE | --params-dynamic-ref FILE --params-dynamic-new FILE]
-#   sim    renders 40 frames of every scenario with both builds' agvslam-sim and compares every file (md5)
+#   sim    renders every scenario's whole timeline over 40 frames with both builds' agvslam-sim and compares every
+#          file (md5)
 #   masks  runs both builds' agvslam-dynamic on <data>/<scenario>_<seed> (rendered once by the ref build, full
 #          length) and compares every mask PNG (md5) and the JSON scores with the timings left out
 #   slam   runs both builds' agvslam-run --mapping inline --dynamic detector|off on the shared KITTI 06, KITTI 01 and
@@ -61,7 +62,10 @@ if [[ " $what " == *" sim "* ]]; then
       dir=$out_root/sim_$b/$scenario
       rm -rf "$dir"; mkdir -p "$(dirname "$dir")"
       bin=$ref; [[ $b == new ]] && bin=$new
-      "$bin/bin/agvslam-sim" --scenario "$scenario" --seed 101 --frames 40 --out "$dir" > "$dir.log" 2>&1
+      # The whole timeline over 40 frames: --squeeze-to where the build has it, else --frames (which meant that).
+      squeeze=--frames
+      "$bin/bin/agvslam-sim" --help 2>/dev/null | grep -q -- --squeeze-to && squeeze=--squeeze-to
+      "$bin/bin/agvslam-sim" --scenario "$scenario" --seed 101 "$squeeze" 40 --out "$dir" > "$dir.log" 2>&1
     done
     if diff <(tree_md5 "$out_root/sim_ref/$scenario") <(tree_md5 "$out_root/sim_new/$scenario") > "$out_root/sim_$scenario.diff"; then
       report "sim $scenario (40 frames)" "same ($(tree_md5 "$out_root/sim_ref/$scenario" | wc -l) files)"

@@ -48,11 +48,11 @@ render() {  # name, agvslam-sim arguments...
     "$sim" "$@" --threads 2 --out "$dir.tmp" >&2 && rm -rf "$dir" && mv "$dir.tmp" "$dir"
   fi
 }
-render loop_scene4_s41 --scenario scene4 --seed 41 --frames 350
-render loop_static_s42 --scenario static --seed 42 --frames 350
-render map_static_s43 --scenario static --seed 43 --frames 350
-render query_scene5_s44 --scenario scene5 --seed 44 --layout-seed 43 --start-offset 7 --frames 350
-render line_scene2_s45 --scenario scene2 --seed 45 --frames 200
+render loop_scene4_s41 --scenario scene4 --seed 41 --squeeze-to 350
+render loop_static_s42 --scenario static --seed 42 --squeeze-to 350
+render map_static_s43 --scenario static --seed 43 --squeeze-to 350
+render query_scene5_s44 --scenario scene5 --seed 44 --layout-seed 43 --start-offset 7 --squeeze-to 350
+render line_scene2_s45 --scenario scene2 --seed 45 --squeeze-to 200
 record_start
 args=(--evaluate --vocabulary "$vocabulary" --frame-step "$frame_step" --threads 2)
 cd "$root"

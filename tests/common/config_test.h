@@ -35,9 +35,10 @@ class TempYaml {
 };
 
 // load(path) on `text` must throw an InputError whose source is the file, whose field is `field`, and whose message
-// names the file and says what was expected.
+// names the file and says what was expected (exactly `expected` when that is not empty).
 template <class Load>
-void expect_input_error(Load&& load, const std::string& text, const std::string& field) {
+void expect_input_error(Load&& load, const std::string& text, const std::string& field,
+                        const std::string& expected = "") {
   TempYaml f(text);
   try {
     load(f.path());
@@ -47,6 +48,9 @@ void expect_input_error(Load&& load, const std::string& text, const std::string&
     EXPECT_EQ(e.where(), field) << e.what();
     EXPECT_FALSE(e.expected().empty()) << e.what();
     EXPECT_NE(std::string(e.what()).find(f.path()), std::string::npos) << e.what();
+    if (!expected.empty()) {
+      EXPECT_EQ(e.expected(), expected);
+    }
   }
 }
 

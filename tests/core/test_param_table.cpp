@@ -67,6 +67,20 @@ const Table<Sample>& sample_params() {
   return table;
 }
 
+// Unsigned 32-bit settings: a seed that may take any value, and a count with a range.
+struct Seeded {
+  uint32_t seed = 1;
+  uint32_t frames = 4;
+};
+
+const Table<Seeded>& seeded_params() {
+  static const Table<Seeded> table("seeded", {
+      {"seed", &Seeded::seed, Range::any()},
+      {"frames", &Seeded::frames, Range::closed(1, 100), "frames", "one at least"},
+  });
+  return table;
+}
+
 class ParamsTest : public ::testing::Test {
  protected:
   void SetUp() override { dir_ = test::make_temp_dir("agvslam-params"); }
@@ -125,6 +139,41 @@ TEST_F(ParamsTest, IdsAreCIntegerLiteralsAndAnEmptyOneKeepsTheDefault) {
   EXPECT_EQ(load("sample:\n  id: \"\"\n").id, 0x300u);
   EXPECT_EQ(error_of("sample:\n  id: 0x800\n").first, "sample.id");
   EXPECT_EQ(error_of("sample:\n  id: 12z\n").first, "sample.id");
+}
+
+TEST_F(ParamsTest, Unsigned32BitSettingsTakeTheirWholeRangeAndNothingBeyond) {
+  const auto load_seeded = [&](const std::string& text) {
+    Seeded s;
+    const File file(write(text));
+    seeded_params().read(file, s);
+    seeded_params().validate(file.path(), s);
+    return s;
+  };
+  const auto error_of_seeded = [&](const std::string& text) -> std::pair<std::string, std::string> {
+    try {
+      load_seeded(text);
+    } catch (const InputError& e) {
+      return {e.where(), e.what()};
+    }
+    return {"", ""};
+  };
+  EXPECT_EQ(load_seeded("seeded:\n  seed: 4294967295\n").seed, 4294967295u);
+  EXPECT_EQ(load_seeded("seeded:\n  seed: 0\n").seed, 0u);
+  EXPECT_EQ(load_seeded("seeded:\n  frames: 100\n").frames, 100u);
+  EXPECT_EQ(load_seeded("seeded:\n").seed, 1u);
+  auto [where, what] = error_of_seeded("seeded:\n  seed: 4294967296\n");
+  EXPECT_EQ(where, "seeded.seed");
+  EXPECT_NE(what.find("expected an unsigned 32-bit integer, got '4294967296'"), std::string::npos) << what;
+  std::tie(where, what) = error_of_seeded("seeded:\n  frames: 0\n");
+  EXPECT_EQ(where, "seeded.frames");
+  EXPECT_NE(what.find("expected an unsigned 32-bit integer in [1, 100] frames (one at least), got 0"), std::string::npos)
+      << what;
+  for (const char* text : {"seeded:\n  seed: -1\n", "seeded:\n  seed: 1.5\n", "seeded:\n  seed: one\n"}) {
+    EXPECT_EQ(error_of_seeded(text).first, "seeded.seed") << text;
+  }
+  Seeded s;
+  s.seed = 4294967295u;
+  EXPECT_EQ(seeded_params().describe(s), "seeded: seed=4294967295, frames=4 frames");
 }
 
 TEST_F(ParamsTest, MissingSectionOrEmptyFileKeepsEveryDefault) {

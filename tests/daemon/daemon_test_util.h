@@ -95,7 +95,7 @@ inline std::string daemon_sim_sequence() {
   fs::create_directories(dir.parent_path());
   const std::string tmp = make_temp_dir("agvslamd-sim");
   std::string out;
-  const int rc = run_command(tool_path("agvslam-sim") + " --scenario scene2 --seed 11 --frames 80 --threads 2 --out " +
+  const int rc = run_command(tool_path("agvslam-sim") + " --scenario scene2 --seed 11 --squeeze-to 80 --threads 2 --out " +
                                  tmp + "/seq",
                              &out);
   if (rc != 0) throw std::runtime_error("agvslam-sim failed: " + out);

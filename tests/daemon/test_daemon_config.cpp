@@ -94,6 +94,20 @@ TEST(DaemonConfig, EveryKindOfBadSettingNamesTheFileAndTheField) {
       {"dds:\n  wait_for_subscribers: -1\n", "dds.wait_for_subscribers"},
       {"can:\n  base_id: zz\n", "can.base_id"},
       {"can:\n  enabled: true\n  rate_hz: -3\n", "can.rate_hz"},
+      {"odometry:\n  source: wheels\n", "odometry.source"},
+      {"odometry:\n  source: can\n", "odometry.source"},  // CAN odometry needs the CAN output's interface
+      {"odometry:\n  tolerance: 1.5\n", "odometry.tolerance"},
+      {"odometry:\n  window_s: 0\n", "odometry.window_s"},
+      {"can:\n  enabled: true\nodometry:\n  source: can\n", "can_odometry.dbc"},  // no DBC named
+      {"can:\n  enabled: true\nodometry:\n  source: can\ncan_odometry:\n  dbc: /nonexistent/v.dbc\n",
+       "can_odometry.dbc"},
+      {"can:\n  enabled: true\nodometry:\n  source: can\ncan_odometry:\n  dbc: DBC\n  message: NOPE\n",
+       "can_odometry.message"},
+      {"can:\n  enabled: true\nodometry:\n  source: can\ncan_odometry:\n  dbc: DBC\n  speed_signal: Velocity\n",
+       "can_odometry.speed_signal"},
+      {"can:\n  enabled: true\nodometry:\n  source: can\ncan_odometry:\n  dbc: DBC\n  yaw_rate_unit: rpm\n",
+       "can_odometry.yaw_rate_unit"},
+      {"can_odometry:\n  dbcfile: x\n", "can_odometry.dbcfile"},
       {"trajectory:\n  frame: odom\n", "trajectory.frame"},
       {"trajectory:\n  file: /tmp/a\nlog:\n  pose_log: /tmp/a\n", "log.pose_log"},  // one file for two outputs
       {"log:\n  level: loud\n", "log.level"},
@@ -104,7 +118,10 @@ TEST(DaemonConfig, EveryKindOfBadSettingNamesTheFileAndTheField) {
   for (const BadCase& bc : cases) {
     const std::string path = dir + "/bad.yaml";
     const bool has_source = std::string(bc.yaml).rfind("source", 0) == 0 || std::string(bc.yaml).rfind("sources", 0) == 0;
-    write_text(path, (has_source ? "" : ok_source) + std::string(bc.yaml));
+    std::string yaml = bc.yaml;
+    const std::size_t dbc = yaml.find("dbc: DBC");
+    if (dbc != std::string::npos) yaml.replace(dbc, 8, "dbc: " + std::string(AGVSLAM_SOURCE_DIR) + "/deploy/agvslam.dbc");
+    write_text(path, (has_source ? "" : ok_source) + yaml);
     try {
       load_daemon_config(path);
       ADD_FAILURE() << "no error for:\n" << bc.yaml;
@@ -117,6 +134,27 @@ TEST(DaemonConfig, EveryKindOfBadSettingNamesTheFileAndTheField) {
       }
     }
   }
+  fs::remove_all(dir);
+}
+
+TEST(DaemonConfig, CanOdometryFromTheShippedDbc) {
+  const std::string dir = test::make_temp_dir("agvslamd-config-odometry");
+  write_text(dir + "/o.yaml", "source:\n  type: dataset\n  dataset: /x\ncan:\n  enabled: true\n  base_id: 0x400\n"
+                              "odometry:\n  source: can\n  window_s: 8\ncan_odometry:\n  dbc: " +
+                                  std::string(AGVSLAM_SOURCE_DIR) + "/deploy/agvslam.dbc\n");
+  const DaemonConfig c = load_daemon_config(dir + "/o.yaml");
+  EXPECT_EQ(c.odometry.source, OdometrySource::kCan);
+  EXPECT_DOUBLE_EQ(c.odometry.check.window_s, 8.0);
+  EXPECT_DOUBLE_EQ(c.odometry.check.tolerance, 0.2);
+  EXPECT_EQ(c.odometry.can.message, "VEHICLE_ODOMETRY");
+  std::string all;
+  for (const auto& line : c.describe()) all += line + "\n";
+  EXPECT_NE(all.find("odometry: source=can"), std::string::npos) << all;
+  EXPECT_NE(all.find("can_odometry: dbc="), std::string::npos) << all;
+  // The shipped vehicle file reads no odometry (the outputs stay as they were) and echoes no can_odometry.
+  const DaemonConfig shipped = load_daemon_config(params("agvslamd.yaml"));
+  EXPECT_EQ(shipped.odometry.source, OdometrySource::kNone);
+  EXPECT_EQ(shipped.odometry.can.dbc, fs::path(std::string(AGVSLAM_SOURCE_DIR) + "/deploy/agvslam.dbc").lexically_normal().string());
   fs::remove_all(dir);
 }
 

@@ -91,12 +91,46 @@ TEST(PoseOutputs, PoseOnlyWhileTrackingStatusAlwaysFilesAsPublished) {
   EXPECT_EQ(lines[5].at("heartbeat"), true);
   EXPECT_EQ(lines[2].at("source_index"), 2);
   EXPECT_EQ(lines[2].at("can").at("sent"), false);
+  EXPECT_FALSE(lines[1].contains("odometry_check"));  // no odometry input: the log is as it was
+  EXPECT_FALSE(st.odometry_enabled);
   EXPECT_EQ(lines[1].at("sample"), drivers::pose_sample_to_json([&] {
               auto s = drivers::synthetic_pose_sample(1, t0 + 50000000LL);
               s.tracking_state = drivers::TrackingState::kTracking;
               s.latency_ns = lines[1].at("sample").at("latency_ns").get<int64_t>();
               return s;
             }()));
+  std::filesystem::remove_all(dir);
+}
+
+// With odometry.source can and no odometry on the bus (here: no bus at all), every sample says so, the JSON log
+// carries the check, and nothing waits for the odometry.
+TEST(PoseOutputs, OdometryCheckWithoutOdometryReportsNoOdometry) {
+  const std::string dir = test::make_temp_dir("agvslamd-outputs-odometry");
+  DaemonConfig c;
+  c.path = "test.yaml";
+  c.outputs.dds_enabled = false;
+  c.outputs.can_enabled = true;
+  c.outputs.can.interface = "agvnocan0";
+  c.odometry.source = OdometrySource::kCan;
+  c.odometry.can.dbc = std::string(AGVSLAM_SOURCE_DIR) + "/deploy/agvslam.dbc";
+  c.log.pose_log = dir + "/poses.jsonl";
+  PoseOutputs out(c);
+  const int64_t t0 = dds::realtime_now_ns();
+  for (std::size_t i = 0; i < 3; ++i) {
+    OutputItem item;
+    item.sample = drivers::synthetic_pose_sample(i, t0 + static_cast<int64_t>(i) * 50000000LL);
+    item.sample.tracking_state = drivers::TrackingState::kTracking;
+    out.publish(item);
+    EXPECT_EQ(item.sample.odometry_check.state, drivers::OdometryCheckState::kNoOdometry);
+  }
+  const OutputStats st = out.stats();
+  EXPECT_TRUE(st.odometry_enabled);
+  EXPECT_EQ(st.odometry_samples, 0U);
+  EXPECT_EQ(st.odometry_check.state, drivers::OdometryCheckState::kNoOdometry);
+  const auto lines = test::read_json_lines(c.log.pose_log);
+  ASSERT_EQ(lines.size(), 3U);
+  EXPECT_EQ(lines[2].at("odometry_check").at("state"), "no_odometry");
+  EXPECT_TRUE(lines[2].at("odometry_check").at("distance_ratio").is_null());  // NaN: not available
   std::filesystem::remove_all(dir);
 }
 

@@ -80,7 +80,8 @@ TEST(Dbc, ShippedDbcDescribesTheEncoderLayout) {
   };
   for (const Want& w : {Want{0x300, "AGVSLAM_POSE_XYAW", 8, false}, Want{0x301, "AGVSLAM_POSE_YZ", 8, false},
                         Want{0x302, "AGVSLAM_VELOCITY", 8, false}, Want{0x303, "AGVSLAM_POSE_STDDEV", 8, false},
-                        Want{0x304, "AGVSLAM_STATUS", 8, false}, Want{0x308, "AGVSLAM_POSE_FD", 48, true}}) {
+                        Want{0x304, "AGVSLAM_STATUS", 8, false}, Want{0x305, "AGVSLAM_ODOM_CHECK", 8, false},
+                        Want{0x306, "VEHICLE_ODOMETRY", 8, false}, Want{0x308, "AGVSLAM_POSE_FD", 48, true}}) {
     const DbcMessage* m = dbc.find(w.id, false);
     ASSERT_NE(m, nullptr) << w.name;
     EXPECT_EQ(m->name, w.name);
@@ -95,6 +96,33 @@ TEST(Dbc, ShippedDbcDescribesTheEncoderLayout) {
     for (const auto& s : m->signals) EXPECT_TRUE(s.little_endian) << w.name << "." << s.name;
   }
   EXPECT_EQ(dbc.find(0x300, false)->signal("TrackingState")->value_names.at(3), "Lost");
+  // The odometry comes from the vehicle controller, in m/s and deg/s.
+  const DbcMessage* odo = dbc.find("VEHICLE_ODOMETRY");
+  EXPECT_EQ(odo->transmitter, "VEHICLE_CONTROLLER");
+  EXPECT_EQ(odo->signal("Speed")->unit, "m/s");
+  EXPECT_EQ(odo->signal("YawRate")->unit, "deg/s");
+  EXPECT_EQ(dbc.find("AGVSLAM_ODOM_CHECK")->transmitter, "AGVSLAM");
+}
+
+TEST(Dbc, EncodeIsTheInverseOfDecode) {
+  const Dbc dbc = Dbc::parse(kSmall, "small.dbc");
+  const DbcMessage* m = dbc.find(291, false);
+  CanFrameBytes f;
+  f.len = 8;
+  m->signal("Be16")->encode(0x1234, f.data.data());
+  m->signal("LeSigned12")->encode(-2.0, f.data.data());
+  m->signal("Be4")->encode(10, f.data.data());
+  EXPECT_EQ(f.data[0], 0x12);
+  EXPECT_EQ(f.data[1], 0x34);
+  EXPECT_EQ(f.data[2], 0xFE);
+  EXPECT_EQ(f.data[3], 0x0F);
+  EXPECT_EQ(f.data[4], 0xA0);
+  // Rounded to the nearest step; clamped to the raw range (12 bits signed: -2048..2047 -> -1025..1022.5).
+  m->signal("LeSigned12")->encode(3.26, f.data.data());
+  EXPECT_EQ(decode_signals(*m, f).at("LeSigned12"), 3.5);
+  m->signal("LeSigned12")->encode(1e9, f.data.data());
+  EXPECT_EQ(decode_signals(*m, f).at("LeSigned12"), 1022.5);
+  EXPECT_EQ(decode_signals(*m, f).at("Be16"), 0x1234);  // neighbours untouched
 }
 
 }  // namespace

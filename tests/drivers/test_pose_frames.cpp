@@ -93,6 +93,41 @@ TEST(PoseFrames, ExtendedIdsAndBase) {
   EXPECT_EQ(fd.len, 48);
 }
 
+// AGVSLAM_ODOM_CHECK: golden bytes, and every signal decoded with the DBC within half a step.
+TEST(PoseFrames, OdometryCheckFrameAgainstTheDbc) {
+  OdometryCheck check;
+  check.state = OdometryCheckState::kDisagrees;
+  check.distance_ratio = 1.2504;  // 1250 = 0x04E2
+  check.speed_rmse_mps = 0.0456;  // 46 = 0x002E
+  check.heading_difference_deg = -12.344;  // -1234 = 0xFB2E
+  const CanFrameBytes f = encode_odometry_check_frame(check, 7, FrameLayout{});
+  EXPECT_EQ(f.id, 0x305U);
+  ASSERT_EQ(f.len, 8);
+  const std::vector<uint8_t> head = {0xE2, 0x04, 0x2E, 0x00, 0x2E, 0xFB, 0x75};  // byte 6: state 5 | counter 7 << 4
+  for (std::size_t i = 0; i < head.size(); ++i) EXPECT_EQ(f.data[i], head[i]) << "byte " << i;
+  std::vector<uint8_t> crc_in = {0x05, 0x03, 0x00, 0x00};
+  crc_in.insert(crc_in.end(), head.begin(), head.end());
+  EXPECT_EQ(f.data[7], reference_crc(crc_in));
+
+  const Dbc dbc = Dbc::load(kDbcPath);
+  const DbcMessage* m = dbc.find(0x305, false);
+  ASSERT_NE(m, nullptr);
+  const auto v = decode_signals(*m, f);
+  EXPECT_NEAR(v.at("DistanceRatio"), check.distance_ratio, 0.0005);
+  EXPECT_NEAR(v.at("SpeedRmse"), check.speed_rmse_mps, 0.0005);
+  EXPECT_NEAR(v.at("HeadingDiff"), check.heading_difference_deg, 0.005);
+  EXPECT_EQ(v.at("OdomCheckState"), 5.0);
+  EXPECT_EQ(m->signal("OdomCheckState")->value_names.at(4), "Agrees");
+  EXPECT_EQ(v.at("Counter"), 7.0);
+
+  // No ratio (the odometry did not move): the reserved 65.535; a huge one saturates below it.
+  check.distance_ratio = std::nan("");
+  EXPECT_EQ(get_bits_le(encode_odometry_check_frame(check, 0, FrameLayout{}).data.data(), 0, 16), 0xFFFFU);
+  check.distance_ratio = 1e6;
+  EXPECT_EQ(get_bits_le(encode_odometry_check_frame(check, 0, FrameLayout{}).data.data(), 0, 16), 0xFFFEU);
+  EXPECT_EQ(encode_odometry_check_frame(check, 0, FrameLayout{0x18FF1000, true}).id, 0x18FF1005U);
+}
+
 // Every frame the encoder makes for 200 synthetic samples, written as candump -L lines, read back and decoded
 // with the DBC's signal definitions: every value within half a step of the sample, Crc and Counter right.
 void round_trip(bool fd) {

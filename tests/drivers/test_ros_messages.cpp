@@ -2,6 +2,8 @@
 
 #include <gtest/gtest.h>
 
+#include <cmath>
+
 #include <fstream>
 #include <map>
 #include <nlohmann/json.hpp>
@@ -63,6 +65,20 @@ TEST(RosMessages, PoseOdomStatusCarryTheSample) {
   EXPECT_EQ(st.fps, s.fps);
   EXPECT_EQ(st.dynamic_pixel_fraction, s.dynamic_pixel_fraction);
   EXPECT_NEAR(st.latency_ms, static_cast<double>(s.latency_ns) * 1e-6, 1e-5);
+  // Without an odometry input: state off, no ratio.
+  EXPECT_EQ(st.odometry_check_state, 0);
+  EXPECT_TRUE(std::isnan(st.odometry_distance_ratio));
+  PoseSample checked = s;
+  checked.odometry_check.state = OdometryCheckState::kDisagrees;
+  checked.odometry_check.distance_ratio = 1.25;
+  checked.odometry_check.speed_rmse_mps = 0.2;
+  checked.odometry_check.heading_difference_deg = -3.5;
+  fill_status_msg(checked, frames, st);
+  EXPECT_EQ(st.odometry_check_state, 5);
+  EXPECT_EQ(st.odometry_distance_ratio, 1.25F);
+  EXPECT_EQ(st.odometry_speed_rmse_mps, 0.2F);
+  EXPECT_EQ(st.odometry_heading_difference_deg, -3.5F);
+  EXPECT_EQ(to_json(st).at("odometry_check_state"), 5);
 }
 
 TEST(RosMessages, JsonUsesRosFieldNamesAndRoundTripPrecision) {
@@ -129,7 +145,7 @@ TEST(RosMessages, StatusMsgMatchesTheIdl) {
     from_idl.push_back(line.substr(b, sp - b) + " " + line.substr(sp + 1));
   }
   EXPECT_EQ(from_msg, from_idl);
-  EXPECT_EQ(from_idl.size(), 8U);
+  EXPECT_EQ(from_idl.size(), 12U);
 }
 
 TEST(DdsConfig, ValidatesDescribesAndBuildsCycloneXml) {

@@ -34,7 +34,7 @@ StereoFrame render(const sim::Simulator& simulator, int i, sim::SimFrame& render
 Score run(const std::string& scenario, int first, int last) {
   sim::ScenarioOptions options;
   options.name = scenario;
-  options.frames = 400;
+  options.squeeze_to_frames = 400;
   const sim::SimConfig config;
   const sim::Simulator simulator(config, options);
   DynamicDetector detector(simulator.calibration());
@@ -68,7 +68,7 @@ TEST(DynamicDetectorSim, StationaryAgvPersonWalkingIn) {
 int first_frame_with_person_in_view(const std::string& scenario) {
   sim::ScenarioOptions options;
   options.name = scenario;
-  options.frames = 400;
+  options.squeeze_to_frames = 400;
   const sim::Simulator simulator(sim::SimConfig{}, options);
   const PinholeCamera cam = simulator.calibration().left;
   std::vector<sim::DynamicObject> objects;
@@ -98,12 +98,13 @@ TEST(DynamicDetectorSim, DrivingAgvPersonCrossingTheAisle) {
 }
 
 TEST(DynamicDetectorSim, CoastedObjectsLieOnMovingObjects) {
-  // Scene3, seed 1: three people cross ahead of the driving AGV; around frames 250-270 the per-frame tests miss a
-  // close one now and then, and the detector coasts it on its own tracks (measured when written: 3 coasted regions
-  // kept in 28 frames, 95 % of their pixels on the moving person).
+  // Scene3, seed 4: the person who stood in the aisle walks ahead of the driving AGV, close; around frames 150-160
+  // the per-frame tests miss them now and then, and the detector coasts them on their own tracks (measured when
+  // written: 6 coasted regions kept in 36 frames, 95 % of their pixels on moving objects).
   sim::ScenarioOptions options;
   options.name = "scene3";
-  options.frames = 400;
+  options.seed = 4;
+  options.squeeze_to_frames = 400;
   const sim::Simulator simulator(sim::SimConfig{}, options);
   DynamicDetectorConfig config;
   config.objects.coast_max_frames = 4;
@@ -115,7 +116,7 @@ TEST(DynamicDetectorSim, CoastedObjectsLieOnMovingObjects) {
   DetectorResult result;
   int coasted_kept = 0;
   long coasted_px = 0, coasted_on_moving_px = 0;
-  for (int i = 245; i <= 272; ++i) {
+  for (int i = 135; i <= 170; ++i) {
     detector.detect(render(simulator, i, rendered), result);
     for (const RoiSegmentation& seg : result.rois) {
       if (!seg.coasted || seg.outline_verdict != OutlineVerdict::kKept) continue;
@@ -124,7 +125,8 @@ TEST(DynamicDetectorSim, CoastedObjectsLieOnMovingObjects) {
       coasted_on_moving_px += cv::countNonZero(seg.outline & rendered.mask(seg.roi));
     }
   }
-  std::printf("scene3 frames 245..272: %d coasted regions kept, %.3f of their pixels on moving objects\n", coasted_kept,
+  std::printf("scene3 seed 4 frames 135..170: %d coasted regions kept, %.3f of their pixels on moving objects\n",
+              coasted_kept,
               coasted_px > 0 ? static_cast<double>(coasted_on_moving_px) / static_cast<double>(coasted_px) : 0.0);
   ASSERT_GE(coasted_kept, 1);
   EXPECT_GE(static_cast<double>(coasted_on_moving_px), 0.8 * static_cast<double>(coasted_px));

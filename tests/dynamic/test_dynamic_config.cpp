@@ -1,45 +1,20 @@
 // params/dynamic.yaml loading: the shipped file, overrides, and errors naming the file and the field.
 #include <gtest/gtest.h>
 
-#include <filesystem>
-#include <fstream>
+#include <string>
+#include <vector>
 
 #include "agvslam/core/error.h"
 #include "agvslam/dynamic/detector.h"
-#include "common/test_data.h"
+#include "common/config_test.h"
 
 namespace agvslam::dynamic {
 namespace {
-namespace fs = std::filesystem;
+using test::TempYaml;
 
-class TempYaml {
- public:
-  explicit TempYaml(const std::string& text) {
-    dir_ = agvslam::test::make_temp_dir("agvslam-dynamic-config");
-    path_ = (fs::path(dir_) / "dynamic.yaml").string();
-    std::ofstream(path_) << text;
-  }
-  ~TempYaml() {
-    std::error_code ec;
-    fs::remove_all(dir_, ec);
-  }
-  TempYaml(const TempYaml&) = delete;
-  TempYaml& operator=(const TempYaml&) = delete;
-  const std::string& path() const { return path_; }
-
- private:
-  std::string dir_, path_;
-};
-
-void expect_error(const std::string& text, const std::string& field) {
-  TempYaml f(text);
-  try {
-    load_dynamic_config(f.path());
-    ADD_FAILURE() << "no error for:\n" << text;
-  } catch (const InputError& e) {
-    EXPECT_EQ(e.source(), f.path());
-    EXPECT_EQ(e.where(), field) << e.what();
-  }
+// expected: the whole "expected ..." text of the error, or "" to check only the file and the field.
+void expect_error(const std::string& text, const std::string& field, const std::string& expected = "") {
+  test::expect_input_error([](const std::string& path) { load_dynamic_config(path); }, text, field, expected);
 }
 
 TEST(DynamicConfig, ShippedParamsFileEqualsTheDefaults) {
@@ -144,6 +119,36 @@ TEST(DynamicConfig, BadValuesNameFileAndField) {
   expect_error("features: 3\n", "features");
   expect_error("superpixels:\n  size: 3\n", "superpixels");
   EXPECT_THROW(load_dynamic_config("/nonexistent/dynamic.yaml"), InputError);
+}
+
+TEST(DynamicConfig, ErrorsSayWhatWasExpectedAndWhatWasFound) {
+  expect_error("epipolar:\n  a_epi_px: -1\n", "epipolar.a_epi_px", "expected a number in (0, 50] px, got -1");
+  expect_error("tracking:\n  window_px: 4.5\n", "tracking.window_px", "expected an integer in [5, 63] px, got '4.5'");
+  expect_error("roi:\n  scale: 0.3\n", "roi.scale", "expected a number 1 or 0.5 (of the full resolution), got 0.3");
+  expect_error("objects:\n  growth_max_ratio: 0.5\n", "objects.growth_max_ratio",
+               "expected a number in [1, 100] or 0 (0: off), got 0.5");
+  expect_error("band:\n  min_seeds: 7\n  max_seeds: 6\n", "band.max_seeds", "expected at least min_seeds, got 6");
+  expect_error("boundaries:\n  lambda_hinge: 3\n  lambda_occ: 3\n", "boundaries.lambda_occ",
+               "expected more than lambda_hinge (eq. 11), got 3");
+  expect_error("regions:\n  mask_mode: blob\n", "regions.mask_mode",
+               "expected one of rectangle, superpixels, disparity, got 'blob'");
+  expect_error("planes:\n  seed: 4294967296\n", "planes.seed", "expected an unsigned 32-bit integer, got '4294967296'");
+}
+
+TEST(DynamicConfig, TheSeedTakesEveryUnsigned32BitValue) {
+  TempYaml f("planes:\n  seed: 4294967295\n");
+  EXPECT_EQ(load_dynamic_config(f.path()).planes.seed, 4294967295u);
+}
+
+TEST(DynamicConfig, EverySectionRejectsAnUnknownKey) {
+  // The echo has one line per section, "section: key=value ...".
+  const std::vector<std::string> lines = DynamicDetectorConfig{}.describe();
+  ASSERT_EQ(lines.size(), 22u);
+  for (const std::string& line : lines) {
+    const std::string section = line.substr(0, line.find(':'));
+    SCOPED_TRACE(section);
+    expect_error(section + ":\n  no_such_key: 1\n", section + ".no_such_key");
+  }
 }
 
 TEST(DynamicConfig, DetectorRejectsAnInvalidConfiguration) {

@@ -22,7 +22,7 @@ std::vector<PlaceSample> render_samples(const Vocabulary& v, const std::string& 
   o.seed = seed;
   o.layout_seed = layout_seed;
   o.start_offset_m = start_offset_m;
-  o.frames = frames;
+  o.squeeze_to_frames = frames;  // the whole route over `frames` frames
   const sim::Simulator sim(sim::SimConfig{}, o);
   features::OrbExtractor extractor;
   features::KeypointSet kps;

@@ -4,6 +4,7 @@
 #include <algorithm>
 #include <cmath>
 #include <cstdio>
+#include <limits>
 
 #include "agvslam/sim/simulator.h"
 
@@ -77,9 +78,37 @@ TEST(Scenario, DefaultFrameCountsAndSpeeds) {
     EXPECT_LE(s.scenario().agv_speed_mps(), e.max_speed) << e.name;
     EXPECT_NEAR(s.scenario().agv_path_length_m(), e.length, 0.01) << e.name;
   }
-  // --frames plays the same timeline faster or slower.
-  const Simulator half = make_sim("scene2", 1, 200);
-  EXPECT_NEAR(half.scenario().agv_speed_mps(), 2.0 * make_sim("scene2", 1).scenario().agv_speed_mps(), 1e-9);
+}
+
+TEST(Scenario, FramesCutTheTimelineAtItsOwnSpeedAndSqueezeToPlaysItFaster) {
+  const Simulator full = make_sim("scene2", 1);
+  const Scenario& f = full.scenario();
+  // --frames: the first N frames, the AGV and the people where they are in the whole run.
+  const Simulator cut = make_sim("scene2", 1, 100);
+  EXPECT_EQ(cut.frame_count(), 100);
+  EXPECT_EQ(cut.scenario().timeline_frames, 400);
+  EXPECT_DOUBLE_EQ(cut.scenario().agv_speed_mps(), f.agv_speed_mps());
+  for (int k : {0, 37, 99}) {
+    EXPECT_TRUE(cut.T_w_c(k).isApprox(full.T_w_c(k), 0.0)) << "frame " << k;
+    EXPECT_EQ(cut.scenario().scenario_time(k), f.scenario_time(k));
+  }
+  // --squeeze-to: the whole timeline over N frames, twice as fast over 200; --frames cuts that.
+  ScenarioOptions o;
+  o.name = "scene2";
+  o.seed = 1;
+  o.squeeze_to_frames = 200;
+  const Simulator half(SimConfig{}.scaled(0.25), o);
+  EXPECT_EQ(half.frame_count(), 200);
+  EXPECT_NEAR(half.scenario().agv_speed_mps(), 2.0 * f.agv_speed_mps(), 1e-9);
+  EXPECT_TRUE(half.T_w_c(100).isApprox(full.T_w_c(200), 1e-12));
+  EXPECT_TRUE(half.T_w_c(199).isApprox(full.T_w_c(398), 1e-12));
+  o.frames = 50;
+  const Simulator half_cut(SimConfig{}.scaled(0.25), o);
+  EXPECT_EQ(half_cut.frame_count(), 50);
+  EXPECT_TRUE(half_cut.T_w_c(49).isApprox(half.T_w_c(49), 0.0));
+  // Beyond the end of the timeline the AGV stands where it stopped.
+  const Simulator longer = make_sim("scene2", 1, 450);
+  EXPECT_TRUE(longer.T_w_c(449).isApprox(full.T_w_c(399), 1e-12));
 }
 
 TEST(Scenario, PosesStartAtIdentityAndFollowTheRoutes) {
@@ -346,6 +375,92 @@ TEST(Actors, StandingStillIsNotMovingAndLimbsRest) {
   pose_actor(a, walking, obj);
   EXPECT_GE(obj.primitives.size(), 12u);
   EXPECT_NEAR(obj.hi.z, a.look.height_m, 0.05);
+}
+
+TEST(Actors, GivenHeadingsTurnLinearlyAndLiftingOrTurningInPlaceIsMoving) {
+  // A forklift that reverses out (heading kept against the travel), turns on the spot and raises its forks.
+  Actor a;
+  a.cls = ActorClass::kForklift;
+  const double nan = std::numeric_limits<double>::quiet_NaN();
+  a.path = {{0.0, 0.0, 0.0, -kPi / 2, 0.0},  {2.0, 0.0, 2.0, -kPi / 2, 0.0}, {4.0, 0.0, 2.0, kPi, 0.0},
+            {6.0, 0.0, 2.0, kPi, 0.3},       {8.0, 0.0, 2.0, kPi, 0.3},     {9.0, -1.0, 2.0, nan, 0.3}};
+  prepare_actor(a);
+  const ActorState reversing = actor_state(a, 1.0);
+  EXPECT_TRUE(reversing.moving);
+  EXPECT_NEAR(reversing.yaw_rad, -kPi / 2, 1e-9);  // facing -y while driving +y
+  EXPECT_NEAR(reversing.y, 1.0, 1e-9);
+  const ActorState turning = actor_state(a, 3.0);
+  EXPECT_TRUE(turning.moving) << "turning on the spot (45 degrees/s) is moving";
+  EXPECT_EQ(turning.speed_mps, 0.0);
+  EXPECT_NEAR(std::fabs(turning.yaw_rad), 3 * kPi / 4, 1e-9);  // half way from -90 to 180 degrees, the short way
+  const ActorState lifting = actor_state(a, 5.0);
+  EXPECT_TRUE(lifting.moving) << "raising the forks (0.15 m/s) is moving";
+  EXPECT_NEAR(lifting.lift_m, 0.15, 1e-9);
+  const ActorState parked = actor_state(a, 7.0);
+  EXPECT_FALSE(parked.moving);
+  EXPECT_NEAR(parked.lift_m, 0.3, 1e-9);
+  EXPECT_NEAR(std::fabs(parked.yaw_rad), kPi, 1e-9);
+  // A stretch without headings: the direction of travel again.
+  EXPECT_NEAR(std::fabs(actor_state(a, 8.7).yaw_rad), kPi, 1e-6);
+  EXPECT_NEAR(actor_state(a, 8.7).distance_m, 2.7, 1e-9);
+  // The forks ride 0.3 m higher than at travel height.
+  DynamicObject low, high;
+  pose_actor(a, actor_state(a, 0.5), low);
+  pose_actor(a, parked, high);
+  EXPECT_NEAR(high.hi.z - low.hi.z, 0.0, 1e-6);      // the mast does not grow
+  float fork_low = 0, fork_high = 0;
+  for (const auto& p : low.primitives)
+    if (p.part == 8) fork_low = p.a.z;
+  for (const auto& p : high.primitives)
+    if (p.part == 8) fork_high = p.a.z;
+  EXPECT_NEAR(fork_high - fork_low, 0.3, 1e-5);
+}
+
+TEST(Actors, TuggerCartsFollowTheTrackAndPalletsRideAtTheirLift) {
+  Actor t;
+  t.id = 3;
+  t.cls = ActorClass::kAgv;
+  t.vehicle.tugger_carts = 2;
+  t.vehicle.load = {Load::Kind::kCartons, 1.2f};
+  // East 6 m, then north 6 m.
+  t.path = {{0.0, 0.0, 0.0}, {6.0, 6.0, 0.0}, {12.0, 6.0, 6.0}};
+  t.initial_yaw_rad = 0;
+  prepare_actor(t);
+  ASSERT_EQ(trailer_count(t), 2);
+  // At t = 10 s the tractor is 4 m up the north leg; cart 0 (2.3 m back) too, cart 1 (4.45 m back) has not
+  // turned yet.
+  const ActorState st = actor_state(t, 10.0);
+  DynamicObject tractor, cart0, cart1;
+  pose_actor(t, st, tractor);
+  pose_trailer(t, st, 0, cart0);
+  pose_trailer(t, st, 1, cart1);
+  EXPECT_EQ(cart0.id, 3);
+  EXPECT_EQ(cart1.cls, ActorClass::kAgv);
+  EXPECT_NEAR(tractor.origin.x, 6.0, 1e-5);
+  EXPECT_NEAR(tractor.origin.y, 4.0, 1e-5);
+  EXPECT_NEAR(cart0.origin.x, 6.0, 1e-5);
+  EXPECT_NEAR(cart0.origin.y, 4.0 - trailer_offset_m(0), 1e-5);
+  EXPECT_NEAR(cart0.sin_yaw, 1.0, 1e-6);  // heading north
+  EXPECT_NEAR(cart1.origin.x, 6.0 - (trailer_offset_m(1) - 4.0), 1e-5);
+  EXPECT_NEAR(cart1.origin.y, 0.0, 1e-5);
+  EXPECT_NEAR(cart1.cos_yaw, 1.0, 1e-6);  // still heading east
+  EXPECT_GT(cart1.hi.z, 1.5f);            // goods on the cart
+  // Before it starts, the carts stand behind it along its initial heading.
+  DynamicObject waiting;
+  pose_trailer(t, actor_state(t, 0.0), 1, waiting);
+  EXPECT_NEAR(waiting.origin.x, -trailer_offset_m(1), 1e-5);
+  // A pallet actor stands at its lift: its base is lift_m above the floor.
+  Actor p;
+  p.cls = ActorClass::kPallet;
+  p.vehicle.load = {Load::Kind::kWrapped, 1.0f};
+  p.path = {{0.0, 1.0, 1.0, 0.0, 0.25}};
+  prepare_actor(p);
+  DynamicObject pallet;
+  pose_actor(p, actor_state(p, 0.0), pallet);
+  EXPECT_NEAR(pallet.lo.z, 0.25, 2e-3);
+  EXPECT_NEAR(pallet.hi.z, 0.25 + 0.144 + 1.0, 2e-3);
+  EXPECT_NEAR(pallet.hi.x - pallet.lo.x, 1.2, 3e-3);
+  EXPECT_EQ(to_string(ActorClass::kPallet), "pallet");
 }
 
 }  // namespace

@@ -37,12 +37,12 @@ std::vector<std::string> lines_of(const std::string& text) {
   return lines;
 }
 
-Simulator make_sim(const std::string& name, uint64_t seed, double scale, int frames = 0,
+Simulator make_sim(const std::string& name, uint64_t seed, double scale, int squeeze_to_frames = 0,
                    std::optional<uint64_t> layout_seed = std::nullopt) {
   ScenarioOptions o;
   o.name = name;
   o.seed = seed;
-  o.frames = frames;
+  o.squeeze_to_frames = squeeze_to_frames;
   o.layout_seed = layout_seed;
   return Simulator(SimConfig{}.scaled(scale), o);
 }
@@ -123,9 +123,9 @@ TEST(Determinism, NoiseAndExposureAreAsSpecified) {
 
 TEST(Sequence, WritesTheKittiLayoutReadableAsADataset) {
   const std::string dir = test::make_temp_dir("agvslam-sim-seq");
-  const Simulator sim = make_sim("scene3", 4, 0.25, 6);
+  const Simulator sim = make_sim("scene3", 4, 0.25, 6);  // the whole timeline in 6 frames: people in view
   write_sequence(sim, dir);
-  for (const char* sub : {"image_0", "image_1", "disp_0", "mask_0", "instance_0"})
+  for (const char* sub : {"image_0", "image_1", "disp_0", "mask_0", "instance_0", "class_0"})
     for (int k = 0; k < 6; ++k) {
       char name[32];
       std::snprintf(name, sizeof(name), "%06d.png", k);
@@ -162,6 +162,9 @@ TEST(Sequence, WritesTheKittiLayoutReadableAsADataset) {
   EXPECT_TRUE(identical(disp, f.disparity_u16));
   EXPECT_TRUE(identical(mask, f.mask));
   EXPECT_TRUE(identical(left, f.left));
+  const cv::Mat classes = cv::imread((fs::path(dir) / "class_0" / "000003.png").string(), cv::IMREAD_UNCHANGED);
+  EXPECT_EQ(classes.type(), CV_8UC1);
+  EXPECT_TRUE(identical(classes, f.classes));
   // objects.txt: a header comment, then "frame id class moving x_min y_min x_max y_max".
   const auto obj_lines = lines_of(read_text(fs::path(dir) / "objects.txt"));
   ASSERT_FALSE(obj_lines.empty());
@@ -261,6 +264,14 @@ TEST_F(Tool, RejectsBadArgumentsWithAClearMessage) {
   EXPECT_EQ(run("--scenario scene1 --frames -5 --out " + dir_ + "/x", &out), 2);
   EXPECT_NE(out.find("--frames"), std::string::npos) << out;
 
+  EXPECT_EQ(run("--scenario scene1 --squeeze-to 0 --out " + dir_ + "/x", &out), 2);
+  EXPECT_NE(out.find("--squeeze-to"), std::string::npos) << out;
+  // --frames cuts the timeline: more frames than it has (400 for scene1) is an error that names the way out.
+  EXPECT_EQ(run("--scenario scene1 --frames 401 --params " + params_ + " --out " + dir_ + "/x", &out), 2);
+  EXPECT_NE(out.find("--frames"), std::string::npos) << out;
+  EXPECT_NE(out.find("at most 400"), std::string::npos) << out;
+  EXPECT_NE(out.find("--squeeze-to"), std::string::npos) << out;
+
   EXPECT_EQ(run("--scenario scene1 --out /proc/agvslam-sim-out", &out), 2);
   EXPECT_NE(out.find("--out"), std::string::npos) << out;
   EXPECT_NE(out.find("/proc/agvslam-sim-out"), std::string::npos) << out;
@@ -272,18 +283,51 @@ TEST_F(Tool, RejectsBadArgumentsWithAClearMessage) {
   EXPECT_NE(out.find("/nonexistent/sim.yaml"), std::string::npos) << out;
 }
 
+TEST_F(Tool, FramesCutsTheTimelineAndSqueezeToPlaysItOverFewerFrames) {
+  std::string out;
+  ASSERT_EQ(run("--scenario scene2 --frames 6 --seed 3 --params " + params_ + " --out " + dir_ + "/cut", &out), 0)
+      << out;
+  ASSERT_EQ(run("--scenario scene2 --squeeze-to 40 --frames 6 --seed 3 --params " + params_ + " --out " + dir_ +
+                    "/fast",
+                &out),
+            0)
+      << out;
+  const auto cut = lines_of(read_text(fs::path(dir_) / "cut" / "poses.txt"));
+  const auto fast = lines_of(read_text(fs::path(dir_) / "fast" / "poses.txt"));
+  ASSERT_EQ(cut.size(), 6u);
+  ASSERT_EQ(fast.size(), 6u);
+  const std::string cut_json = read_text(fs::path(dir_) / "cut" / "scenario.json");
+  const std::string fast_json = read_text(fs::path(dir_) / "fast" / "scenario.json");
+  EXPECT_NE(cut_json.find("\"timeline_frames\": 400"), std::string::npos) << cut_json;
+  EXPECT_NE(cut_json.find("\"speed_factor\": 1.0"), std::string::npos) << cut_json;
+  EXPECT_NE(fast_json.find("\"timeline_frames\": 40"), std::string::npos) << fast_json;
+  EXPECT_NE(fast_json.find("\"speed_factor\": 10.0"), std::string::npos) << fast_json;
+  // The class ids of class_0 are listed.
+  EXPECT_NE(cut_json.find("\"name\": \"pallet/box\""), std::string::npos) << cut_json;
+  // Frame 0 is the identity in both; by frame 5 the squeezed run (ten times as fast) has driven further.
+  EXPECT_EQ(cut[0], fast[0]);
+  auto z_of = [](const std::string& line) {
+    std::istringstream in(line);
+    double v[12];
+    for (double& x : v) in >> x;
+    return v[11];
+  };
+  EXPECT_GT(z_of(fast[5]), z_of(cut[5]) + 1e-3);
+}
+
 TEST_F(Tool, WritesTheSameSequenceWithOneOrTwoThreads) {
   std::string out1, out2;
-  ASSERT_EQ(run("--scenario scene5 --frames 4 --seed 9 --params " + params_ + " --out " + dir_ + "/t1", &out1), 0)
+  ASSERT_EQ(run("--scenario scene5 --squeeze-to 4 --seed 9 --params " + params_ + " --out " + dir_ + "/t1", &out1), 0)
       << out1;
-  ASSERT_EQ(run("--scenario scene5 --frames 4 --seed 9 --threads 2 --params " + params_ + " --out " + dir_ + "/t2",
+  ASSERT_EQ(run("--scenario scene5 --squeeze-to 4 --seed 9 --threads 2 --params " + params_ + " --out " + dir_ + "/t2",
                 &out2),
             0)
       << out2;
   EXPECT_NE(out1.find("AGV speed"), std::string::npos) << out1;
   EXPECT_NE(out1.find("baseline_m=0.12,"), std::string::npos) << "the settings are echoed at start-up:\n" << out1;
   for (const char* file : {"calib.txt", "times.txt", "poses.txt", "objects.txt", "image_0/000003.png",
-                           "image_1/000003.png", "disp_0/000003.png", "mask_0/000003.png"}) {
+                           "image_1/000003.png", "disp_0/000003.png", "mask_0/000003.png", "instance_0/000003.png",
+                           "class_0/000003.png"}) {
     const std::string a = read_text(fs::path(dir_) / "t1" / file), b = read_text(fs::path(dir_) / "t2" / file);
     EXPECT_FALSE(a.empty()) << file;
     EXPECT_EQ(a, b) << file << " differs between --threads 1 and 2";

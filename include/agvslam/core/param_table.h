@@ -146,6 +146,9 @@ std::string format_id(uint32_t id);                 // 0x300
 // Reads a CAN-style id written as a C integer literal (0x300, 768, 01400); "" keeps `value`.
 void read_id(const File& file, const std::string& section, const std::string& key, uint32_t max_id, uint32_t& value,
              const std::string& expectation);
+// Reads an unsigned integer of at most 32 bits; absent keeps `value`.
+void read_uint32(const File& file, const std::string& section, const std::string& key, uint32_t& value,
+                 const std::string& expectation);
 std::string field(const std::string& section, const std::string& key);  // "section.key"
 [[noreturn]] void fail(const std::string& source, const std::string& where, const std::string& expectation,
                        const std::string& got);
@@ -175,6 +178,17 @@ class Param {
     };
     validate_ = [member, id](const C& c) { return c.*member <= id.max; };
     value_ = [member](const C& c) { return detail::format_id(c.*member); };
+  }
+  // An unsigned 32-bit integer (a seed): a negative value or one above 4294967295 is of the wrong type.
+  Param(const char* key, uint32_t C::*member, Range range, const char* unit = "", const char* reason = "")
+      : key_(key),
+        unit_(unit),
+        expectation_(detail::number_expectation("an unsigned 32-bit integer", range, unit, reason)) {
+    read_ = [member, e = expectation_](const File& f, const std::string& s, const std::string& k, C& c) {
+      detail::read_uint32(f, s, k, c.*member, e);
+    };
+    validate_ = [member, range](const C& c) { return range.contains(c.*member); };
+    value_ = [member](const C& c) { return std::to_string(c.*member); };
   }
   Param(const char* key, uint64_t C::*member, const char* reason = "")
       : key_(key),

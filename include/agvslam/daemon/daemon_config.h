@@ -11,6 +11,8 @@
 //   base_link    camera-to-base_link extrinsic T_base_cam (x, y, z, roll, pitch, yaw of the camera)
 //   covariance   the documented heuristic for the pose and twist covariance (the tracker gives none)
 //   dds / can    the outputs (drivers::dds::DdsConfig / drivers::can::CanConfig keys plus `enabled`)
+//   odometry     wheel odometry in (none | can) and the live check against it (OdometryMonitorConfig keys)
+//   can_odometry the odometry message on the CAN bus (drivers::can::CanOdometryConfig keys; read with source can)
 //   trajectory   the published poses as a TUM file, and the keyframe-refined trajectory at stop
 //   log          log file (reopened on SIGHUP), level, per-sample JSON log, statistics period
 //   systemd      when READY=1 is sent
@@ -28,7 +30,9 @@
 
 #include "agvslam/core/camera.h"
 #include "agvslam/core/se3.h"
+#include "agvslam/daemon/odometry_monitor.h"
 #include "agvslam/drivers/can/can_config.h"
+#include "agvslam/drivers/can/odometry_input.h"
 #include "agvslam/drivers/dds/dds_config.h"
 #include "agvslam/drivers/v4l2/camera_config.h"
 #include "agvslam/dynamic/detector.h"
@@ -131,6 +135,16 @@ struct OutputsConfig {
   drivers::can::CanConfig can;
 };
 
+// Where wheel odometry comes from: none (no check, the outputs as without it) or the vehicle's odometry frames on
+// the CAN output's interface (section can_odometry).
+enum class OdometrySource { kNone, kCan };
+
+struct OdometryConfig {
+  OdometrySource source = OdometrySource::kNone;
+  OdometryMonitorConfig check;
+  drivers::can::CanOdometryConfig can;  // section can_odometry
+};
+
 enum class TrajectoryFrame { kBaseLink, kCamera };
 
 struct TrajectoryConfig {
@@ -173,6 +187,7 @@ struct DaemonConfig {
   BaseLinkConfig base_link;
   CovarianceConfig covariance;
   OutputsConfig outputs;
+  OdometryConfig odometry;
   TrajectoryConfig trajectory;
   LogConfig log;
   SystemdConfig systemd;

@@ -7,6 +7,11 @@
 //         pose, see PoseSampleBuilder), rate-limited by can.rate_hz; never blocks
 //   trajectory file (TUM) of the tracking samples, and the per-sample JSON log (pose_log)
 // publish() stamps latency_ns (capture -> handed to the outputs) just before handing the sample over.
+//
+// With odometry.source can, publish() first reads the odometry frames that arrived on the CAN socket (never
+// waiting), feeds them and the sample to the OdometryMonitor, and fills sample.odometry_check, which the DDS status,
+// the CAN frame AGVSLAM_ODOM_CHECK and the JSON log then carry; a warning goes to the log when the state turns to
+// disagrees (at most every odometry.warn_every_s). Without an odometry input the outputs are as they were.
 
 #include <chrono>
 #include <cstdio>
@@ -16,6 +21,8 @@
 #include <string>
 
 #include "agvslam/daemon/daemon_config.h"
+#include "agvslam/daemon/odometry_monitor.h"
+#include "agvslam/drivers/can/odometry_input.h"
 #include "agvslam/drivers/can/can_publisher.h"
 #include "agvslam/drivers/dds/publisher.h"
 #include "agvslam/drivers/pose_sample.h"
@@ -46,7 +53,15 @@ struct OutputStats {
   bool can_enabled = false;
   drivers::can::CanPublisherStats can;
   std::string can_last_error;
+  bool odometry_enabled = false;
+  drivers::can::CanOdometryStats can_odometry;  // frames of the odometry message and what became of them
+  uint64_t odometry_samples = 0;                // handed to the monitor
+  uint64_t odometry_disagreements = 0;          // times the state turned to disagrees
+  drivers::OdometryCheck odometry_check;        // the latest
 };
+
+// The check's figures as the JSON log and the statistics write them ({"state": "agrees", "distance_ratio": ...}).
+nlohmann::json odometry_check_json(const drivers::OdometryCheck& check);
 
 // A line-buffered append-only text file (the TUM trajectory, the JSON log); RAII over FILE*.
 class TextFile {
@@ -91,12 +106,23 @@ class PoseOutputs {
   std::unique_ptr<drivers::dds::DdsPosePublisher> dds_status_;
   std::unique_ptr<drivers::dds::DdsPosePublisher> dds_pose_;
   std::unique_ptr<drivers::can::CanPosePublisher> can_;
+  std::unique_ptr<drivers::can::CanOdometryDecoder> can_odometry_;
+  std::unique_ptr<OdometryMonitor> odometry_monitor_;
+  drivers::OdometryCheckState odometry_state_ = drivers::OdometryCheckState::kOff;
+  std::chrono::steady_clock::time_point last_odometry_warning_{};
+  uint64_t odometry_disagreements_ = 0;
   TextFile trajectory_, pose_log_;
   int unflushed_ = 0;
   uint64_t samples_ = 0, tracking_samples_ = 0, heartbeats_ = 0;
   mutable std::mutex stats_mutex_;  // stats() is read by the supervisor while the outputs thread publishes
   drivers::can::CanPublisherStats can_stats_;  // copied after each publish (CanPosePublisher is single-threaded)
   std::string can_last_error_;
+  drivers::can::CanOdometryStats can_odometry_stats_;  // copied likewise, with the monitor's figures
+  drivers::OdometryCheck odometry_check_;
+  uint64_t odometry_samples_copy_ = 0, odometry_disagreements_copy_ = 0;
+
+  // Reads the odometry frames that arrived and fills item.sample.odometry_check (odometry input configured).
+  void check_odometry(OutputItem& item, bool tracking);
 };
 
 }  // namespace agvslam::daemon

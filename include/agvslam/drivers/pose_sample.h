@@ -31,6 +31,37 @@ inline const char* to_string(TrackingState state) {
   return "unknown";
 }
 
+// The live odometry check (agvslamd's `odometry` section: the SLAM's motion against the vehicle's wheel odometry over
+// a sliding window), in the numbering the DDS status topic and the CAN frame AGVSLAM_ODOM_CHECK carry.
+enum class OdometryCheckState : uint8_t {
+  kOff = 0,              // no odometry input configured
+  kNoOdometry = 1,       // configured, but no odometry sample received yet
+  kStale = 2,            // no odometry sample for longer than odometry.stale_ms
+  kTooLittleMotion = 3,  // the window holds too little travel and turning to judge (or is not full yet)
+  kAgrees = 4,
+  kDisagrees = 5,        // distance ratio or heading difference outside the tolerance
+};
+
+inline const char* to_string(OdometryCheckState state) {
+  switch (state) {
+    case OdometryCheckState::kOff: return "off";
+    case OdometryCheckState::kNoOdometry: return "no_odometry";
+    case OdometryCheckState::kStale: return "stale";
+    case OdometryCheckState::kTooLittleMotion: return "too_little_motion";
+    case OdometryCheckState::kAgrees: return "agrees";
+    case OdometryCheckState::kDisagrees: return "disagrees";
+  }
+  return "unknown";
+}
+
+struct OdometryCheck {
+  OdometryCheckState state = OdometryCheckState::kOff;
+  double distance_ratio = std::nan("");  // SLAM / odometry path length over the window; NaN: not available
+  double speed_rmse_mps = 0;             // RMS speed difference over the window's 0.5 s steps
+  double heading_difference_deg = 0;     // SLAM heading change - integrated odometry yaw rate over the window
+  double window_s = 0;                   // the span the figures cover
+};
+
 using Matrix6d = Eigen::Matrix<double, 6, 6>;
 
 struct PoseSample {
@@ -59,6 +90,7 @@ struct PoseSample {
   float dynamic_pixel_fraction = 0.0F;  // 0..1, share of the left image masked as dynamic
   // Capture -> pose handed to the outputs, nanoseconds (measured by the daemon when it hands the sample over).
   int64_t latency_ns = 0;
+  OdometryCheck odometry_check;  // filled by the daemon's outputs stage when an odometry input is configured
 };
 
 // Yaw (rotation about z of map, radians in (-pi, pi]) of T_map_base, the heading the CAN frames carry.

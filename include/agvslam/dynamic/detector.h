@@ -77,7 +77,7 @@ struct DetectorOptions {
   std::string describe() const;
 };
 
-// Everything in params/dynamic.yaml: one struct per stage or part.
+// Everything in params/dynamic.yaml: one struct per part; their tables (read, validate, echo): dynamic_config.cpp.
 struct DynamicDetectorConfig {
   QuadtreeFastConfig features;
   LkTrackerConfig tracking;
@@ -103,7 +103,7 @@ struct DynamicDetectorConfig {
   ConfirmOptions confirm;
 
   void validate(const std::string& source) const;
-  // One line per stage, for the start-up echo.
+  // The start-up echo: one line per section, "section: key=value unit, ...".
   std::vector<std::string> describe() const;
 };
 

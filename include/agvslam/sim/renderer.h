@@ -12,7 +12,8 @@
 //
 // Outputs per camera: linear radiance (before exposure and noise), depth along the optical axis (the ray
 // parameter: rays are built as R_m_c * ((u - cx) / fx, (v - cy) / fy, 1)), the id of the dynamic object seen
-// at the pixel centre (0 = static scene) and a surface key (for edge detection). Rows may be split across
+// at the pixel centre (0 = static scene), its semantic class (semantic_classes.h) and a surface key (for edge
+// detection). Rows may be split across
 // threads; every pixel is computed independently, so the result does not depend on the thread count.
 
 #include <Eigen/Geometry>
@@ -59,6 +60,7 @@ struct CameraRender {
   cv::Mat radiance;   // CV_32FC1, linear
   cv::Mat depth_m;    // CV_32FC1, depth along the optical axis (0 = nothing hit)
   cv::Mat object_id;  // CV_16UC1, actor id at the pixel centre (0 = static scene)
+  cv::Mat class_id;   // CV_8UC1, SemanticClass of the surface at the pixel centre (semantic_classes.h)
   cv::Mat surface_key;// CV_32SC1
   cv::Mat edge;       // CV_8UC1, scratch: pixels that were supersampled
 };
@@ -88,7 +90,6 @@ class Renderer {
   float cached_wall_albedo(int wall, float u, float z, float footprint_m) const;
   float cached_ceiling_albedo(float x, float y, float footprint_m) const;
   float cached_box_face_albedo(std::size_t box, int face, float u, float v, float footprint_m) const;
-  TextureCache::Stats texture_cache_stats() const { return textures_.stats(); }
 
   const Warehouse& warehouse() const { return warehouse_; }
   const RenderSettings& settings() const { return settings_; }
@@ -179,5 +180,8 @@ float box_albedo(Material material, uint8_t variant, const FaceSample& f);
 // Albedo of a point on an actor (p_local in the object's yaw frame: x forward, y left, z up).
 float actor_albedo(const DynamicObject& obj, const DynamicPrimitive& prim, const V3& p_local, const V3& n_local,
                    float axis_param, float footprint_m);
+// The same for a person's body, clothes and shoes (clothing.cpp).
+float person_albedo(const DynamicObject& obj, const DynamicPrimitive& prim, const V3& p_local, const V3& n_local,
+                    float axis_param, float footprint_m);
 
 }  // namespace agvslam::sim

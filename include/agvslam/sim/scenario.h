@@ -18,13 +18,35 @@
 //           ahead; a parked forklift (never moves)
 //   scene5  the same loop; a person walks 1.5-2.4 m ahead of the AGV for the whole loop, one crosses beyond
 //           them (~3.3-4 m ahead), one stands picking then walks away; another AGV is parked, then drives
+//   scene6  AGV waits before a cross-aisle while a forklift crosses 1.6-2.4 m ahead and stops in front of it,
+//           then drives the aisle; a person crosses ahead
 //
-// Every scenario has a nominal timeline (people 0.6-1.3 m/s, the AGV ~0.8-0.9 m/s). `--frames N` plays the whole
-// timeline over N frames, so speeds scale with default_frames / N. Actors are generated from (seed,
+// Scenes from warehouse operation (issue 37), where a moving object dominates the view, moves with the camera
+// or was static and mapped before it moved (scenario_operations.cpp). Vehicles keep right in the main aisle
+// (3.2 m between the rack faces: the AGV 0.65 m right of its centre, oncoming traffic 0.75 m left of it).
+//   follow    the AGV follows a tugger train (AGV class, two 1.6 m x 1.2 m carts of goods) or a loaded forklift
+//             down the main aisle at ~0.9 m/s, 2.6-3.3 m behind its rear (time headway 0.7-1.1 s plus 2.0-2.3 m);
+//             the leader covers ~10-12 % of the view and moves along the epipolar lines; both stop at the end
+//   crowd     the AGV drives to the zebra crossing, stops 2 m before the cross-aisle and waits 14.5-16 s while a
+//             group of 5-7 people (two abreast, 1.0-1.2 m/s) crosses 1.6-2.4 m ahead, then a forklift crosses
+//             the other way 1.7-2.9 m ahead; then it drives on 8 m
+//   pallet    the AGV stands at the staging area facing three pallet slots 2.8 m ahead, two with loaded pallets
+//             (actors of class pallet). A forklift drives in, turns on the spot, slides its forks into one of
+//             them (standing in view for ~15 s), lifts it, reverses, turns and carries it out of sight; it comes
+//             back reversing with another pallet, sets it down in the free slot and leaves. scenario.json lists the
+//             frames at which each actor moves.
+//   oncoming  the AGV drives 24-26 m down the main aisle keeping right; a loaded forklift (1.7-2.2 m/s), then a
+//             tugger train or a cart AGV (1.0-1.2 m/s) come from the aisle's far end in the other lane and pass
+//             it with ~0.4 m between their sides
+//
+// Every scenario has a nominal timeline (people 0.6-1.3 m/s, the AGV ~0.8-0.9 m/s), played at its own speed:
+// `--frames N` writes its first N frames. `--squeeze-to N` plays the whole timeline over N frames instead, so
+// speeds scale with default_frames / N (and --frames then cuts that). Actors are generated from (seed,
 // RngStream::kActors), the warehouse from the layout seed, so the layout can be kept while people change.
-// Actor timings are chosen so that people keep >= 1 m (vehicles >= 1.5 m) from the camera and every actor
-// >= 0.5 m from the others (checked on a 50 ms grid; a warning is logged if no candidate satisfies it); the
-// AGV never stops for them.
+// In scene1-6, actor timings are chosen so that people keep >= 1 m (vehicles >= 1.5 m) from the camera and every
+// actor >= 0.5 m from the others (checked on a 50 ms grid; a warning is logged if no candidate satisfies it); the
+// AGV never stops for them. In the operation scenes passing vehicles come closer (by design) and the group's
+// people walk 0.6-1 m apart.
 
 #include <cstdint>
 #include <optional>
@@ -42,20 +64,22 @@ struct ScenarioInfo {
   double nominal_duration_s;  // default frames = round(nominal_duration_s * rate_hz)
 };
 
-// The catalogue, in order: static, scene1 .. scene5.
+// The catalogue, in order: static, scene1 .. scene6, follow, crowd, pallet, oncoming.
 const std::vector<ScenarioInfo>& scenario_catalogue();
 // Throws InputError("--scenario", name, "expected one of: ...") for an unknown name.
 const ScenarioInfo& find_scenario(const std::string& name);
 
 struct ScenarioOptions {
   std::string name = "scene1";
-  int frames = 0;                        // 0: the scenario's default
+  int frames = 0;             // frames to write: the first `frames` of the timeline (0: all of it); beyond its
+                              // end the AGV and the actors stand where the timeline left them
+  int squeeze_to_frames = 0;  // play the whole timeline over this many frames (0: at its own speed)
   uint64_t seed = 1;                     // actors (and, by default, the layout)
   std::optional<uint64_t> layout_seed;   // warehouse layout and textures (default: seed)
   double start_offset_m = 0;             // AGV start along its route (loop: any value, wraps; line: [0, 3] m)
 
   uint64_t effective_layout_seed() const { return layout_seed ? *layout_seed : seed; }
-  // Throws InputError naming the option for frames <= 0 (when given), a bad start offset, ...
+  // Throws InputError naming the option for negative frame counts, a bad start offset, ...
   void validate(const WarehouseLayout& layout) const;
 };
 
@@ -84,16 +108,23 @@ class RoutePath {
   bool closed_ = false;
 };
 
-// Trapezoidal speed profile: rest for hold_start_s, accelerate, cruise, decelerate, rest for hold_end_s.
+// Trapezoidal speed profile: rest for hold_start_s, accelerate, cruise, decelerate, rest for hold_end_s. With
+// stop_at_m >= 0 it drives two such trapezoids with the same cruise speed, standing for stop_s at stop_at_m
+// between them (an AGV waiting at a crossing).
 struct SpeedProfile {
   double distance_m = 0;
   double duration_s = 1;
   double hold_start_s = 0.5, hold_end_s = 0.5;
   double accel_mps2 = 0.4;
+  double stop_at_m = -1;  // < 0: no stop on the way
+  double stop_s = 0;
   double cruise_mps = 0;  // derived by solve()
   void solve();
   double distance_at(double t_s) const;
   double speed_at(double t_s) const;
+  // With a stop on the way: when the AGV arrives there and when it drives on (scenario time, s).
+  double stop_begin_s() const;
+  double stop_end_s() const { return stop_begin_s() + stop_s; }
 };
 
 struct AgvMotion {
@@ -110,10 +141,11 @@ struct Scenario {
   std::string name, description;
   uint64_t seed = 1, layout_seed = 1;
   double start_offset_m = 0;
-  int frames = 1;
+  int frames = 1;                   // frames written
+  int timeline_frames = 1;          // frames the whole timeline is played over (the scenario's own: its default)
   double rate_hz = 20;
   double nominal_duration_s = 20;   // scenario timeline length
-  double time_scale = 1;            // real seconds per scenario second = frames / rate / nominal duration
+  double time_scale = 1;            // real seconds per scenario second = timeline_frames / rate / nominal duration
   AgvMotion agv;
   std::vector<Actor> actors;
   double min_camera_clearance_m = 1e9;  // smallest actor-to-camera distance over the timeline (surface)
@@ -133,6 +165,8 @@ Scenario make_scenario(const ScenarioOptions& options, const Warehouse& warehous
 struct Circle {
   double x, y, r;
 };
-std::vector<Circle> actor_footprint(ActorClass cls, const ActorState& state);
+std::vector<Circle> actor_footprint(const Actor& actor, const ActorState& state);
+// True when one of the two carries the other at times (their footprints overlap then by design).
+bool carries(const Actor& a, const Actor& b);
 
 }  // namespace agvslam::sim

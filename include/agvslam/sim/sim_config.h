@@ -3,8 +3,8 @@
 // the YAML file overrides any subset of them:
 //
 //   camera:    width, height, fx, fy, cx, cy, baseline_m, height_above_floor_m, rate_hz
-//   sensor:    noise_sigma_dn, exposure_variation, vignetting
-//   rendering: max_depth_m, antialias_edges, haze_distance_m, png_compression
+//   sensor:    noise_sigma_dn, exposure_variation, exposure_spread, vignetting
+//   rendering: max_depth_m, antialias_edges, haze_distance_m, png_compression, lighting_variation
 //   vehicle:   vibration_deg
 //
 // fy <= 0 means fy = fx; cx, cy < 0 mean the image centre ((width - 1) / 2, (height - 1) / 2). Each section's
@@ -32,6 +32,7 @@ struct SimConfig {
   // Sensor.
   double noise_sigma_dn = 2.0;        // Gaussian read noise, grey levels (digital numbers)
   double exposure_variation = 0.04;   // amplitude of the smooth global gain variation (0.04 = +-4 %)
+  double exposure_spread = 0.1;       // a sequence's exposure is drawn from its seed in [1 - s, 1 + s]
   double vignetting = 0.10;           // relative brightness loss in the image corners
 
   // Rendering.
@@ -39,6 +40,8 @@ struct SimConfig {
   bool antialias_edges = true;        // 2 extra samples on silhouette pixels (ground truth: pixel centres)
   double haze_distance_m = 140.0;     // e-folding distance of a faint atmospheric haze (<= 0: none)
   int png_compression = 1;            // zlib level 0..9 for the written PNGs
+  double lighting_variation = 0.25;   // relative spread of the key light's strength (the ambient light's: half of
+                                      // it), drawn from the layout seed with the key light's direction (0: fixed)
 
   // Vehicle.
   double vibration_deg = 0.25;        // amplitude of the camera's pitch/roll vibration at full speed

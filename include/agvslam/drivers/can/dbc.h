@@ -30,6 +30,9 @@ struct DbcSignal {
   // Raw integer (sign-extended when signed) from a payload; nullopt when the signal lies beyond `len` bytes.
   std::optional<int64_t> raw(const uint8_t* data, std::size_t len) const;
   double physical(int64_t raw_value) const { return static_cast<double>(raw_value) * factor + offset; }
+  // Writes a physical value into a payload of at least the signal's extent: rounded to the nearest step and
+  // clamped to the raw range the signal's length and sign allow (the inverse of raw() and physical()).
+  void encode(double physical_value, uint8_t* data) const;
 };
 
 struct DbcMessage {

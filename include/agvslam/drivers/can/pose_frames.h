@@ -10,6 +10,11 @@
 //   base+3 AGVSLAM_POSE_STDDEV StdDevX uint16 mm | StdDevY uint16 mm | StdDevYaw uint16 0.01 deg | reserved | Counter | Crc
 //   base+4 AGVSLAM_STATUS      LatencyMs uint16 0.1 ms | Fps uint8 0.5 Hz | DynamicPct uint8 0.5 % |
 //                              DroppedFrames uint16 | TrackingState 4 bit | Counter | Crc
+//   base+5 AGVSLAM_ODOM_CHECK  DistanceRatio uint16 0.001 (0xFFFF: not available) | SpeedRmse uint16 mm/s |
+//                              HeadingDiff int16 0.01 deg | OdomCheckState 4 bit | Counter | Crc
+//                              (with STATUS, only while an odometry input is configured)
+//   base+6 VEHICLE_ODOMETRY    in: Speed int16 mm/s | YawRate int16 0.01 deg/s | reserved | Counter | Crc, sent by
+//                              the vehicle controller (drivers/can/odometry_input.h decodes it with the DBC)
 // Every frame: bits 52..55 Counter (4-bit rolling counter, the same value in every frame of one pose, +1 per
 // pose), bits 56..63 Crc (CRC-8/SAE-J1850: poly 0x1D, init 0xFF, final xor 0xFF) over the 4 bytes of the CAN id
 // (little-endian, without EFF/RTR/ERR flags) followed by payload bytes 0..len-2.
@@ -33,6 +38,8 @@ enum FrameOffset : uint32_t {
   kVelocityOffset = 2,
   kStdDevOffset = 3,
   kStatusOffset = 4,
+  kOdometryCheckOffset = 5,
+  kVehicleOdometryOffset = 6,
   kPoseFdOffset = 8,
 };
 inline constexpr std::size_t kPoseFdLength = 48;
@@ -62,6 +69,8 @@ uint8_t frame_crc(const CanFrameBytes& f);
 std::size_t encode_classic_frames(const PoseSample& s, uint8_t counter, const FrameLayout& layout, bool with_velocity,
                                   bool with_stddev, bool with_status,
                                   std::array<CanFrameBytes, kMaxClassicFrames>& out);
+// AGVSLAM_ODOM_CHECK of one pose cycle (classic, 8 bytes, also sent beside the CAN FD frame).
+CanFrameBytes encode_odometry_check_frame(const OdometryCheck& check, uint8_t counter, const FrameLayout& layout);
 // The single CAN FD frame of one pose cycle.
 CanFrameBytes encode_fd_frame(const PoseSample& s, uint8_t counter, const FrameLayout& layout);
 
