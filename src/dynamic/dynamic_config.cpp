@@ -44,6 +44,7 @@ const Table<LkTrackerConfig>& tracking_params() {
       {"persistent", &C::persistent},
       {"min_track_distance_px", &C::min_track_distance_px, Range::closed(0, 200), "px"},
       {"max_tracks", &C::max_tracks, Range::closed(1, 100000)},
+      {"predict_min_px", &C::predict_min_px, Range::closed(0, 1000), "px", "0: searches start at the old position"},
   });
   return table;
 }

@@ -26,19 +26,29 @@ int LkTracker::levels_for_motion(double max_motion_px) const {
 
 void LkTracker::track(const std::vector<cv::Mat>& prev_pyramid, const std::vector<cv::Mat>& cur_pyramid,
                       const std::vector<cv::Point2f>& prev_pts, std::vector<cv::Point2f>& cur_pts,
-                      std::vector<uint8_t>& ok, int levels) {
+                      std::vector<uint8_t>& ok, int levels, const std::vector<cv::Point2f>* start) {
   ok.assign(prev_pts.size(), 0);
   cur_pts.clear();
   if (prev_pts.empty()) return;
   if (levels < 0 || levels > config_.levels) levels = config_.levels;
   const cv::Size win(config_.window_px, config_.window_px);
   const cv::TermCriteria crit(cv::TermCriteria::COUNT | cv::TermCriteria::EPS, config_.max_iterations, config_.epsilon);
-  cv::calcOpticalFlowPyrLK(prev_pyramid, cur_pyramid, prev_pts, cur_pts, status_, errors_, win, levels, crit, 0,
+  int flags = 0;
+  if (start != nullptr) {
+    cur_pts = *start;
+    flags = cv::OPTFLOW_USE_INITIAL_FLOW;
+  }
+  cv::calcOpticalFlowPyrLK(prev_pyramid, cur_pyramid, prev_pts, cur_pts, status_, errors_, win, levels, crit, flags,
                            config_.min_eigen_threshold);
-  // Backward pass from the forward result with no prior (starting it at prev_pts would let a wrong forward
-  // track converge back to where it came from).
-  cv::calcOpticalFlowPyrLK(cur_pyramid, prev_pyramid, cur_pts, back_pts_, back_status_, errors_, win, levels, crit, 0,
-                           config_.min_eigen_threshold);
+  // Backward pass from the forward result, offset back by the start's offset when there was one (without: no
+  // prior; starting it at prev_pts would let a wrong forward track converge back to where it came from, and a
+  // track that slipped by a period of a repeated pattern ends a period away from prev_pts either way).
+  if (start != nullptr) {
+    back_pts_.resize(prev_pts.size());
+    for (std::size_t i = 0; i < prev_pts.size(); ++i) back_pts_[i] = cur_pts[i] - ((*start)[i] - prev_pts[i]);
+  }
+  cv::calcOpticalFlowPyrLK(cur_pyramid, prev_pyramid, cur_pts, back_pts_, back_status_, errors_, win, levels, crit,
+                           flags, config_.min_eigen_threshold);
   const cv::Size size = cur_pyramid.front().size();
   const float max_fb2 = static_cast<float>(config_.fb_max_error_px * config_.fb_max_error_px);
   for (std::size_t i = 0; i < prev_pts.size(); ++i) {

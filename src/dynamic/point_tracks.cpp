@@ -45,6 +45,7 @@ PointTracks::PointTracks(const PointTracksConfig& config, const StereoCalibratio
 
 void PointTracks::reset() {
   last_max_motion_px_ = -1;
+  has_motion_prior_ = false;
   prev_pts_.clear();
   prev_disparity_px_.clear();
   history_.clear();
@@ -74,13 +75,68 @@ void PointTracks::measure_disparities(const StereoFrame& frame, const std::vecto
   }
 }
 
+bool PointTracks::predicted_starts() {
+  lk_start_.clear();
+  const double min_px = config_.tracking.predict_min_px;
+  if (!has_motion_prior_ || min_px <= 0 || prev_disparity_px_.size() != prev_pts_.size()) return false;
+  const PinholeCamera& camera = calibration_.left;
+  const cv::Size size = prev_pyramid_.front().size();
+  lk_start_ = prev_pts_;
+  bool any = false;
+  for (std::size_t i = 0; i < prev_pts_.size(); ++i) {
+    Eigen::Vector2d uv;
+    double depth_m = 0;
+    if (!DepthConsistencyTest::predict(camera, calibration_.bf(), T_motion_prior_, prev_pts_[i], prev_disparity_px_[i],
+                                       uv, depth_m)) {
+      continue;
+    }
+    const cv::Point2f p(static_cast<float>(uv.x()), static_cast<float>(uv.y()));
+    const cv::Point2f step = p - prev_pts_[i];
+    if (step.dot(step) <= min_px * min_px) continue;
+    if (p.x < 0 || p.y < 0 || p.x > static_cast<float>(size.width - 1) || p.y > static_cast<float>(size.height - 1)) {
+      continue;  // leaves the image: LK from the old position decides (usually out too)
+    }
+    lk_start_[i] = p;
+    any = true;
+  }
+  return any;
+}
+
 void PointTracks::follow_tracks(DetectorResult& result) {
   result.lk_levels = tracker_.levels_for_motion(last_max_motion_px_);
-  tracker_.track(prev_pyramid_, cur_pyramid_, prev_pts_, cur_pts_, tracked_, result.lk_levels);
+  if (!predicted_starts()) {
+    tracker_.track(prev_pyramid_, cur_pyramid_, prev_pts_, cur_pts_, tracked_, result.lk_levels);
+  } else {
+    // The predicted tracks search on the finest levels only (the prediction is a few px off; the coarse levels of a
+    // repeated pattern would pull them a period away), the others as before.
+    split_.assign(2, {});
+    for (std::size_t i = 0; i < prev_pts_.size(); ++i) split_[lk_start_[i] != prev_pts_[i] ? 1 : 0].push_back(i);
+    cur_pts_.assign(prev_pts_.size(), cv::Point2f());
+    tracked_.assign(prev_pts_.size(), 0);
+    for (int part = 0; part < 2; ++part) {
+      const std::vector<std::size_t>& idx = split_[static_cast<std::size_t>(part)];
+      if (idx.empty()) continue;
+      part_prev_.clear();
+      part_start_.clear();
+      for (std::size_t i : idx) {
+        part_prev_.push_back(prev_pts_[i]);
+        part_start_.push_back(lk_start_[i]);
+      }
+      const int levels = part == 1 ? std::min(result.lk_levels, config_.tracking.min_levels) : result.lk_levels;
+      tracker_.track(prev_pyramid_, cur_pyramid_, part_prev_, part_cur_, part_ok_, levels,
+                     part == 1 ? &part_start_ : nullptr);
+      for (std::size_t k = 0; k < idx.size(); ++k) {
+        cur_pts_[idx[k]] = part_cur_[k];
+        tracked_[idx[k]] = part_ok_[k];
+      }
+    }
+  }
+  // The next frame's levels follow the largest motion from where the searches started.
+  const bool predicted = lk_start_.size() == prev_pts_.size() && has_motion_prior_;
   float max_motion2 = -1;
   for (std::size_t i = 0; i < tracked_.size(); ++i) {
     if (!tracked_[i]) continue;
-    const cv::Point2f m = cur_pts_[i] - prev_pts_[i];
+    const cv::Point2f m = cur_pts_[i] - (predicted ? lk_start_[i] : prev_pts_[i]);
     max_motion2 = std::max(max_motion2, m.dot(m));
   }
   last_max_motion_px_ = max_motion2 < 0 ? -1.0 : std::sqrt(static_cast<double>(max_motion2));
@@ -103,6 +159,8 @@ void PointTracks::track_and_test(const StereoFrame& frame, DetectorResult& resul
     depth_test_.run(calibration_.left, calibration_.bf(), prev_pts_, prev_disparity_px_, cur_pts_, cur_disparity_px_,
                     tracked_, result.depth);
   }
+  has_motion_prior_ = config_.use_depth_test && result.depth.valid;
+  if (has_motion_prior_) T_motion_prior_ = result.depth.T_cur_prev;
   tm.depth_test_ms = ms_since(t);
   t = Clock::now();
   test_multiframe(frame, result);

@@ -36,6 +36,12 @@ struct LkTrackerConfig {
   bool persistent = true;
   double min_track_distance_px = 12.0;
   int max_tracks = 600;
+  // Beyond the paper: a track with a disparity starts its LK search where the previous frame's ego-motion (constant
+  // velocity) puts a static point, when that is more than predict_min_px from where it was. Fast forward motion
+  // moves near ground points by tens of px per frame; searched from their old position, LK's coarse levels lock onto
+  // the neighbouring period of a repeated pattern (road hatching, rack uprights, floor tiles), the forward-backward
+  // check cannot tell, and the slipped track looks like motion off the epipolar line. 0 = off.
+  double predict_min_px = 5.0;
 
   void validate(const std::string& source) const;
   std::string describe() const;
@@ -52,9 +58,11 @@ class LkTracker {
 
   // Tracks prev_pts from the image of prev_pyramid into that of cur_pyramid; ok[i] = 1 when the track
   // converged, stayed inside the image and passed the forward-backward check. levels < 0: config().levels.
+  // start: where each search begins in the current image (e.g. where the ego-motion puts a static point), or
+  // nullptr for prev_pts; the backward pass then begins at the result minus the same offset.
   void track(const std::vector<cv::Mat>& prev_pyramid, const std::vector<cv::Mat>& cur_pyramid,
              const std::vector<cv::Point2f>& prev_pts, std::vector<cv::Point2f>& cur_pts, std::vector<uint8_t>& ok,
-             int levels = -1);
+             int levels = -1, const std::vector<cv::Point2f>* start = nullptr);
 
   // The levels (min_levels..levels) that follow motion_margin x max_motion_px; levels when max_motion_px < 0
   // (unknown).

@@ -102,7 +102,11 @@ class PointTracks {
  private:
   void measure_disparities(const StereoFrame& frame, const std::vector<cv::Point2f>& px, const std::vector<uint8_t>* usable,
                            const cv::Mat& full_disparity_px, std::vector<float>& out);
-  // Follows the tracks into this frame and chooses the next frame's LK levels from their largest motion.
+  // Where each track's LK search starts: where the motion prior puts it as a static point, when that is far enough
+  // from its previous position (tracking.predict_min_px); false when no track needs it.
+  bool predicted_starts();
+  // Follows the tracks into this frame and chooses the next frame's LK levels from their largest motion (from where
+  // each search started).
   void follow_tracks(DetectorResult& result);
   // The histories' step to this frame, then the multi-frame test and its depth-edge check.
   void test_multiframe(const StereoFrame& frame, DetectorResult& result);
@@ -129,6 +133,14 @@ class PointTracks {
   std::vector<uint8_t> tracked_;
   std::vector<float> cur_disparity_px_;
   double last_max_motion_px_ = -1;  // the previous frame's largest track motion (-1: unknown), for its LK levels
+  // The last frame's ego-motion (previous -> current camera) from the depth test, the prior of the next frame's
+  // LK starts (tracking.predict_min_px); none after a frame without one.
+  SE3d T_motion_prior_ = SE3d::Identity();
+  bool has_motion_prior_ = false;
+  std::vector<cv::Point2f> lk_start_;  // where each track's search starts (empty: at its old position)
+  std::vector<std::vector<std::size_t>> split_;  // tracks searched from the old position / from a prediction
+  std::vector<cv::Point2f> part_prev_, part_start_, part_cur_;
+  std::vector<uint8_t> part_ok_;
 
   // Scratch of replenish().
   std::vector<uint8_t> consistent_, keep_;
