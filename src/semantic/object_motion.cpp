@@ -1,0 +1,119 @@
+#include "agvslam/semantic/object_motion.h"
+
+#include <algorithm>
+#include <cmath>
+#include <opencv2/imgproc.hpp>
+
+namespace agvslam::semantic {
+namespace {
+
+double median_of(std::vector<double> v) {
+  if (v.empty()) return 0.0;
+  const auto mid = v.begin() + static_cast<std::ptrdiff_t>(v.size() / 2);
+  std::nth_element(v.begin(), mid, v.end());
+  return *mid;
+}
+
+// Which object (index) holds the pixel, -1: none.
+int object_at(const std::vector<SemanticObject>& objects, const cv::Point2f& p) {
+  const cv::Point px(cvRound(p.x), cvRound(p.y));
+  for (std::size_t i = 0; i < objects.size(); ++i) {
+    if (objects[i].box.contains(px) && objects[i].mask.at<uint8_t>(px)) return static_cast<int>(i);
+  }
+  return -1;
+}
+
+// Where a static point near `at` with disparity about `disparity_px` (0: unknown) moved this frame: the median shift
+// of the eight static points nearest in the image among those of similar depth (all static points when too few).
+bool static_shift_near(const std::vector<const dynamic::TrackedPoint*>& statics, const cv::Point2f& at,
+                       double disparity_px, cv::Point2f& shift) {
+  std::vector<const dynamic::TrackedPoint*> similar;
+  if (disparity_px > 0) {
+    for (const dynamic::TrackedPoint* p : statics) {
+      const double d = p->cur_disparity_px;
+      if (d > 0 && std::abs(d - disparity_px) <= 0.25 * disparity_px) similar.push_back(p);
+    }
+  }
+  const std::size_t kNearest = 8;
+  if (similar.size() < kNearest) similar = statics;
+  if (similar.empty()) return false;
+  const std::size_t n = std::min(kNearest, similar.size());
+  std::partial_sort(similar.begin(), similar.begin() + static_cast<std::ptrdiff_t>(n), similar.end(),
+                    [&](const dynamic::TrackedPoint* a, const dynamic::TrackedPoint* b) {
+                      return cv::norm(a->cur_px - at) < cv::norm(b->cur_px - at);
+                    });
+  std::vector<double> dx, dy;
+  for (std::size_t i = 0; i < n; ++i) {
+    dx.push_back(similar[i]->cur_px.x - similar[i]->prev_px.x);
+    dy.push_back(similar[i]->cur_px.y - similar[i]->prev_px.y);
+  }
+  shift = {static_cast<float>(median_of(dx)), static_cast<float>(median_of(dy))};
+  return true;
+}
+
+}  // namespace
+
+double ObjectMotionTest::static_threshold_px(const std::vector<double>& static_offsets_px) const {
+  if (static_offsets_px.empty()) return config_.min_offset_px;
+  const double median = median_of(static_offsets_px);
+  std::vector<double> deviation;
+  deviation.reserve(static_offsets_px.size());
+  for (double v : static_offsets_px) deviation.push_back(std::abs(v - median));
+  // 1.4826 MAD is the standard deviation of a normal distribution.
+  const double sigma = 1.4826 * median_of(deviation);
+  return std::max(config_.min_offset_px, median + config_.static_sigmas * sigma);
+}
+
+std::vector<MotionVote> ObjectMotionTest::update(const std::vector<dynamic::TrackedPoint>& points,
+                                                 std::vector<SemanticObject>& objects) const {
+  std::vector<int> owner(points.size(), -1);
+  std::vector<double> static_offsets;
+  std::vector<const dynamic::TrackedPoint*> statics;
+  for (std::size_t i = 0; i < points.size(); ++i) {
+    const dynamic::TrackedPoint& p = points[i];
+    if (!p.tracked) continue;
+    owner[i] = object_at(objects, p.cur_px);
+    if (owner[i] >= 0 || p.dynamic) continue;
+    statics.push_back(&p);
+    if (p.reprojection_px >= 0) static_offsets.push_back(p.reprojection_px);
+  }
+  const double threshold = static_threshold_px(static_offsets);
+
+  std::vector<MotionVote> votes(objects.size());
+  std::vector<std::vector<double>> disparities(objects.size());
+  for (std::size_t i = 0; i < points.size(); ++i) {
+    if (owner[i] < 0) continue;
+    const dynamic::TrackedPoint& p = points[i];
+    MotionVote& v = votes[static_cast<std::size_t>(owner[i])];
+    if (p.cur_disparity_px > 0) disparities[static_cast<std::size_t>(owner[i])].push_back(p.cur_disparity_px);
+    if (p.reprojection_px < 0 && !p.dynamic_epipolar) continue;
+    ++v.tested_points;
+    if (p.reprojection_px > threshold || p.dynamic_epipolar || p.dynamic_depth) ++v.moving_points;
+  }
+
+  for (std::size_t k = 0; k < objects.size(); ++k) {
+    SemanticObject& object = objects[k];
+    MotionVote& v = votes[k];
+    if (v.tested_points >= config_.min_points) {
+      v.measured = true;
+      v.vote = v.moving_points >= config_.moving_fraction * v.tested_points ? 1.0 : 0.0;
+    } else if (object.flow_known) {
+      cv::Point2f static_shift;
+      const cv::Moments m = cv::moments(object.mask, true);
+      const cv::Point2f centre = m.m00 > 0 ? cv::Point2f(static_cast<float>(m.m10 / m.m00),
+                                                         static_cast<float>(m.m01 / m.m00))
+                                           : cv::Point2f(0, 0);
+      if (static_shift_near(statics, centre, median_of(disparities[k]), static_shift)) {
+        v.from_mask = v.measured = true;
+        v.mask_offset_px = cv::norm(object.flow_px - static_shift);
+        v.vote = v.mask_offset_px > config_.far_min_offset_px ? 1.0 : 0.0;
+      }
+    }
+    object.evidence = config_.decay * object.evidence + v.vote;
+    if (!object.moving && object.evidence > config_.enter_evidence) object.moving = true;
+    if (object.moving && object.evidence < config_.exit_evidence) object.moving = false;
+  }
+  return votes;
+}
+
+}  // namespace agvslam::semantic
