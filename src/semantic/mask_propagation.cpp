@@ -5,15 +5,10 @@
 #include <opencv2/imgproc.hpp>
 #include <opencv2/video/tracking.hpp>
 
+#include "agvslam/dynamic/median.h"
+
 namespace agvslam::semantic {
 namespace {
-
-float median_of(std::vector<float> v) {
-  if (v.empty()) return 0.f;
-  const auto mid = v.begin() + static_cast<std::ptrdiff_t>(v.size() / 2);
-  std::nth_element(v.begin(), mid, v.end());
-  return *mid;
-}
 
 cv::Size lk_window(const PropagationConfig& config) { return {config.lk_window_px, config.lk_window_px}; }
 
@@ -107,7 +102,7 @@ void carry_objects(const std::vector<cv::Mat>& from, const std::vector<cv::Mat>&
       dx.push_back(dst[i].x - src[i].x);
       dy.push_back(dst[i].y - src[i].y);
     }
-    object.flow_px = {median_of(dx), median_of(dy)};
+    object.flow_px = {dynamic::median_in_place(dx, 0.f), dynamic::median_in_place(dy, 0.f)};
     if (warp.empty()) warp = (cv::Mat_<double>(2, 3) << 1, 0, object.flow_px.x, 0, 1, object.flow_px.y);
     cv::Mat moved;
     cv::warpAffine(object.mask, moved, warp, size, cv::INTER_NEAREST, cv::BORDER_CONSTANT, 0);

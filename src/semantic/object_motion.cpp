@@ -4,15 +4,13 @@
 #include <cmath>
 #include <opencv2/imgproc.hpp>
 
+#include "agvslam/dynamic/median.h"
+
 namespace agvslam::semantic {
 namespace {
 
-double median_of(std::vector<double> v) {
-  if (v.empty()) return 0.0;
-  const auto mid = v.begin() + static_cast<std::ptrdiff_t>(v.size() / 2);
-  std::nth_element(v.begin(), mid, v.end());
-  return *mid;
-}
+// The median of a copy (0 for none).
+float median_of(std::vector<float> v) { return dynamic::median_in_place(v, 0.f); }
 
 // Which object (index) holds the pixel, -1: none.
 int object_at(const std::vector<SemanticObject>& objects, const cv::Point2f& p) {
@@ -42,23 +40,23 @@ bool static_shift_near(const std::vector<const dynamic::TrackedPoint*>& statics,
                     [&](const dynamic::TrackedPoint* a, const dynamic::TrackedPoint* b) {
                       return cv::norm(a->cur_px - at) < cv::norm(b->cur_px - at);
                     });
-  std::vector<double> dx, dy;
+  std::vector<float> dx, dy;
   for (std::size_t i = 0; i < n; ++i) {
     dx.push_back(similar[i]->cur_px.x - similar[i]->prev_px.x);
     dy.push_back(similar[i]->cur_px.y - similar[i]->prev_px.y);
   }
-  shift = {static_cast<float>(median_of(dx)), static_cast<float>(median_of(dy))};
+  shift = {median_of(dx), median_of(dy)};
   return true;
 }
 
 }  // namespace
 
-double ObjectMotionTest::static_threshold_px(const std::vector<double>& static_offsets_px) const {
+double ObjectMotionTest::static_threshold_px(const std::vector<float>& static_offsets_px) const {
   if (static_offsets_px.empty()) return config_.min_offset_px;
-  const double median = median_of(static_offsets_px);
-  std::vector<double> deviation;
+  const float median = median_of(static_offsets_px);
+  std::vector<float> deviation;
   deviation.reserve(static_offsets_px.size());
-  for (double v : static_offsets_px) deviation.push_back(std::abs(v - median));
+  for (float v : static_offsets_px) deviation.push_back(std::abs(v - median));
   // 1.4826 MAD is the standard deviation of a normal distribution.
   const double sigma = 1.4826 * median_of(deviation);
   return std::max(config_.min_offset_px, median + config_.static_sigmas * sigma);
@@ -67,7 +65,7 @@ double ObjectMotionTest::static_threshold_px(const std::vector<double>& static_o
 std::vector<MotionVote> ObjectMotionTest::update(const std::vector<dynamic::TrackedPoint>& points,
                                                  std::vector<SemanticObject>& objects) const {
   std::vector<int> owner(points.size(), -1);
-  std::vector<double> static_offsets;
+  std::vector<float> static_offsets;
   std::vector<const dynamic::TrackedPoint*> statics;
   for (std::size_t i = 0; i < points.size(); ++i) {
     const dynamic::TrackedPoint& p = points[i];
@@ -75,12 +73,12 @@ std::vector<MotionVote> ObjectMotionTest::update(const std::vector<dynamic::Trac
     owner[i] = object_at(objects, p.cur_px);
     if (owner[i] >= 0 || p.dynamic) continue;
     statics.push_back(&p);
-    if (p.reprojection_px >= 0) static_offsets.push_back(p.reprojection_px);
+    if (p.reprojection_px >= 0) static_offsets.push_back(static_cast<float>(p.reprojection_px));
   }
   const double threshold = static_threshold_px(static_offsets);
 
   std::vector<MotionVote> votes(objects.size());
-  std::vector<std::vector<double>> disparities(objects.size());
+  std::vector<std::vector<float>> disparities(objects.size());
   for (std::size_t i = 0; i < points.size(); ++i) {
     if (owner[i] < 0) continue;
     const dynamic::TrackedPoint& p = points[i];

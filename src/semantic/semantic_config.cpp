@@ -1,5 +1,6 @@
 #include "agvslam/semantic/semantic_config.h"
 
+#include <filesystem>
 #include <sstream>
 
 #include "agvslam/core/param_table.h"
@@ -153,6 +154,11 @@ SemanticConfig load_semantic_config(const std::string& path) {
                         {model_params().reader(c.model), keyframe_params().reader(c.keyframes),
                          propagation_params().reader(c.propagation), motion_params().reader(c.motion),
                          fusion_params().reader(c.fusion)});
+  // A relative model path in the file is relative to the file (params/semantic.yaml -> params/models/...), so the
+  // daemon and the tools find the model whatever their working directory.
+  if (!c.model.path.empty() && std::filesystem::path(c.model.path).is_relative()) {
+    c.model.path = (std::filesystem::absolute(path).parent_path() / c.model.path).lexically_normal().string();
+  }
   c.validate(path);
   return c;
 }

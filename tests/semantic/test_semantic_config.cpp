@@ -14,7 +14,7 @@ void expect_error(const std::string& text, const std::string& field) {
 TEST(SemanticConfig, ShippedParamsFileLoadsAndMatchesTheDefaults) {
   const SemanticConfig c = load_semantic_config(std::string(AGVSLAM_SOURCE_DIR) + "/params/semantic.yaml");
   const SemanticConfig d;
-  EXPECT_EQ(c.model.path, d.model.path);
+  EXPECT_EQ(c.model.path, std::string(AGVSLAM_SOURCE_DIR) + "/" + d.model.path);  // relative to params/
   EXPECT_EQ(c.model.input_width, d.model.input_width);
   EXPECT_EQ(c.model.input_height, d.model.input_height);
   EXPECT_DOUBLE_EQ(c.model.scale, d.model.scale);

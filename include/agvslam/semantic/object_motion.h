@@ -36,7 +36,7 @@ class ObjectMotionTest {
                                  std::vector<SemanticObject>& objects) const;
 
   // The robust threshold on reprojection offsets from the static points' offsets (px).
-  double static_threshold_px(const std::vector<double>& static_offsets_px) const;
+  double static_threshold_px(const std::vector<float>& static_offsets_px) const;
 
  private:
   MotionConfig config_;

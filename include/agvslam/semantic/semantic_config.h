@@ -10,7 +10,8 @@ namespace agvslam::semantic {
 
 // Section `model`: any PSPNet-style ONNX network that maps one image to per-class scores.
 struct ModelConfig {
-  std::string path = "params/models/pspnet_mnv2.onnx";  // relative paths: to the working directory
+  // Relative: to the working directory here, to the YAML file's folder when read from one.
+  std::string path = "params/models/pspnet_mnv2.onnx";
   int input_width = 288;     // px: the network's fixed input size; the frame is resized to it (INTER_AREA)
   int input_height = 192;    // px
   int input_channels = 1;    // 1: the grey image; 3: grey copied to B, G, R (networks trained on colour)
@@ -89,8 +90,9 @@ struct SemanticConfig {
 
 std::string to_string(FusionMode mode);
 
-// Loads params/semantic.yaml over the defaults. InputError naming the file and field for a missing file, an
-// unknown key, or a value of the wrong type or out of range.
+// Loads params/semantic.yaml over the defaults; a relative model.path becomes relative to the file's folder.
+// InputError naming the file and field for a missing file, an unknown key, or a value of the wrong type or out of
+// range (the model file itself is checked by Segmenter).
 SemanticConfig load_semantic_config(const std::string& path);
 
 }  // namespace agvslam::semantic

@@ -20,6 +20,7 @@ for ((seed = first; seed <= last; ++seed)); do
   scenario=${scenarios[$((seed % ${#scenarios[@]}))]}
   dir="$out/${scenario}_${seed}"
   if [ -d "$dir/class_0" ] && [ "$(ls "$dir/class_0" | wc -l)" -eq "$frames" ]; then continue; fi
-  "$sim" --scenario "$scenario" --seed "$seed" --squeeze-to "$frames" --params "$params" --out "$dir" >/dev/null
+  "$sim" --scenario "$scenario" --seed "$seed" --squeeze-to "$frames" --params "$params" --threads 2 --out "$dir" \
+    >"$dir.log" 2>&1 || { cat "$dir.log"; exit 1; }
   echo "rendered $dir"
 done
