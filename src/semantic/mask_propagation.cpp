@@ -38,7 +38,7 @@ void seed_corners(const cv::Mat& grey, const PropagationConfig& config, std::vec
   static const cv::Mat kErode = cv::getStructuringElement(cv::MORPH_RECT, {5, 5});
   for (SemanticObject& object : objects) {
     object.corners.clear();
-    // Within the object's box only: the corner response of the whole frame would cost the tracking thread.
+    // Within the object's box only: the corner response of the whole frame would cost the caller's thread.
     const cv::Rect box = cv::boundingRect(object.mask);
     if (box.empty()) continue;
     cv::Mat inner;

@@ -109,7 +109,7 @@ const SemanticFrame& SemanticMasker::process(std::size_t frame_index, const cv::
   frame_.votes.clear();
   std::vector<cv::Mat> pyramid = lk_pyramid(grey, config_.propagation);
 
-  // 2. The previous frame's objects into this one (before a result replaces them, so matching sees them here).
+  // 1. The previous frame's objects into this one (before a result replaces them, so matching sees them here).
   if (has_previous_ && !frame_.objects.empty()) {
     carry_objects(previous_pyramid_, pyramid, config_.propagation, frame_.objects);
   } else {
@@ -124,14 +124,14 @@ const SemanticFrame& SemanticMasker::process(std::size_t frame_index, const cv::
     }
   }
 
-  // 3. Ask for this frame's segmentation.
+  // 2. Ask for this frame's segmentation.
   frame_.requested = selector_.next(cues);
   if (frame_.requested != SegmentReason::kNone) {
     requests_.push(Request{frame_index, grey.clone()});
     ++stats_.requests;
   }
 
-  // 1. Finished segmentations (synchronous: wait for this frame's).
+  // 3. Finished segmentations (synchronous: wait for this frame's).
   if (config_.fusion.synchronous && frame_.requested != SegmentReason::kNone) {
     while (true) {
       std::optional<Result> r = results_.pop(std::chrono::seconds(60));
@@ -172,7 +172,7 @@ const SemanticFrame& SemanticMasker::process(std::size_t frame_index, const cv::
 
   previous_pyramid_ = std::move(pyramid);
   has_previous_ = true;
-  frame_.tracking_thread_ms = ms_since(t0);
+  frame_.process_ms = ms_since(t0);
   return frame_;
 }
 

@@ -20,7 +20,7 @@ enum class SegmentReason : uint8_t {
 };
 const char* to_string(SegmentReason reason);
 
-// What the tracking thread knows about the frame it is about to process.
+// What tracking knows about the frame about to be processed.
 struct FrameCues {
   bool relocalised = false;              // the first frame after tracking was lost and found again
   int previous_dynamic_points = -1;      // dynamic points of the previous frame (-1: unknown)

@@ -1,15 +1,18 @@
 #pragma once
-// The semantic stage beside tracking: per frame, in the tracking thread, process()
-//   1. takes a finished segmentation from the worker: the current frame's is used as it is, an earlier frame's
+// The semantic stage beside tracking: per frame, in the thread that runs the geometric detector (in agvslamd and
+// agvslam-run the detector thread, one frame ahead of tracking), process()
+//   1. carries the objects of the previous frame into this one by LK (mask_propagation.h);
+//   2. asks the worker to segment this frame when KeyframeSelector says so (paper 002);
+//   3. takes a finished segmentation from the worker: the current frame's is used as it is, an earlier frame's
 //      (late) is carried from the image it was computed on to this one by LK, one older than
 //      propagation.max_late_frames is dropped (never applied to a frame it does not belong to); the worker has
-//      already cut it into objects, seeded their corners and built that image's pyramid;
-//   2. otherwise carries the objects of the previous frame into this one by LK (mask_propagation.h);
-//   3. asks the worker to segment this frame when KeyframeSelector says so (paper 002);
+//      already cut it into objects, seeded their corners and built that image's pyramid; its objects continue
+//      the carried ones they overlap (their motion evidence with them);
 //   4. decides per object whether it moves (object_motion.h, paper 001) from the geometric detector's points;
 //   5. fuses the moving objects' masks with the detector's mask (fusion.mode).
 // The network runs in the worker's own thread behind a one-slot queue in which the newest request wins, so a slow
-// segmentation never stalls tracking (fusion.synchronous waits for each one instead: offline evaluation).
+// segmentation never stalls that thread or tracking (fusion.synchronous waits for each one instead: offline
+// evaluation).
 
 #include <cstddef>
 #include <cstdint>
@@ -37,7 +40,7 @@ struct SemanticFrame {
   std::vector<MotionVote> votes;    // per object, this frame
   cv::Mat moving_mask;              // CV_8UC1, 255 = a moving segmented object (dilated)
   cv::Mat fused_mask;               // CV_8UC1, 255 = dynamic after fusion with the detector's mask
-  double tracking_thread_ms = 0;    // what process() cost the caller
+  double process_ms = 0;            // what process() cost its caller's thread
 };
 
 struct SemanticStats {
@@ -85,7 +88,7 @@ class SemanticMasker {
     cv::Mat grey;
   };
   // The worker's answer: the objects of the segmented frame with their corners, and that image's pyramid, so the
-  // tracking thread only has to carry them.
+  // caller's thread only has to carry them.
   struct Result {
     std::size_t frame_index;
     std::vector<SemanticObject> objects;
@@ -107,7 +110,7 @@ class SemanticMasker {
   BoundedQueue<Result> results_;
   std::thread worker_;
 
-  // Tracking thread state.
+  // State of the caller's thread.
   SemanticFrame frame_;
   std::vector<cv::Mat> previous_pyramid_;
   int next_object_id_ = 1;
