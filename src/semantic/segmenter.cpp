@@ -21,10 +21,11 @@ std::string describe_import_error(const std::string& what) {
   static const std::regex node(R"(Node \[([^@\]]+)@?[^\]]*\]:\(([^)]*)\))");
   std::smatch m;
   if (std::regex_search(what, m, node)) {
-    return "a node OpenCV's ONNX importer supports; node '" + m[2].str() + "' of type " + m[1].str() +
-           " is not (export at opset 10 without Identity nodes, see src/semantic/training/train.py): " + what;
+    return "expected nodes OpenCV's ONNX importer supports, found node '" + m[2].str() + "' of type " + m[1].str() +
+           " (export at opset 10 without Identity nodes, or rewrite them with src/semantic/training/repair_onnx.py): " +
+           what;
   }
-  return "an ONNX model OpenCV can read (the file may be truncated or not ONNX): " + what;
+  return "expected an ONNX model OpenCV can read (the file may be truncated or not ONNX): " + what;
 }
 
 std::string shape_text(const cv::Mat& m) {
@@ -40,14 +41,14 @@ Segmenter::Segmenter(const ModelConfig& config) : config_(config), net_(std::mak
   const std::string& path = config_.path;
   std::error_code ec;
   if (!std::filesystem::is_regular_file(path, ec)) {
-    throw InputError(path, "model", "an ONNX model file (model.path in params/semantic.yaml); there is none");
+    throw InputError(path, "model", "expected an ONNX model file (model.path in params/semantic.yaml), found none");
   }
   try {
     net_->net = cv::dnn::readNetFromONNX(path);
   } catch (const cv::Exception& e) {
     throw InputError(path, "model", describe_import_error(e.what()));
   }
-  if (net_->net.empty()) throw InputError(path, "model", "an ONNX model with layers; OpenCV read an empty network");
+  if (net_->net.empty()) throw InputError(path, "model", "expected an ONNX model with layers, OpenCV read none");
   net_->net.setPreferableBackend(cv::dnn::DNN_BACKEND_OPENCV);
   net_->net.setPreferableTarget(cv::dnn::DNN_TARGET_CPU);
 
@@ -58,18 +59,18 @@ Segmenter::Segmenter(const ModelConfig& config) : config_(config), net_(std::mak
     out = scores(cv::Mat(config_.input_height, config_.input_width, CV_8UC1, cv::Scalar(0)));
   } catch (const cv::Exception& e) {
     throw InputError(path, "model input",
-                     "a network that accepts a 1x" + input +
+                     "expected a network that accepts a 1x" + input +
                          " image (model.input_channels/input_height/input_width in params/semantic.yaml): " + e.what());
   }
   if (out.dims != 4 || out.size[0] != 1 || out.size[1] < 2) {
-    throw InputError(path, "model output", "a 1xCxHxW score map with C >= 2 classes, got " + shape_text(out));
+    throw InputError(path, "model output", "expected a 1xCxHxW score map with C >= 2 classes, got " + shape_text(out));
   }
   class_count_ = out.size[1];
   for (int id : config_.movable_ids()) {
     if (id >= class_count_) {
       throw InputError(path, "model output",
-                       "class scores for every movable class (model.movable_classes: " + config_.movable_classes +
-                           "), the network gives " + std::to_string(class_count_) + " classes");
+                       "expected class scores for every movable class (model.movable_classes: " +
+                           config_.movable_classes + "), the network gives " + std::to_string(class_count_) + " classes");
     }
   }
 }
