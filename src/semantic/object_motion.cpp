@@ -21,20 +21,18 @@ int object_at(const std::vector<SemanticObject>& objects, const cv::Point2f& p) 
   return -1;
 }
 
-// Where a static point near `at` with disparity about `disparity_px` (0: unknown) moved this frame: the median shift
-// of the eight static points nearest in the image among those of similar depth (all static points when too few).
+// Where a static point near `at` with disparity about `disparity_px` moved this frame: the median shift of the
+// eight static points nearest in the image among those within 25 % of that disparity (the parallax of a driving
+// AGV depends on depth); false when there are fewer than three such points.
 bool static_shift_near(const std::vector<const dynamic::TrackedPoint*>& statics, const cv::Point2f& at,
                        double disparity_px, cv::Point2f& shift) {
   std::vector<const dynamic::TrackedPoint*> similar;
-  if (disparity_px > 0) {
-    for (const dynamic::TrackedPoint* p : statics) {
-      const double d = p->cur_disparity_px;
-      if (d > 0 && std::abs(d - disparity_px) <= 0.25 * disparity_px) similar.push_back(p);
-    }
+  for (const dynamic::TrackedPoint* p : statics) {
+    const double d = p->cur_disparity_px;
+    if (d > 0 && std::abs(d - disparity_px) <= 0.25 * disparity_px) similar.push_back(p);
   }
   const std::size_t kNearest = 8;
-  if (similar.size() < kNearest) similar = statics;
-  if (similar.empty()) return false;
+  if (similar.size() < 3) return false;
   const std::size_t n = std::min(kNearest, similar.size());
   std::partial_sort(similar.begin(), similar.begin() + static_cast<std::ptrdiff_t>(n), similar.end(),
                     [&](const dynamic::TrackedPoint* a, const dynamic::TrackedPoint* b) {
@@ -63,6 +61,7 @@ double ObjectMotionTest::static_threshold_px(const std::vector<float>& static_of
 }
 
 std::vector<MotionVote> ObjectMotionTest::update(const std::vector<dynamic::TrackedPoint>& points,
+                                                 const dynamic::DisparityPlane* ground,
                                                  std::vector<SemanticObject>& objects) const {
   std::vector<int> owner(points.size(), -1);
   std::vector<float> static_offsets;
@@ -96,12 +95,17 @@ std::vector<MotionVote> ObjectMotionTest::update(const std::vector<dynamic::Trac
       v.measured = true;
       v.vote = v.moving_points >= config_.moving_fraction * v.tested_points ? 1.0 : 0.0;
     } else if (object.flow_known) {
-      cv::Point2f static_shift;
       const cv::Moments m = cv::moments(object.mask, true);
       const cv::Point2f centre = m.m00 > 0 ? cv::Point2f(static_cast<float>(m.m10 / m.m00),
                                                          static_cast<float>(m.m01 / m.m00))
                                            : cv::Point2f(0, 0);
-      if (static_shift_near(statics, centre, median_of(disparities[k]), static_shift)) {
+      // Its depth: its own points', else the floor's below the middle of its box (where it stands).
+      double disparity = median_of(disparities[k]);
+      if (disparity <= 0 && ground && ground->valid) {
+        disparity = ground->disparity_at(object.box.x + 0.5 * object.box.width, object.box.y + object.box.height - 1);
+      }
+      cv::Point2f static_shift;
+      if (disparity > 0 && static_shift_near(statics, centre, disparity, static_shift)) {
         v.from_mask = v.measured = true;
         v.mask_offset_px = cv::norm(object.flow_px - static_shift);
         v.vote = v.mask_offset_px > config_.far_min_offset_px ? 1.0 : 0.0;

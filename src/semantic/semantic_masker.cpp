@@ -147,7 +147,8 @@ const SemanticFrame& SemanticMasker::process(std::size_t frame_index, const cv::
 
   // 4. Moving or not.
   static const std::vector<dynamic::TrackedPoint> kNoPoints;
-  frame_.votes = motion_.update(geometry ? geometry->points : kNoPoints, frame_.objects);
+  frame_.votes = motion_.update(geometry ? geometry->points : kNoPoints, geometry ? &geometry->ground_plane : nullptr,
+                                frame_.objects);
 
   // 5. Masks.
   frame_.moving_mask = cv::Mat::zeros(grey.size(), CV_8UC1);

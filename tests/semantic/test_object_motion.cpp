@@ -52,8 +52,8 @@ TEST(ObjectMotion, WalkingPersonIsMaskedStandingPersonKeepsItsFeatures) {
   const cv::Rect walker_box(100, 150, 60, 180), stander_box(500, 150, 60, 180);
   std::vector<SemanticObject> walker{person(walker_box)}, stander{person(stander_box)};
   for (int frame = 0; frame < 10; ++frame) {
-    const auto w = test.update(frame_points(rng, walker_box, 12, 4.0), walker);  // a 4 px step against the static
-    const auto s = test.update(frame_points(rng, stander_box, 12, 0.0), stander);
+    const auto w = test.update(frame_points(rng, walker_box, 12, 4.0), nullptr, walker);  // a 4 px step against the static
+    const auto s = test.update(frame_points(rng, stander_box, 12, 0.0), nullptr, stander);
     ASSERT_EQ(w.size(), 1u);
     EXPECT_TRUE(w[0].measured);
     EXPECT_FALSE(w[0].from_mask);
@@ -66,7 +66,7 @@ TEST(ObjectMotion, WalkingPersonIsMaskedStandingPersonKeepsItsFeatures) {
   // The walker stops: it is unmasked once its evidence has decayed, not on the first quiet frame.
   int frames_to_stop = 0;
   while (walker[0].moving && frames_to_stop < 50) {
-    test.update(frame_points(rng, walker_box, 12, 0.0), walker);
+    test.update(frame_points(rng, walker_box, 12, 0.0), nullptr, walker);
     ++frames_to_stop;
   }
   EXPECT_FALSE(walker[0].moving);
@@ -84,7 +84,7 @@ TEST(ObjectMotion, DetectorFlagsCountAsMovingPoints) {
     for (auto& p : points) {
       if (box.contains(p.cur_px)) p.dynamic_epipolar = true;
     }
-    test.update(points, objects);
+    test.update(points, nullptr, objects);
   }
   EXPECT_TRUE(objects[0].moving);
 }
@@ -100,16 +100,23 @@ TEST(ObjectMotion, FarObjectJudgedByItsMaskShift) {
   ObjectMotionTest test{MotionConfig{}};
   std::mt19937 rng(3);
   const cv::Rect box(400, 200, 12, 30);  // a far person: no tested points of its own
-  std::vector<SemanticObject> far_walker{person(box)}, far_stander{person(box)};
+  std::vector<SemanticObject> far_walker{person(box)}, far_stander{person(box)}, no_depth{person(box)};
+  // The floor where it stands is at the static points' disparity (20 px).
+  dynamic::DisparityPlane floor;
+  floor.c = 20;
+  floor.valid = true;
   for (int frame = 0; frame < 4; ++frame) {
     // The camera pans: every static point shifts 3 px to the left.
     auto points = frame_points(rng, box, 0, 0.0);
     for (auto& p : points) p.prev_px.x = p.cur_px.x + 3.0f;
-    far_walker[0].flow_known = far_stander[0].flow_known = true;
+    far_walker[0].flow_known = far_stander[0].flow_known = no_depth[0].flow_known = true;
+    no_depth[0].flow_px = {0.f, 0.f};
     far_walker[0].flow_px = {-3.0f + 2.5f, 0.f};  // walks 2.5 px per frame against the pan
     far_stander[0].flow_px = {-3.2f, 0.1f};       // moves with the static background
-    const auto w = test.update(points, far_walker);
-    const auto s = test.update(points, far_stander);
+    const auto w = test.update(points, &floor, far_walker);
+    const auto s = test.update(points, &floor, far_stander);
+    const auto n = test.update(points, nullptr, no_depth);
+    EXPECT_FALSE(n[0].measured) << "without a depth there is no static shift to compare with";
     EXPECT_TRUE(w[0].from_mask);
     EXPECT_NEAR(w[0].mask_offset_px, 2.5, 1e-3);
     EXPECT_LT(s[0].mask_offset_px, 0.5);

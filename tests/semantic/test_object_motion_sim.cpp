@@ -50,7 +50,7 @@ double moving_fraction(test::SimSequence& seq, int first, int last, int settle) 
     detector.detect(frame, result);
     person[0].mask = seq.labels(i) == 5;
     person[0].box = cv::boundingRect(person[0].mask);
-    const std::vector<MotionVote> votes = motion.update(result.points, person);
+    const std::vector<MotionVote> votes = motion.update(result.points, &result.ground_plane, person);
     if (i >= first + settle) {
       ++judged;
       moving += person[0].moving ? 1 : 0;

@@ -4,13 +4,15 @@
 // the static points of the same frame: a point moves when its reprojection offset under the ego-motion (the
 // detector's depth test, stereo depth) exceeds the static offsets' median by static_sigmas robust sigmas, or when
 // the detector's epipolar or depth test flagged it. With fewer than min_points tested points (a far object) the
-// vote comes from the mask itself: its corners' image shift against the shift of static points at its depth,
-// which is where a static object there would have gone. Votes accumulate with a decay and a hysteresis, so one
+// vote comes from the mask itself: its corners' image shift against the shift of static points at its depth (its
+// points' disparity, or the floor's where it stands), which is where a static object there would have gone; with
+// no depth at all there is no vote. Votes accumulate with a decay and a hysteresis, so one
 // noisy frame neither masks a standing person nor unmasks a walking one.
 
 #include <vector>
 
 #include "agvslam/dynamic/detection_result.h"
+#include "agvslam/dynamic/disparity_plane.h"
 #include "agvslam/semantic/mask_propagation.h"
 #include "agvslam/semantic/semantic_config.h"
 
@@ -32,8 +34,10 @@ class ObjectMotionTest {
 
   // Votes for each object from the detector's points of this frame and updates its evidence and `moving`.
   // points: DetectorResult::points (current positions cur_px); static points are those outside every object.
+  // ground: the floor's disparity plane (DetectorResult::ground_plane), the depth of an object without points of
+  // its own where it stands (the bottom of its mask); null or invalid: such an object gets no far-object vote.
   std::vector<MotionVote> update(const std::vector<dynamic::TrackedPoint>& points,
-                                 std::vector<SemanticObject>& objects) const;
+                                 const dynamic::DisparityPlane* ground, std::vector<SemanticObject>& objects) const;
 
   // The robust threshold on reprojection offsets from the static points' offsets (px).
   double static_threshold_px(const std::vector<float>& static_offsets_px) const;
