@@ -1,5 +1,6 @@
 #include "agvslam/semantic/semantic_masker.h"
 
+#include <algorithm>
 #include <chrono>
 #include <opencv2/imgproc.hpp>
 
@@ -192,14 +193,35 @@ void SemanticMasker::apply_fusion(dynamic::DynamicMask& mask) const {
   const int r = config_.fusion.mask_dilation_px;
   const cv::Mat grow = cv::getStructuringElement(cv::MORPH_ELLIPSE, {2 * r + 1, 2 * r + 1});
   for (const SemanticObject& object : frame.objects) {
-    if (!object.moving || next_id > 255) continue;
+    if (!object.moving) continue;
     cv::Mat pixels;
     cv::dilate(object.mask, pixels, grow);
     pixels &= frame.fused_mask;
+    const cv::Rect box = cv::boundingRect(pixels);
+    if (box.empty()) continue;
+    // The detector's instance this object overlaps most is the same person or vehicle found by both: the object's
+    // other pixels join it, so it is scored and tracked as one object.
+    int counts[256] = {0};
+    for (int y = box.y; y < box.y + box.height; ++y) {
+      const uint8_t* p = pixels.ptr<uint8_t>(y);
+      const uint8_t* id = mask.instances.ptr<uint8_t>(y);
+      for (int x = box.x; x < box.x + box.width; ++x) counts[p[x] ? id[x] : 0] += p[x] ? 1 : 0;
+    }
+    const int joined = static_cast<int>(std::max_element(counts + 1, counts + 256) - counts);
+    const int id = counts[joined] > 0 ? joined : next_id;
+    if (id > 255) continue;
     pixels.setTo(0, mask.instances != 0);
     if (cv::countNonZero(pixels) == 0) continue;
-    mask.instances.setTo(next_id++, pixels);
-    mask.regions.push_back(cv::boundingRect(pixels));
+    mask.instances.setTo(id, pixels);
+    const cv::Rect added = cv::boundingRect(pixels);
+    if (id == next_id) {
+      ++next_id;
+      mask.regions.push_back(added);
+    } else {
+      for (cv::Rect& region : mask.regions) {
+        if ((region & box).area() > 0) region |= added;
+      }
+    }
   }
   mask.image = frame.fused_mask.clone();
 }

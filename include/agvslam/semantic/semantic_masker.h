@@ -72,8 +72,9 @@ class SemanticMasker {
 
   // Writes the last process()'s fusion into the detector's mask (what the tools score, write and hand to tracking):
   // the image becomes fused_mask; with union the detector's instances stay and each moving segmented object adds
-  // its pixels not yet covered as an instance of its own (ids after the detector's, at most 255); with semantic
-  // the instances are the moving objects alone; with geometry nothing changes. Regions follow the instances.
+  // its pixels not yet covered to the detector's instance it overlaps most (the same object found by both), or as
+  // an instance of its own (ids after the detector's, at most 255); with semantic the instances are the moving
+  // objects alone; with geometry nothing changes. Regions grow with the pixels added to them.
   void apply_fusion(dynamic::DynamicMask& mask) const;
 
   // Forgets the objects and starts again as at the first frame (after a reset of tracking).
