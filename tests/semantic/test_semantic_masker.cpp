@@ -116,3 +116,60 @@ TEST(SemanticMasker, FusionModes) {
 
 }  // namespace
 }  // namespace agvslam::semantic
+
+namespace agvslam::semantic {
+namespace {
+
+// A segmented person whose points move joins the detector's object where they overlap (the detector outlined its
+// upper half): one instance for the whole person; a second moving person the detector missed gets its own.
+TEST(SemanticMasker, UnionJoinsTheDetectorsObject) {
+  const cv::Size size(320, 240);
+  const cv::Rect person_a(40, 40, 40, 120), person_b(200, 60, 30, 100);
+  cv::Mat labels = cv::Mat::zeros(size, CV_8UC1);
+  labels(person_a).setTo(5);
+  labels(person_b).setTo(5);
+  cv::Mat grey(size, CV_8UC1);
+  cv::randu(grey, 0, 255);  // texture for LK
+  SemanticConfig config;
+  config.fusion.synchronous = true;
+  config.fusion.mask_dilation_px = 0;
+  config.keyframes.every_n_frames = 1;
+  SemanticMasker masker(config, [labels](const cv::Mat&) { return labels; });
+
+  dynamic::DetectorResult geometry;
+  geometry.mask.instances = cv::Mat::zeros(size, CV_8UC1);
+  const cv::Rect upper_a(person_a.x, person_a.y, person_a.width, person_a.height / 2);
+  for (int frame = 0; frame < 3; ++frame) {
+    geometry.mask.instances.setTo(0);
+    geometry.mask.instances(upper_a).setTo(1);
+    geometry.mask.image = geometry.mask.instances > 0;
+    geometry.mask.regions = {upper_a};
+    geometry.points.clear();
+    for (const cv::Rect& box : {person_a, person_b}) {
+      for (int k = 0; k < 6; ++k) {
+        dynamic::TrackedPoint p;
+        p.tracked = true;
+        p.cur_px = p.prev_px = cv::Point2f(box.x + 5.f + 5.f * k, box.y + 10.f + 15.f * k);
+        p.reprojection_px = 5;  // far beyond the static points' offsets
+        geometry.points.push_back(p);
+      }
+    }
+    for (int k = 0; k < 30; ++k) {
+      dynamic::TrackedPoint p;
+      p.tracked = true;
+      p.cur_px = p.prev_px = cv::Point2f(100.f + 3.f * k, 200.f);
+      p.reprojection_px = 0.3;
+      geometry.points.push_back(p);
+    }
+    masker.process(static_cast<std::size_t>(frame), grey, &geometry, FrameCues{});
+  }
+  masker.apply_fusion(geometry.mask);
+  EXPECT_EQ(cv::countNonZero(geometry.mask.instances(person_a) != 1), 0) << "person a should be one instance";
+  EXPECT_EQ(cv::countNonZero(geometry.mask.instances(person_b) != 2), 0) << "person b should be an instance of its own";
+  ASSERT_EQ(geometry.mask.regions.size(), 2u);
+  EXPECT_EQ(geometry.mask.regions[0], person_a);
+  EXPECT_EQ(geometry.mask.regions[1], person_b);
+}
+
+}  // namespace
+}  // namespace agvslam::semantic
