@@ -48,6 +48,7 @@ void SemanticMasker::work() {
 void SemanticMasker::reset() {
   selector_.reset();
   frame_.objects.clear();
+  pyramids_.clear();
   has_previous_ = false;
 }
 
@@ -57,16 +58,24 @@ SemanticStats SemanticMasker::stats() const {
   return s;
 }
 
-void SemanticMasker::adopt(const Result& result, const std::vector<cv::Mat>& current_pyramid) {
+void SemanticMasker::adopt(const Result& result) {
   const std::size_t age = frame_.frame_index - result.frame_index;
-  if (result.frame_index > frame_.frame_index || age > static_cast<std::size_t>(config_.propagation.max_late_frames)) {
+  // The frames processed after the segmented one, each with its pyramid (kept for max_late_frames frames).
+  auto next = std::find_if(pyramids_.begin(), pyramids_.end(),
+                           [&](const auto& p) { return p.first > result.frame_index; });
+  if (result.frame_index > frame_.frame_index || age > static_cast<std::size_t>(config_.propagation.max_late_frames) ||
+      (age > 0 && next == pyramids_.end())) {
     ++stats_.stale_results;
     return;
   }
   std::vector<SemanticObject> found = result.objects;
   if (age > 0) {
     ++stats_.late_results;
-    carry_objects(result.pyramid, current_pyramid, config_.propagation, found);
+    const std::vector<cv::Mat>* from = &result.pyramid;
+    for (; next != pyramids_.end(); ++next) {
+      carry_objects(*from, next->second, config_.propagation, found);
+      from = &next->second;
+    }
   }
   // Each new object continues the carried object of its class it overlaps most (its motion evidence with it).
   std::vector<bool> continued(frame_.objects.size(), false);
@@ -108,11 +117,14 @@ const SemanticFrame& SemanticMasker::process(std::size_t frame_index, const cv::
   frame_.requested = SegmentReason::kNone;
   frame_.result_age_frames = -1;
   frame_.votes.clear();
-  std::vector<cv::Mat> pyramid = lk_pyramid(grey, config_.propagation);
+  const bool has_previous = has_previous_ && !pyramids_.empty();
+  pyramids_.emplace_back(frame_index, lk_pyramid(grey, config_.propagation));
+  while (pyramids_.size() > static_cast<std::size_t>(config_.propagation.max_late_frames) + 1) pyramids_.pop_front();
+  const std::vector<cv::Mat>& pyramid = pyramids_.back().second;
 
   // 1. The previous frame's objects into this one (before a result replaces them, so matching sees them here).
-  if (has_previous_ && !frame_.objects.empty()) {
-    carry_objects(previous_pyramid_, pyramid, config_.propagation, frame_.objects);
+  if (has_previous && pyramids_.size() >= 2 && !frame_.objects.empty()) {
+    carry_objects(pyramids_[pyramids_.size() - 2].second, pyramid, config_.propagation, frame_.objects);
   } else {
     for (SemanticObject& object : frame_.objects) object.flow_known = false;
   }
@@ -138,11 +150,11 @@ const SemanticFrame& SemanticMasker::process(std::size_t frame_index, const cv::
       std::optional<Result> r = results_.pop(std::chrono::seconds(60));
       if (!r) break;
       const bool mine = r->frame_index == frame_index;
-      adopt(*r, pyramid);
+      adopt(*r);
       if (mine) break;
     }
   }
-  while (std::optional<Result> r = results_.try_pop()) adopt(*r, pyramid);
+  while (std::optional<Result> r = results_.try_pop()) adopt(*r);
 
   for (SemanticObject& object : frame_.objects) ++object.frames_seen;
 
@@ -172,7 +184,6 @@ const SemanticFrame& SemanticMasker::process(std::size_t frame_index, const cv::
       break;
   }
 
-  previous_pyramid_ = std::move(pyramid);
   has_previous_ = true;
   frame_.process_ms = ms_since(t0);
   return frame_;

@@ -4,7 +4,8 @@
 //   1. carries the objects of the previous frame into this one by LK (mask_propagation.h);
 //   2. asks the worker to segment this frame when KeyframeSelector says so (paper 002);
 //   3. takes a finished segmentation from the worker: the current frame's is used as it is, an earlier frame's
-//      (late) is carried from the image it was computed on to this one by LK, one older than
+//      (late) is carried from the image it was computed on through every frame since to this one by LK (one step
+//      per frame: a walking person's legs defeat one long step), one older than
 //      propagation.max_late_frames is dropped (never applied to a frame it does not belong to); the worker has
 //      already cut it into objects, seeded their corners and built that image's pyramid; its objects continue
 //      the carried ones they overlap (their motion evidence with them);
@@ -16,10 +17,12 @@
 
 #include <cstddef>
 #include <cstdint>
+#include <deque>
 #include <functional>
 #include <memory>
 #include <opencv2/core.hpp>
 #include <thread>
+#include <utility>
 #include <vector>
 
 #include "agvslam/core/bounded_queue.h"
@@ -99,7 +102,7 @@ class SemanticMasker {
 
   void work();
   // Adopts a segmentation of frame `result.frame_index` into the current frame's objects.
-  void adopt(const Result& result, const std::vector<cv::Mat>& current_pyramid);
+  void adopt(const Result& result);
 
   SemanticConfig config_;
   std::vector<int> movable_ids_;
@@ -113,7 +116,8 @@ class SemanticMasker {
 
   // State of the caller's thread.
   SemanticFrame frame_;
-  std::vector<cv::Mat> previous_pyramid_;
+  // The pyramids of the last max_late_frames + 1 frames, the current one last, for carrying late results.
+  std::deque<std::pair<std::size_t, std::vector<cv::Mat>>> pyramids_;
   int next_object_id_ = 1;
   bool has_previous_ = false;
   SemanticStats stats_;
