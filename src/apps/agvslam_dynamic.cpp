@@ -2,7 +2,12 @@
 //
 //   agvslam-dynamic --dataset DIR --out DIR [--json FILE] [--frames A:B] [--params-dynamic params/dynamic.yaml]
 //                   [--params-stereo params/stereo.yaml] [--calib FILE] [--overlay-every N]
-//                   [--min-object-pixels N] [--min-iou X]
+//                   [--min-object-pixels N] [--min-iou X] [--semantic MODEL|off] [--params-semantic FILE]
+//
+// --semantic MODEL adds the semantic stage (agvslam/semantic/semantic_masker.h, params/semantic.yaml): segmented
+// movable objects that move are fused with the detector's mask and scored with it; here it waits for every
+// segmentation (fusion.synchronous), so the scores do not depend on timing. A model that cannot be loaded leaves
+// the detector alone, with a warning.
 //
 // Writes <out>/mask/NNNNNN.png (8-bit, 255 = dynamic) for every frame, and every N-th frame an overlay
 // <out>/overlay/NNNNNN.png with four panels like the paper's Figs. 3, 5, 7 and 8: (a) SGBM disparity of the
@@ -29,6 +34,7 @@
 #include <ctime>
 #include <filesystem>
 #include <map>
+#include <memory>
 #include <optional>
 #include <nlohmann/json.hpp>
 #include <opencv2/imgcodecs.hpp>
@@ -46,6 +52,7 @@
 #include "agvslam/io/dataset.h"
 #include "agvslam/io/objects_io.h"
 #include "agvslam/io/trajectory_io.h"
+#include "agvslam/semantic/semantic_masker.h"
 #include "agvslam/stereo/sgbm.h"
 #include "agvslam/stereo/stereo_config.h"
 #include "tool_main.h"
@@ -61,6 +68,7 @@ namespace eval = agvslam::eval;
 
 struct Options {
   std::string dataset, out_dir, json_path, frames, params_dynamic, params_stereo, calib;
+  std::string semantic = "off", params_semantic;
   int overlay_every = 10;
   int opencv_threads = 1;
   int min_object_pixels = 400;
@@ -796,6 +804,25 @@ void write_json(const Options& o, const agvslam::io::StereoDataset& dataset, std
   agvslam::io::write_file_atomically(o.json_path, text);
 }
 
+// The semantic stage of --semantic MODEL, or null (off, or a model that cannot be loaded: geometry alone).
+std::unique_ptr<agvslam::semantic::SemanticMasker> open_semantic(const Options& o) {
+  namespace sem = agvslam::semantic;
+  if (o.semantic == "off") return nullptr;
+  sem::SemanticConfig config = o.params_semantic.empty() ? sem::SemanticConfig{} : sem::load_semantic_config(o.params_semantic);
+  config.model.path = o.semantic;
+  config.fusion.synchronous = true;
+  std::unique_ptr<sem::Segmenter> segmenter;
+  try {
+    segmenter = std::make_unique<sem::Segmenter>(config.model);
+  } catch (const InputError& e) {
+    spdlog::warn("--semantic: {}; continuing with the geometric detector alone", e.what());
+    return nullptr;
+  }
+  spdlog::info("  semantic settings{}", o.params_semantic.empty() ? " (built-in defaults)" : " from " + o.params_semantic);
+  for (const auto& line : config.describe()) spdlog::info("    {}", line);
+  return std::make_unique<sem::SemanticMasker>(config, std::move(segmenter));
+}
+
 int run(const Options& o) {
   const auto dataset = agvslam::io::open_dataset(o.dataset, o.calib);
   std::size_t first = 0, last = 0;
@@ -822,14 +849,23 @@ int run(const Options& o) {
 
   cv::setNumThreads(o.opencv_threads);
   dyn::DynamicDetector detector(dataset->calibration(), dynamic_config, stereo_config);
+  const std::unique_ptr<agvslam::semantic::SemanticMasker> semantic = open_semantic(o);
   agvslam::stereo::StereoSgbm display_sgbm(stereo_config.sgbm);
   dyn::DetectorResult result;
   Totals totals;
+  int previous_dynamic_points = -1;
   for (std::size_t i = first; i <= last; ++i) {
     const agvslam::StereoFrame frame = dataset->frame(i);
     const double cpu_before_ms = thread_cpu_ms();
     detector.detect(frame, result);
     const double detect_cpu_ms = thread_cpu_ms() - cpu_before_ms;
+    if (semantic) {
+      agvslam::semantic::FrameCues cues;
+      cues.previous_dynamic_points = previous_dynamic_points;
+      semantic->process(i, frame.left, &result, cues);
+      semantic->apply_fusion(result.mask);  // scored, written and drawn as the detector's own mask
+    }
+    previous_dynamic_points = result.dynamic_point_count();
     write_png((out / "mask" / frame_name(i)).string(), result.mask.image);
     if (o.dump_rois) write_png((out / "instances" / frame_name(i)).string(), result.mask.instances);
     FrameTruth truth;
@@ -851,6 +887,12 @@ int run(const Options& o) {
     if ((i - first + 1) % 100 == 0) spdlog::info("  frame {}/{}", i - first + 1, last - first + 1);
   }
 
+  if (semantic) {
+    const agvslam::semantic::SemanticStats st = semantic->stats();
+    spdlog::info("semantic: {} frames sent to the network, {} segmented ({:.1f} ms each), {} carried late, {} dropped stale",
+                 st.requests, st.segmented, st.segmented ? st.segment_ms_total / static_cast<double>(st.segmented) : 0.0,
+                 st.late_results, st.stale_results);
+  }
   const bool scored = gt.has_masks && totals.score.frames() > 0;
   print_summary(scored, scoring, totals);
   if (!o.json_path.empty()) write_json(o, *dataset, first, last, scored, scoring, totals);
@@ -872,6 +914,9 @@ int main(int argc, char** argv) {
   app.add_option("--params-dynamic", o.params_dynamic, "detector settings (params/dynamic.yaml; default: built-in)");
   app.add_option("--params-stereo", o.params_stereo, "stereo settings (params/stereo.yaml; default: built-in)");
   app.add_option("--calib", o.calib, "calibration file overriding the dataset's");
+  app.add_option("--semantic", o.semantic,
+                 "segmentation model (ONNX) whose moving objects join the detector's mask, or off (default)");
+  app.add_option("--params-semantic", o.params_semantic, "params/semantic.yaml (with --semantic MODEL)");
   app.add_flag("--dump-rois", o.dump_rois,
                "debugging: write every ROI's outline (kept or dropped) to rois/, the reported objects to instances/ (8-bit ids) "
                "and the ROIs' dynamic points to the --json output");

@@ -6,13 +6,16 @@
 //               [--params-dynamic ...] [--params-stereo ...] [--mapping thread|inline] [--speed X]
 //               [--opencv-threads N] [--params-place params/place.yaml] [--loop on|off]
 //               [--save-map FILE] [--load-map FILE --mode localise|map] [--blank A:B] [--repeat N]
-//               [--map-dataset DIR]
+//               [--map-dataset DIR] [--semantic MODEL|off] [--params-semantic params/semantic.yaml]
 //
 // Reads KITTI-layout folders (also what agvslam-sim writes) and EuRoC ASL folders through agvslam::io, and runs
 // them through agvslamd's pipeline (agvslam/daemon/pipeline.h) with its outputs off and lossless queues (every
 // frame processed): a reader thread, with --dynamic detector a detector thread (detection of frame k+1 overlaps
 // tracking of frame k), and the tracking thread. --dynamic gt takes the dataset's ground-truth masks (simulator
-// mask_0/), --dynamic off is the plain ORB-SLAM2-like baseline.
+// mask_0/), --dynamic off is the plain ORB-SLAM2-like baseline. --semantic MODEL (with --dynamic detector) adds the
+// semantic stage in the detector thread (agvslam/semantic/semantic_masker.h): the network in a worker of its own,
+// moving segmented objects fused into the detector's mask; a model that cannot be loaded leaves the detector alone,
+// with a warning.
 //
 // --mapping thread runs local mapping in its own thread, as on the vehicle; --mapping inline maps each keyframe
 // before the next frame (deterministic: the same input gives the same trajectory; the tracking times then include
@@ -95,6 +98,7 @@ enum class DynamicMode { kDetector, kGroundTruth, kOff };
 struct Options {
   std::string dataset, calib, out, format = "tum", dynamic = "detector", json, frames, mapping = "thread";
   std::string params_slam, params_features, params_dynamic, params_stereo;
+  std::string semantic = "off", params_semantic = AGVSLAM_PARAMS_DIR "/semantic.yaml";
   std::string params_place = AGVSLAM_PARAMS_DIR "/place.yaml";
   std::string loop = "on", save_map, load_map, mode, blank, map_dataset;
   int repeat = 1;
@@ -253,6 +257,10 @@ daemon::DaemonConfig pipeline_config(const Options& o, const Settings& s) {
   if (s.dynamic == DynamicMode::kDetector) {
     if (!o.params_dynamic.empty()) c.detector = dyn::load_dynamic_config(o.params_dynamic);
     if (!o.params_stereo.empty()) c.stereo = agvslam::stereo::load_stereo_config(o.params_stereo);
+    if (o.semantic != "off") {
+      c.semantic = agvslam::semantic::load_semantic_config(o.params_semantic);
+      c.semantic->model.path = o.semantic;
+    }
   }
   return c;
 }
@@ -285,6 +293,10 @@ void log_settings(const Options& o, const Settings& s, const Input& in, const da
     for (const auto& line : c.detector.describe()) spdlog::info("    {}", line);
     spdlog::info("  stereo settings{}", o.params_stereo.empty() ? " (built-in defaults)" : " from " + o.params_stereo);
     for (const auto& line : c.stereo.describe()) spdlog::info("    {}", line);
+    if (c.semantic) {
+      spdlog::info("  semantic settings from {}", o.params_semantic);
+      for (const auto& line : c.semantic->describe()) spdlog::info("    {}", line);
+    }
   }
 }
 
@@ -684,6 +696,7 @@ void write_json(const Options& o, const Input& in, const FrameLog& log, const Sl
   const slam::MapCounts& map = results.map_counts;
   j["dataset"] = in.setup.dataset->root();
   j["dynamic"] = o.dynamic;
+  j["semantic"] = o.semantic;
   j["mapping"] = o.mapping;
   j["speed"] = o.speed;
   j["frames"] = {{"first", in.setup.first}, {"last", in.setup.last}, {"processed", log.frames}, {"tracked", log.tracked},
@@ -757,6 +770,9 @@ int main(int argc, char** argv) {
   app.add_option("--params-features", o.params_features, "params/features.yaml");
   app.add_option("--params-dynamic", o.params_dynamic, "params/dynamic.yaml (with --dynamic detector)");
   app.add_option("--params-stereo", o.params_stereo, "params/stereo.yaml (with --dynamic detector)");
+  app.add_option("--semantic", o.semantic,
+                 "segmentation model (ONNX) whose moving objects join the detector's mask, or off (default)");
+  app.add_option("--params-semantic", o.params_semantic, "params/semantic.yaml (with --semantic MODEL)");
   app.add_option("--mapping", o.mapping, "local mapping: thread (default, as on the vehicle) or inline (deterministic)");
   app.add_option("--speed", o.speed, "feed frames at this multiple of the dataset rate (0, default: as fast as possible)");
   app.add_option("--opencv-threads", o.opencv_threads, "OpenCV's threads inside a stage (default 1: one core per thread)");

@@ -69,6 +69,7 @@ const params::Table<StageFiles>& stages_params() {
       {"dynamic", &StageFiles::dynamic, Text::any(), "params/dynamic.yaml; \"\" = built-in defaults"},
       {"stereo", &StageFiles::stereo, Text::any(), "params/stereo.yaml; \"\" = built-in defaults"},
       {"place", &StageFiles::place, Text::any(), "params/place.yaml; \"\" = no vocabulary"},
+      {"semantic", &StageFiles::semantic, Text::any(), "params/semantic.yaml; \"\" = no semantic stage"},
   });
   return table;
 }
@@ -316,6 +317,9 @@ std::vector<std::string> DaemonConfig::describe() const {
   if (pipeline.dynamic == DynamicMode::kDetector) {
     for (const auto& line : detector.describe()) out.push_back("  " + line);
     for (const auto& line : stereo.describe()) out.push_back("  " + line);
+    if (semantic) {
+      for (const auto& line : semantic->describe()) out.push_back("  semantic " + line);
+    }
   }
   return out;
 }
@@ -352,8 +356,9 @@ DaemonConfig load_daemon_config(const std::string& path) {
                              systemd_params().reader(c.systemd), map_params().reader(c.map)});
   const fs::path dir = fs::absolute(fs::path(path)).parent_path();
   for (std::string* f : {&c.source.dataset, &c.calibration_file, &c.stage_files.features, &c.stage_files.slam,
-                         &c.stage_files.dynamic, &c.stage_files.stereo, &c.stage_files.place, &c.trajectory.file,
-                         &c.trajectory.final_file, &c.log.file, &c.log.pose_log, &c.map.file, &c.odometry.can.dbc}) {
+                         &c.stage_files.dynamic, &c.stage_files.stereo, &c.stage_files.place, &c.stage_files.semantic,
+                         &c.trajectory.file, &c.trajectory.final_file, &c.log.file, &c.log.pose_log, &c.map.file,
+                         &c.odometry.can.dbc}) {
     *f = resolve(dir, *f);
   }
   c.validate();
@@ -379,6 +384,7 @@ DaemonConfig load_daemon_config(const std::string& path) {
   if (c.pipeline.dynamic == DynamicMode::kDetector) {
     if (!c.stage_files.dynamic.empty()) c.detector = dynamic::load_dynamic_config(c.stage_files.dynamic);
     if (!c.stage_files.stereo.empty()) c.stereo = stereo::load_stereo_config(c.stage_files.stereo);
+    if (!c.stage_files.semantic.empty()) c.semantic = semantic::load_semantic_config(c.stage_files.semantic);
   }
   return c;
 }

@@ -117,6 +117,14 @@ Pipeline::Pipeline(const DaemonConfig& config, const SourceSetup& setup, std::un
   if (config.pipeline.dynamic == DynamicMode::kDetector) {
     detector_ = std::make_unique<dynamic::DynamicDetector>(setup.calibration, config.detector, config.stereo);
     detected_queue_ = std::make_unique<BoundedQueue<DetectedFrame>>(1, QueuePolicy::kLossless);
+    if (config.semantic) {
+      try {
+        semantic_ = std::make_unique<semantic::SemanticMasker>(
+            *config.semantic, std::make_unique<semantic::Segmenter>(config.semantic->model));
+      } catch (const InputError& e) {
+        spdlog::warn("semantic stage off, the geometric detector alone: {}", e.what());
+      }
+    }
   }
   outputs_ = std::make_unique<PoseOutputs>(config);
 }
@@ -280,6 +288,8 @@ void Pipeline::detector_loop() {
   const auto poll = std::chrono::milliseconds(config_.pipeline.poll_ms);
   try {
     dynamic::DetectorResult result;
+    int previous_dynamic_points = -1;
+    uint64_t keyframes_seen = 0;
     for (;;) {
       beat(beat_detector_);
       std::optional<CapturedFrame> f = capture_queue_.pop(poll);
@@ -292,6 +302,17 @@ void Pipeline::detector_loop() {
       d.times.capture_queue_ms = static_cast<double>(monotonic_now_ns() - f->queued_mono_ns) * 1e-6;
       const double cpu0 = thread_cpu_ms();
       detector_->detect(f->frame, result);
+      if (semantic_) {
+        semantic::FrameCues cues;
+        cues.previous_dynamic_points = previous_dynamic_points;
+        cues.relocalised = relocalised_.exchange(false);
+        const uint64_t keyframes = keyframes_in_map_.load();
+        cues.new_keyframe = keyframes > keyframes_seen;
+        keyframes_seen = keyframes;
+        semantic_->process(f->frame.index, f->frame.left, &result, cues);
+        semantic_->apply_fusion(result.mask);
+      }
+      previous_dynamic_points = result.dynamic_point_count();
       d.times.detector_cpu_ms = thread_cpu_ms() - cpu0;
       d.times.detector_ms = ms_since(t0);
       d.detected_mono_ns = monotonic_now_ns();
@@ -309,6 +330,7 @@ void Pipeline::tracking_loop() {
   const auto poll = std::chrono::milliseconds(config_.pipeline.poll_ms);
   try {
     uint64_t processed = 0;
+    slam::TrackingState last_state = slam::TrackingState::kInitialising;
     for (;;) {
       beat(beat_tracking_);
       if (processing_hook_) processing_hook_();
@@ -340,6 +362,11 @@ void Pipeline::tracking_loop() {
       const double cpu0 = thread_cpu_ms();
       const slam::TrackResult r = system_->track_stereo(slam_t_ns, c.frame.left, c.frame.right, mask);
       item.times.tracking_cpu_ms = thread_cpu_ms() - cpu0;
+      if (semantic_) {
+        keyframes_in_map_.store(r.keyframes);
+        if (r.state == slam::TrackingState::kOk && last_state == slam::TrackingState::kLost) relocalised_.store(true);
+        last_state = r.state;
+      }
       const double tracking_ms = ms_since(t0);
       item.times.tracking_ms = tracking_ms;
       ++processed;

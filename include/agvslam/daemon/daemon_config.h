@@ -37,6 +37,7 @@
 #include "agvslam/drivers/v4l2/camera_config.h"
 #include "agvslam/dynamic/detector.h"
 #include "agvslam/place/place_config.h"
+#include "agvslam/semantic/semantic_config.h"
 #include "agvslam/slam/system.h"
 #include "agvslam/stereo/stereo_config.h"
 
@@ -64,6 +65,7 @@ struct SourceConfig {
 struct StageFiles {
   std::string features, slam, dynamic, stereo;  // resolved paths; "" = built-in defaults
   std::string place;                            // resolved; "" = no vocabulary (no place recognition)
+  std::string semantic;                         // resolved; "" = no semantic stage (geometry alone)
 };
 
 // The saved map (slam::System::save_map / load_map; file format in agvslam/slam/map_io.h).
@@ -198,6 +200,7 @@ struct DaemonConfig {
   dynamic::DynamicDetectorConfig detector;
   stereo::StereoConfig stereo;
   std::optional<place::PlaceConfig> place;  // set when stages.place names a file
+  std::optional<semantic::SemanticConfig> semantic;  // set when stages.semantic names a file (with the detector)
 
   // Throws InputError(path, "section.key", "expected ...").
   void validate() const;

@@ -40,6 +40,7 @@
 #include "agvslam/daemon/pose_builder.h"
 #include "agvslam/daemon/pose_outputs.h"
 #include "agvslam/dynamic/detector.h"
+#include "agvslam/semantic/semantic_masker.h"
 
 namespace agvslam::daemon {
 
@@ -134,6 +135,12 @@ class Pipeline {
   std::unique_ptr<FrameSource> source_;
   std::unique_ptr<slam::System> system_;
   std::unique_ptr<dynamic::DynamicDetector> detector_;  // used by the detector thread only
+  // The semantic stage beside the detector (stages.semantic), fused into its mask; null: geometry alone.
+  std::unique_ptr<semantic::SemanticMasker> semantic_;
+  // What tracking tells the semantic stage's keyframe rules: keyframes in the map, and a relocalisation not yet
+  // passed on.
+  std::atomic<uint64_t> keyframes_in_map_{0};
+  std::atomic<bool> relocalised_{false};
   std::unique_ptr<PoseOutputs> outputs_;
   PoseSampleBuilder builder_;
 
