@@ -22,7 +22,8 @@ bool CanPosePublisher::try_open(Clock::time_point now) {
     backoff_ = std::chrono::milliseconds(config_.reopen_min_ms);
     return true;
   }
-  if (error != last_error_) spdlog::warn("can: {} (retrying every {}..{} ms)", error, config_.reopen_min_ms, config_.reopen_max_ms);
+  if (error != last_error_)
+    spdlog::warn("can: {} (retrying every {}..{} ms)", error, config_.reopen_min_ms, config_.reopen_max_ms);
   last_error_ = error;
   next_reopen_ = now + backoff_;
   backoff_ = std::min(backoff_ * 2, std::chrono::milliseconds(config_.reopen_max_ms));

@@ -80,7 +80,8 @@ bool CanSocket::open(const std::string& interface, bool fd_frames, std::string* 
   }
   if (!receive.empty()) {
     const int on = 1;
-    if (::setsockopt(fd_, SOL_SOCKET, SO_TIMESTAMPNS, &on, sizeof on) < 0) return fail("setsockopt(SO_TIMESTAMPNS)", errno);
+    if (::setsockopt(fd_, SOL_SOCKET, SO_TIMESTAMPNS, &on, sizeof on) < 0)
+      return fail("setsockopt(SO_TIMESTAMPNS)", errno);
   }
   const can_err_mask_t err_mask = CAN_ERR_MASK;
   if (::setsockopt(fd_, SOL_CAN_RAW, CAN_RAW_ERR_FILTER, &err_mask, sizeof err_mask) < 0) {
@@ -94,7 +95,8 @@ bool CanSocket::open(const std::string& interface, bool fd_frames, std::string* 
     std::strncpy(ifr.ifr_name, interface.c_str(), IFNAMSIZ - 1);
     if (::ioctl(fd_, SIOCGIFMTU, &ifr) < 0) return fail("SIOCGIFMTU", errno);
     if (ifr.ifr_mtu != static_cast<int>(CANFD_MTU)) {
-      if (error != nullptr) *error = interface + ": not a CAN FD interface (MTU " + std::to_string(ifr.ifr_mtu) + ", expected 72)";
+      if (error != nullptr)
+        *error = interface + ": not a CAN FD interface (MTU " + std::to_string(ifr.ifr_mtu) + ", expected 72)";
       close();
       return false;
     }

@@ -44,7 +44,8 @@ std::optional<int64_t> DbcSignal::raw(const uint8_t* data, std::size_t len) cons
 
 void DbcSignal::encode(double physical_value, uint8_t* data) const {
   const double lo = is_signed ? -std::ldexp(1.0, static_cast<int>(length) - 1) : 0.0;
-  const double hi = is_signed ? std::ldexp(1.0, static_cast<int>(length) - 1) - 1 : std::ldexp(1.0, static_cast<int>(length)) - 1;
+  const double hi =
+      is_signed ? std::ldexp(1.0, static_cast<int>(length) - 1) - 1 : std::ldexp(1.0, static_cast<int>(length)) - 1;
   double q = factor != 0.0 ? std::round((physical_value - offset) / factor) : 0.0;
   if (std::isnan(q)) q = 0.0;
   q = std::clamp(q, lo, hi);
@@ -110,7 +111,8 @@ Dbc Dbc::parse(const std::string& text, const std::string& source) {
     ++line_no;
     const std::string t = trim(line);
     if (starts_with(t, "BO_ ")) {
-      if (!std::regex_match(t, m, bo_re)) throw InputError(source, where(), "expected 'BO_ <id> <name>: <length> <node>'");
+      if (!std::regex_match(t, m, bo_re))
+        throw InputError(source, where(), "expected 'BO_ <id> <name>: <length> <node>'");
       DbcMessage msg;
       const auto raw_id = static_cast<uint32_t>(std::stoul(m[1].str()));
       msg.extended = (raw_id & kDbcExtendedFlag) != 0;
@@ -144,8 +146,9 @@ Dbc Dbc::parse(const std::string& text, const std::string& source) {
       s.unit = m[11].str();
       if (s.length == 0 || s.length > 64) throw InputError(source, where(), "expected a signal length of 1..64 bits");
       if (s.little_endian && s.start_bit + s.length > current->length * 8) {
-        throw InputError(source, where(), "expected signal " + s.name + " to fit in the message's " +
-                                              std::to_string(current->length) + " bytes");
+        throw InputError(
+            source, where(),
+            "expected signal " + s.name + " to fit in the message's " + std::to_string(current->length) + " bytes");
       }
       current->signals.push_back(s);
     } else {

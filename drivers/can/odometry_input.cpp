@@ -59,18 +59,21 @@ double unit_factor(const std::vector<std::pair<std::string, double>>& units, con
 const params::Table<CanOdometryConfig>& can_odometry_params() {
   using C = CanOdometryConfig;
   using params::Text;
-  static const params::Table<C> table("can_odometry", {
-      {"dbc", &C::dbc, Text::non_empty(), "the DBC file that describes the odometry message"},
-      {"message", &C::message, Text::non_empty(), "a message name of the DBC"},
-      {"relative_to_base_id", &C::relative_to_base_id,
-       "true: the DBC's id is for base id 0x300 and moves with can.base_id (deploy/agvslam.dbc)"},
-      {"speed_signal", &C::speed_signal, Text::non_empty(), "a signal of the message"},
-      {"speed_unit", &C::speed_unit, Text::one_of(unit_names(speed_units(), true)), "\"\" = the DBC's unit"},
-      {"yaw_rate_signal", &C::yaw_rate_signal, Text::non_empty(), "a signal of the message"},
-      {"yaw_rate_unit", &C::yaw_rate_unit, Text::one_of(unit_names(yaw_rate_units(), true)), "\"\" = the DBC's unit"},
-      {"counter_signal", &C::counter_signal, Text::any(), "a signal of the message, \"\" = none"},
-      {"crc_signal", &C::crc_signal, Text::any(), "a signal of the message, \"\" = none"},
-  });
+  static const params::Table<C> table(
+      "can_odometry",
+      {
+          {"dbc", &C::dbc, Text::non_empty(), "the DBC file that describes the odometry message"},
+          {"message", &C::message, Text::non_empty(), "a message name of the DBC"},
+          {"relative_to_base_id", &C::relative_to_base_id,
+           "true: the DBC's id is for base id 0x300 and moves with can.base_id (deploy/agvslam.dbc)"},
+          {"speed_signal", &C::speed_signal, Text::non_empty(), "a signal of the message"},
+          {"speed_unit", &C::speed_unit, Text::one_of(unit_names(speed_units(), true)), "\"\" = the DBC's unit"},
+          {"yaw_rate_signal", &C::yaw_rate_signal, Text::non_empty(), "a signal of the message"},
+          {"yaw_rate_unit", &C::yaw_rate_unit, Text::one_of(unit_names(yaw_rate_units(), true)),
+           "\"\" = the DBC's unit"},
+          {"counter_signal", &C::counter_signal, Text::any(), "a signal of the message, \"\" = none"},
+          {"crc_signal", &C::crc_signal, Text::any(), "a signal of the message, \"\" = none"},
+      });
   return table;
 }
 
@@ -98,9 +101,9 @@ CanOdometryDecoder::CanOdometryDecoder(const CanOdometryConfig& config, const Fr
     if (name.empty()) return std::nullopt;
     const DbcSignal* s = m->signal(name);
     if (s == nullptr) {
-      throw InputError(source, "can_odometry." + key,
-                       "expected a signal of " + m->name + " in " + config.dbc + " (" + signal_names(*m) + "), got " +
-                           name);
+      throw InputError(
+          source, "can_odometry." + key,
+          "expected a signal of " + m->name + " in " + config.dbc + " (" + signal_names(*m) + "), got " + name);
     }
     return *s;
   };
@@ -127,8 +130,9 @@ CanOdometryDecoder::CanOdometryDecoder(const CanOdometryConfig& config, const Fr
     extended_ = m->extended;
   }
   if (id_ > (extended_ ? 0x1FFFFFFFU : 0x7FFU)) {
-    throw InputError(source, "can_odometry.message", "expected an id that fits the frame format (" + m->name +
-                                                         " lands on " + std::to_string(id_) + ")");
+    throw InputError(
+        source, "can_odometry.message",
+        "expected an id that fits the frame format (" + m->name + " lands on " + std::to_string(id_) + ")");
   }
   for (uint32_t offset = kPoseXYawOffset; offset <= kPoseFdOffset; ++offset) {
     if (offset == kVehicleOdometryOffset) continue;

@@ -28,27 +28,30 @@ const params::Table<DdsConfig>& dds_params() {
   using params::Range;
   using params::Text;
   static const params::Table<DdsConfig> table =
-      params::Table<DdsConfig>("dds", {
-          {"domain_id", &DdsConfig::domain_id, Range::closed(0, 232), "",
-           "ROS_DOMAIN_ID; higher ids give ports >= 65536"},
-          {"network_interface", &DdsConfig::network_interface, Text::any(), "\"\": Cyclone DDS's own choice"},
-          {"config_uri", &DdsConfig::config_uri, Text::any(), "Cyclone DDS XML or a file:// URI"},
-          {"topic_namespace", &DdsConfig::topic_namespace, Text::non_empty()},
-          {"publish_pose", &DdsConfig::publish_pose},
-          {"publish_odom", &DdsConfig::publish_odom},
-          {"publish_status", &DdsConfig::publish_status},
-          {"map_frame_id", &DdsConfig::map_frame_id, Text::non_empty(), "a frame name, e.g. map"},
-          {"odom_frame_id", &DdsConfig::odom_frame_id, Text::non_empty(), "a frame name, e.g. map or odom"},
-          {"base_frame_id", &DdsConfig::base_frame_id, Text::non_empty(), "a frame name, e.g. base_link"},
-          {"history_depth", &DdsConfig::history_depth, Range::closed(1, 1000), "samples"},
-          {"max_blocking_ms", &DdsConfig::max_blocking_ms, Range::closed(0, 1000), "ms"},
-          {"queue_capacity", &DdsConfig::queue_capacity, Range::closed(1, 1024), "samples"},
-      })
-          .check("topic_namespace", [](const DdsConfig& c) { return valid_ros_namespace(c.topic_namespace); },
-                 "a ROS name without leading or trailing '/' (letters, digits, '_', '/'), e.g. agvslam")
-          .check("publish_pose",
-                 [](const DdsConfig& c) { return c.publish_pose || c.publish_odom || c.publish_status; },
-                 "at least one of publish_pose, publish_odom, publish_status")
+      params::Table<DdsConfig>(
+          "dds",
+          {
+              {"domain_id", &DdsConfig::domain_id, Range::closed(0, 232), "",
+               "ROS_DOMAIN_ID; higher ids give ports >= 65536"},
+              {"network_interface", &DdsConfig::network_interface, Text::any(), "\"\": Cyclone DDS's own choice"},
+              {"config_uri", &DdsConfig::config_uri, Text::any(), "Cyclone DDS XML or a file:// URI"},
+              {"topic_namespace", &DdsConfig::topic_namespace, Text::non_empty()},
+              {"publish_pose", &DdsConfig::publish_pose},
+              {"publish_odom", &DdsConfig::publish_odom},
+              {"publish_status", &DdsConfig::publish_status},
+              {"map_frame_id", &DdsConfig::map_frame_id, Text::non_empty(), "a frame name, e.g. map"},
+              {"odom_frame_id", &DdsConfig::odom_frame_id, Text::non_empty(), "a frame name, e.g. map or odom"},
+              {"base_frame_id", &DdsConfig::base_frame_id, Text::non_empty(), "a frame name, e.g. base_link"},
+              {"history_depth", &DdsConfig::history_depth, Range::closed(1, 1000), "samples"},
+              {"max_blocking_ms", &DdsConfig::max_blocking_ms, Range::closed(0, 1000), "ms"},
+              {"queue_capacity", &DdsConfig::queue_capacity, Range::closed(1, 1024), "samples"},
+          })
+          .check(
+              "topic_namespace", [](const DdsConfig& c) { return valid_ros_namespace(c.topic_namespace); },
+              "a ROS name without leading or trailing '/' (letters, digits, '_', '/'), e.g. agvslam")
+          .check(
+              "publish_pose", [](const DdsConfig& c) { return c.publish_pose || c.publish_odom || c.publish_status; },
+              "at least one of publish_pose, publish_odom, publish_status")
           .summary([](const DdsConfig& c) {
             std::string topics;
             if (c.publish_pose) topics += " " + c.pose_topic();

@@ -4,9 +4,12 @@ namespace agvslam::drivers::dds {
 
 const char* to_string(Topic topic) {
   switch (topic) {
-    case Topic::kPose: return "pose";
-    case Topic::kOdom: return "odom";
-    case Topic::kStatus: return "status";
+    case Topic::kPose:
+      return "pose";
+    case Topic::kOdom:
+      return "odom";
+    case Topic::kStatus:
+      return "status";
   }
   return "unknown";
 }

@@ -137,8 +137,8 @@ nlohmann::json to_json(const StatusMsg& m) {
           {"latency_ms", m.latency_ms},
           {"odometry_check_state", m.odometry_check_state},
           // NaN (no ratio) as null, so that two JSON copies of one message compare equal.
-          {"odometry_distance_ratio", std::isnan(m.odometry_distance_ratio) ? nlohmann::json()
-                                                                           : nlohmann::json(m.odometry_distance_ratio)},
+          {"odometry_distance_ratio",
+           std::isnan(m.odometry_distance_ratio) ? nlohmann::json() : nlohmann::json(m.odometry_distance_ratio)},
           {"odometry_speed_rmse_mps", m.odometry_speed_rmse_mps},
           {"odometry_heading_difference_deg", m.odometry_heading_difference_deg}};
 }

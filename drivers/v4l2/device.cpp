@@ -46,7 +46,8 @@ V4l2Device::V4l2Device(const std::string& path, const CaptureRequest& request) :
     const int raw = ::open(path.c_str(), O_RDWR | O_NONBLOCK | O_CLOEXEC);
     if (raw < 0) {
       const int e = errno;
-      throw V4l2Error(path_, "cannot open: " + errno_text(e) + (e == ENOENT ? "; expected a V4L2 capture device node" : ""),
+      throw V4l2Error(path_,
+                      "cannot open: " + errno_text(e) + (e == ENOENT ? "; expected a V4L2 capture device node" : ""),
                       false, e);
     }
     // Native formats only: GREY and YUYV are used as delivered, MJPEG is decoded with libv4lconvert below.
@@ -54,7 +55,14 @@ V4l2Device::V4l2Device(const std::string& path, const CaptureRequest& request) :
     if (fd_ < 0) {
       const int e = errno;
       ::close(raw);
-      throw V4l2Error(path_, (e == ENOTTY ? "is not a V4L2 device (libv4l2: " + errno_text(e) + "); expected a V4L2 capture device node" : "libv4l2 cannot take the device: " + errno_text(e) + (e == EINVAL ? " (it has no current format: a v4l2loopback device without a writer, or a camera still starting)" : "")), e == ENOTTY, e);
+      throw V4l2Error(
+          path_,
+          (e == ENOTTY ? "is not a V4L2 device (libv4l2: " + errno_text(e) + "); expected a V4L2 capture device node"
+                       : "libv4l2 cannot take the device: " + errno_text(e) +
+                             (e == EINVAL ? " (it has no current format: a v4l2loopback device without a writer, or a "
+                                            "camera still starting)"
+                                          : "")),
+          e == ENOTTY, e);
     }
     v4l2_capability cap{};
     if (xioctl(fd_, VIDIOC_QUERYCAP, &cap) < 0) {
@@ -76,9 +84,11 @@ V4l2Device::V4l2Device(const std::string& path, const CaptureRequest& request) :
     set_rate(request.fps);
     if (pix_ == V4L2_PIX_FMT_MJPEG) {
       if (width_ % 16 != 0 || height_ % 8 != 0)  // 4:2:2 JPEG blocks are 16x8, 4:2:0 16x16
-        throw V4l2Error(path_, "MJPEG at " + std::to_string(width_) + "x" + std::to_string(height_) +
-                                   ": libv4lconvert decodes only widths that are multiples of 16 and heights of 8 "
-                                   "(16 for 4:2:0)", true);
+        throw V4l2Error(path_,
+                        "MJPEG at " + std::to_string(width_) + "x" + std::to_string(height_) +
+                            ": libv4lconvert decodes only widths that are multiples of 16 and heights of 8 "
+                            "(16 for 4:2:0)",
+                        true);
       try {
         mjpeg_ = std::make_unique<MjpegDecoder>(fd_);
       } catch (const std::runtime_error& e) {
@@ -129,8 +139,9 @@ void V4l2Device::set_format(const CaptureRequest& r) {
   if (offered.empty())  // v4l2loopback before its writer starts; a camera still initialising
     throw V4l2Error(path_, "offers no capture format yet (VIDIOC_ENUM_FMT lists none)", false, EAGAIN);
   if (offered.find(fourcc_to_string(want)) == std::string::npos)
-    throw V4l2Error(path_, "does not offer pixel format " + fourcc_to_string(want) + " (" + to_string(r.pixel_format) +
-                               "); it offers " + offered,
+    throw V4l2Error(path_,
+                    "does not offer pixel format " + fourcc_to_string(want) + " (" + to_string(r.pixel_format) +
+                        "); it offers " + offered,
                     true);
   v4l2_format f{};
   f.type = V4L2_BUF_TYPE_VIDEO_CAPTURE;
@@ -148,18 +159,22 @@ void V4l2Device::set_format(const CaptureRequest& r) {
     if (xioctl(fd_, VIDIOC_G_FMT, &cur) == 0)
       now = "; it delivers " + fourcc_to_string(cur.fmt.pix.pixelformat) + " " + std::to_string(cur.fmt.pix.width) +
             "x" + std::to_string(cur.fmt.pix.height);
-    throw V4l2Error(path_, "refused format " + fourcc_to_string(want) + " " + std::to_string(r.width) + "x" +
-                               std::to_string(r.height) + " (VIDIOC_S_FMT: " + errno_text(e) + ")" + now,
+    throw V4l2Error(path_,
+                    "refused format " + fourcc_to_string(want) + " " + std::to_string(r.width) + "x" +
+                        std::to_string(r.height) + " (VIDIOC_S_FMT: " + errno_text(e) + ")" + now,
                     true, e);
   }
   if (f.fmt.pix.pixelformat != want)
-    throw V4l2Error(path_, "was asked for " + fourcc_to_string(want) + " but chose " +
-                               fourcc_to_string(f.fmt.pix.pixelformat) + "; it offers " + offered,
+    throw V4l2Error(path_,
+                    "was asked for " + fourcc_to_string(want) + " but chose " +
+                        fourcc_to_string(f.fmt.pix.pixelformat) + "; it offers " + offered,
                     true);
   if (static_cast<int>(f.fmt.pix.width) != r.width || static_cast<int>(f.fmt.pix.height) != r.height)
-    throw V4l2Error(path_, "refused size " + std::to_string(r.width) + "x" + std::to_string(r.height) + " for " +
-                               fourcc_to_string(want) + ": it delivers " + std::to_string(f.fmt.pix.width) + "x" +
-                               std::to_string(f.fmt.pix.height) + " (check camera.width/height; side by side: width is one eye)",
+    throw V4l2Error(path_,
+                    "refused size " + std::to_string(r.width) + "x" + std::to_string(r.height) + " for " +
+                        fourcc_to_string(want) + ": it delivers " + std::to_string(f.fmt.pix.width) + "x" +
+                        std::to_string(f.fmt.pix.height) +
+                        " (check camera.width/height; side by side: width is one eye)",
                     true);
   pix_ = want;
   width_ = r.width;
@@ -192,7 +207,8 @@ void V4l2Device::start_streaming(int count) {
   req.type = V4L2_BUF_TYPE_VIDEO_CAPTURE;
   req.memory = V4L2_MEMORY_MMAP;
   if (xioctl(fd_, VIDIOC_REQBUFS, &req) < 0) fail("VIDIOC_REQBUFS (mmap)", errno == EINVAL);
-  if (req.count < 2) throw V4l2Error(path_, "granted " + std::to_string(req.count) + " buffers; expected at least 2", true);
+  if (req.count < 2)
+    throw V4l2Error(path_, "granted " + std::to_string(req.count) + " buffers; expected at least 2", true);
   buffers_.resize(req.count);
   for (uint32_t i = 0; i < req.count; ++i) {
     v4l2_buffer b{};
@@ -226,13 +242,15 @@ bool V4l2Device::dequeue(cv::Mat& grey, CapturedImage& info) {
     fail("VIDIOC_DQBUF");
   }
   const int64_t now = monotonic_now_ns();
-  info.t_ns = static_cast<int64_t>(b.timestamp.tv_sec) * 1000000000LL + static_cast<int64_t>(b.timestamp.tv_usec) * 1000LL;
+  info.t_ns =
+      static_cast<int64_t>(b.timestamp.tv_sec) * 1000000000LL + static_cast<int64_t>(b.timestamp.tv_usec) * 1000LL;
   // A driver that does not say its stamps are monotonic: keep them only when they look like CLOCK_MONOTONIC.
   if (!timestamp_monotonic_ && (info.t_ns <= 0 || info.t_ns > now || now - info.t_ns > 1000000000LL)) info.t_ns = now;
   info.sequence = b.sequence;
   info.error_flag = (b.flags & V4L2_BUF_FLAG_ERROR) != 0;
-  if (b.index >= buffers_.size()) throw V4l2Error(path_, "VIDIOC_DQBUF returned buffer index " + std::to_string(b.index) +
-                                                              " of " + std::to_string(buffers_.size()));
+  if (b.index >= buffers_.size())
+    throw V4l2Error(path_, "VIDIOC_DQBUF returned buffer index " + std::to_string(b.index) + " of " +
+                               std::to_string(buffers_.size()));
   const auto* data = static_cast<const uint8_t*>(buffers_[b.index].start);
   const std::size_t used = b.bytesused ? b.bytesused : buffers_[b.index].length;
   if (!info.error_flag) {
@@ -285,7 +303,8 @@ V4l2Output::V4l2Output(const std::string& path, int width, int height, Mode mode
   f.fmt.pix.field = V4L2_FIELD_NONE;
   f.fmt.pix.bytesperline = format == PixelFormat::kGrey ? static_cast<uint32_t>(width) : 0;
   f.fmt.pix.sizeimage = static_cast<uint32_t>(width * height);  // MJPEG: the largest JPEG accepted
-  if (::ioctl(fd_, VIDIOC_S_FMT, &f) < 0) fail_out("VIDIOC_S_FMT " + pix_name + " " + std::to_string(width) + "x" + std::to_string(height), true);
+  if (::ioctl(fd_, VIDIOC_S_FMT, &f) < 0)
+    fail_out("VIDIOC_S_FMT " + pix_name + " " + std::to_string(width) + "x" + std::to_string(height), true);
   if (f.fmt.pix.pixelformat != pix || static_cast<int>(f.fmt.pix.width) != width ||
       static_cast<int>(f.fmt.pix.height) != height) {
     errno = EINVAL;
@@ -328,7 +347,8 @@ V4l2Output::~V4l2Output() { release(); }
 
 void V4l2Output::announce() {
   v4l2_buf_type type = V4L2_BUF_TYPE_VIDEO_OUTPUT;
-  if (::ioctl(fd_, VIDIOC_STREAMON, &type) < 0) throw V4l2Error(path_, "VIDIOC_STREAMON (output) failed: " + errno_text(errno), false, errno);
+  if (::ioctl(fd_, VIDIOC_STREAMON, &type) < 0)
+    throw V4l2Error(path_, "VIDIOC_STREAMON (output) failed: " + errno_text(errno), false, errno);
 }
 
 void V4l2Output::write(const cv::Mat& grey, int64_t t_ns) {
@@ -345,7 +365,8 @@ void V4l2Output::write_bytes(const uint8_t* data, std::size_t n, int64_t t_ns) {
     // are used round robin without VIDIOC_DQBUF.
     const Buffer& buf = buffers_[next_];
     if (n > buf.length)
-      throw V4l2Error(path_, "frame of " + std::to_string(n) + " bytes does not fit a " + std::to_string(buf.length) + "-byte buffer");
+      throw V4l2Error(path_, "frame of " + std::to_string(n) + " bytes does not fit a " + std::to_string(buf.length) +
+                                 "-byte buffer");
     std::memcpy(buf.start, data, n);
     v4l2_buffer b{};
     b.type = V4L2_BUF_TYPE_VIDEO_OUTPUT;
@@ -355,7 +376,8 @@ void V4l2Output::write_bytes(const uint8_t* data, std::size_t n, int64_t t_ns) {
     b.field = V4L2_FIELD_NONE;
     b.timestamp.tv_sec = static_cast<time_t>(t_ns / 1000000000LL);
     b.timestamp.tv_usec = static_cast<suseconds_t>((t_ns % 1000000000LL) / 1000);
-    if (::ioctl(fd_, VIDIOC_QBUF, &b) < 0) throw V4l2Error(path_, "VIDIOC_QBUF (output) failed: " + errno_text(errno), false, errno);
+    if (::ioctl(fd_, VIDIOC_QBUF, &b) < 0)
+      throw V4l2Error(path_, "VIDIOC_QBUF (output) failed: " + errno_text(errno), false, errno);
     next_ = (next_ + 1) % buffers_.size();
     return;
   }

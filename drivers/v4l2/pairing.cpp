@@ -71,7 +71,8 @@ void TimestampPairer::clear(std::deque<int>& released) {
 
 void split_side_by_side(const cv::Mat& sbs, cv::Mat& left, cv::Mat& right) {
   if (sbs.type() != CV_8UC1) throw std::invalid_argument("split_side_by_side: expected a CV_8UC1 image");
-  if (sbs.cols % 2 != 0) throw std::invalid_argument("split_side_by_side: expected an even width, got " + std::to_string(sbs.cols));
+  if (sbs.cols % 2 != 0)
+    throw std::invalid_argument("split_side_by_side: expected an even width, got " + std::to_string(sbs.cols));
   const int w = sbs.cols / 2;
   left.create(sbs.rows, w, CV_8UC1);
   right.create(sbs.rows, w, CV_8UC1);

@@ -16,7 +16,8 @@ void grey_to_grey(const uint8_t* src, std::size_t bytes_per_line, cv::Mat& grey)
     std::memcpy(grey.data, src, w * static_cast<std::size_t>(grey.rows));
     return;
   }
-  for (int y = 0; y < grey.rows; ++y) std::memcpy(grey.ptr<uint8_t>(y), src + static_cast<std::size_t>(y) * bytes_per_line, w);
+  for (int y = 0; y < grey.rows; ++y)
+    std::memcpy(grey.ptr<uint8_t>(y), src + static_cast<std::size_t>(y) * bytes_per_line, w);
 }
 
 void yuyv_to_grey(const uint8_t* src, std::size_t bytes_per_line, cv::Mat& grey) {

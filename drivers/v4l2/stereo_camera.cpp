@@ -30,9 +30,12 @@ int64_t realtime_now_ns() {
 
 const char* to_string(CaptureStats::State s) {
   switch (s) {
-    case CaptureStats::State::kClosed: return "closed";
-    case CaptureStats::State::kStreaming: return "streaming";
-    case CaptureStats::State::kReopening: return "reopening";
+    case CaptureStats::State::kClosed:
+      return "closed";
+    case CaptureStats::State::kStreaming:
+      return "streaming";
+    case CaptureStats::State::kReopening:
+      return "reopening";
   }
   return "?";
 }
@@ -127,7 +130,8 @@ bool StereoCamera::try_reopen() {
   } catch (const V4l2Error& e) {
     ++stats_.reopen_attempts;
     if (stats_.last_error != e.what() || stats_.reopen_attempts % 10 == 0)
-      spdlog::warn("camera: reopen attempt {} failed: {}; next in {} ms", stats_.reopen_attempts, e.what(), backoff_ms_);
+      spdlog::warn("camera: reopen attempt {} failed: {}; next in {} ms", stats_.reopen_attempts, e.what(),
+                   backoff_ms_);
     stats_.last_error = e.what();
     next_reopen_ns_ = monotonic_now_ns() + static_cast<int64_t>(backoff_ms_) * 1000000LL;
     backoff_ms_ = std::min(2 * backoff_ms_, config_.reopen_backoff_max_ms);
@@ -204,8 +208,10 @@ StereoCamera::Grab StereoCamera::grab(StereoFrame& frame, int timeout_ms, Captur
     for (int s : released_) {
       if (s < 0) continue;
       const auto i = static_cast<std::size_t>(s);
-      if (i < left_pool_.size()) left_busy_[i] = false;
-      else right_busy_[i - left_pool_.size()] = false;
+      if (i < left_pool_.size())
+        left_busy_[i] = false;
+      else
+        right_busy_[i - left_pool_.size()] = false;
     }
     released_.clear();
   };
@@ -255,8 +261,8 @@ StereoCamera::Grab StereoCamera::grab(StereoFrame& frame, int timeout_ms, Captur
     bool stalled = false;
     for (auto& e : eyes_) {
       if (now - e->last_frame_ns > stall_ns) {
-        lose(e->path + ": no frame for " + std::to_string((now - e->last_frame_ns) / 1000000) + " ms (stall_timeout_ms " +
-             std::to_string(config_.stall_timeout_ms) + ")");
+        lose(e->path + ": no frame for " + std::to_string((now - e->last_frame_ns) / 1000000) +
+             " ms (stall_timeout_ms " + std::to_string(config_.stall_timeout_ms) + ")");
         stalled = true;
         break;
       }

@@ -18,6 +18,8 @@
 // a mean absolute error. Exit status: 0 ok, 1 a check failed or the device failed, 2 bad option or camera configuration
 // (device not a capture device, format not offered, size refused).
 
+#include <spdlog/sinks/stdout_color_sinks.h>
+#include <spdlog/spdlog.h>
 #include <CLI/CLI.hpp>
 #include <algorithm>
 #include <cstdio>
@@ -25,8 +27,6 @@
 #include <fstream>
 #include <nlohmann/json.hpp>
 #include <opencv2/imgcodecs.hpp>
-#include <spdlog/sinks/stdout_color_sinks.h>
-#include <spdlog/spdlog.h>
 #include <sstream>
 
 #include "agvslam/core/error.h"
@@ -45,7 +45,7 @@ using agvslam::InputError;
 
 struct Options {
   std::string config, section = "camera", left, right, format, backoff, ready_file, save, json, expect_dataset,
-      expect_frames;
+                      expect_frames;
   double max_mean_abs_error = 2.0;
   std::vector<std::string> manifests;
   bool side_by_side = false, wait = false;
@@ -70,7 +70,8 @@ std::vector<Expected> read_manifest(const std::string& path) {
     std::istringstream s(line);
     Expected e{};
     std::string l, r;
-    if (!(s >> e.index >> l >> r)) throw InputError(path, "line " + std::to_string(n), "expected 'index left_hash right_hash'");
+    if (!(s >> e.index >> l >> r))
+      throw InputError(path, "line " + std::to_string(n), "expected 'index left_hash right_hash'");
     e.left = std::stoull(l, nullptr, 16);
     e.right = std::stoull(r, nullptr, 16);
     out.push_back(e);
@@ -90,7 +91,8 @@ void write_ready(const std::string& path, int count) {
 
 // The camera settings: --config's section with the command line's overrides, validated.
 v4l2::V4l2CameraConfig camera_config(const Options& o) {
-  v4l2::V4l2CameraConfig c = o.config.empty() ? v4l2::V4l2CameraConfig{} : v4l2::load_v4l2_camera_config(o.config, o.section);
+  v4l2::V4l2CameraConfig c =
+      o.config.empty() ? v4l2::V4l2CameraConfig{} : v4l2::load_v4l2_camera_config(o.config, o.section);
   if (!o.left.empty()) c.left_device = o.left;
   if (!o.right.empty()) c.right_device = o.right;
   if (o.side_by_side) c.side_by_side = true;
@@ -105,7 +107,8 @@ v4l2::V4l2CameraConfig camera_config(const Options& o) {
     const auto colon = o.backoff.find(':');
     try {
       c.reopen_backoff_initial_ms = std::stoi(o.backoff.substr(0, colon));
-      c.reopen_backoff_max_ms = colon == std::string::npos ? c.reopen_backoff_initial_ms : std::stoi(o.backoff.substr(colon + 1));
+      c.reopen_backoff_max_ms =
+          colon == std::string::npos ? c.reopen_backoff_initial_ms : std::stoi(o.backoff.substr(colon + 1));
     } catch (const std::exception&) {
       throw InputError("--backoff-ms", o.backoff, "expected INITIAL:MAX in ms");
     }
@@ -149,7 +152,7 @@ Expectations load_expectations(const Options& o) {
     e.manifest.insert(e.manifest.end(), part.begin(), part.end());
   }
   e.reference = load_reference(o);
-  e.pairs = o.frames > 0 ? static_cast<std::size_t>(o.frames)
+  e.pairs = o.frames > 0           ? static_cast<std::size_t>(o.frames)
             : !e.reference.empty() ? e.reference.size()
             : !e.manifest.empty()  ? e.manifest.size()
                                    : 100;
@@ -174,7 +177,8 @@ struct Capture {
 // of 16).
 void compare_with_reference(const agvslam::StereoFrame& f, const agvslam::StereoFrame& ref, Capture& c) {
   const int dw = ref.left.cols - f.left.cols, dh = ref.left.rows - f.left.rows;
-  if (dw < 0 || dh < 0 || dw > 15 || dh > 15 || ref.right.size() != ref.left.size() || f.right.size() != f.left.size()) {
+  if (dw < 0 || dh < 0 || dw > 15 || dh > 15 || ref.right.size() != ref.left.size() ||
+      f.right.size() != f.left.size()) {
     ++c.reference_size_mismatch;
     return;
   }
@@ -251,27 +255,34 @@ void check_manifest(const std::vector<Expected>& expected, const Capture& c, std
     }
   }
   if (mismatches > 0) failures.push_back(std::to_string(mismatches) + " pairs differ from the manifest");
-  if (c.got.size() > expected.size()) failures.push_back(std::to_string(c.got.size() - expected.size()) + " pairs more than the manifest");
+  if (c.got.size() > expected.size())
+    failures.push_back(std::to_string(c.got.size() - expected.size()) + " pairs more than the manifest");
 }
 
 // Every check that failed, in words.
-std::vector<std::string> check(const Options& o, const Expectations& e, const Capture& c, const v4l2::CaptureStats& st) {
+std::vector<std::string> check(const Options& o, const Expectations& e, const Capture& c,
+                               const v4l2::CaptureStats& st) {
   std::vector<std::string> failures;
-  if (c.got.size() < e.pairs) failures.push_back("received " + std::to_string(c.got.size()) + " of " + std::to_string(e.pairs) + " pairs");
+  if (c.got.size() < e.pairs)
+    failures.push_back("received " + std::to_string(c.got.size()) + " of " + std::to_string(e.pairs) + " pairs");
   if (!e.manifest.empty()) check_manifest(e.manifest, c, failures);
   if (!e.reference.empty()) {
     const double worst = c.reference_error.max();
     std::printf("reference %s: mean |captured - reference| per image: median %.2f, max %.2f grey levels (limit %.2f)\n",
                 o.expect_dataset.c_str(), c.reference_error.median(), worst, o.max_mean_abs_error);
-    if (c.reference_size_mismatch > 0) failures.push_back(std::to_string(c.reference_size_mismatch) + " pairs differ in size from the reference");
+    if (c.reference_size_mismatch > 0)
+      failures.push_back(std::to_string(c.reference_size_mismatch) + " pairs differ in size from the reference");
     if (worst > o.max_mean_abs_error)
-      failures.push_back("an image differs from its reference by " + std::to_string(worst) + " grey levels on average (limit " +
-                         std::to_string(o.max_mean_abs_error) + "): wrong frame or a broken conversion");
+      failures.push_back("an image differs from its reference by " + std::to_string(worst) +
+                         " grey levels on average (limit " + std::to_string(o.max_mean_abs_error) +
+                         "): wrong frame or a broken conversion");
   }
   if (st.device_losses < static_cast<uint64_t>(o.min_losses))
-    failures.push_back("expected at least " + std::to_string(o.min_losses) + " device losses, saw " + std::to_string(st.device_losses));
+    failures.push_back("expected at least " + std::to_string(o.min_losses) + " device losses, saw " +
+                       std::to_string(st.device_losses));
   if (st.reopens < static_cast<uint64_t>(o.min_losses))
-    failures.push_back("expected at least " + std::to_string(o.min_losses) + " reopens, saw " + std::to_string(st.reopens));
+    failures.push_back("expected at least " + std::to_string(o.min_losses) + " reopens, saw " +
+                       std::to_string(st.reopens));
   return failures;
 }
 
@@ -304,11 +315,12 @@ int run(const Options& o) {
   const v4l2::V4l2CameraConfig c = camera_config(o);
   const Expectations e = load_expectations(o);
   spdlog::info("agvslam-camera: {}", c.describe());
-  spdlog::info("stop after {} pairs{}, timeout {} s, {} at start, ready-file {}, manifests {} ({} frames), min losses {}, "
-               "save {}",
-               e.pairs, o.duration_s > 0 ? " or " + std::to_string(o.duration_s) + " s" : "", o.timeout_s,
-               o.wait ? "wait for the device" : "fail if the device is not ready", o.ready_file.empty() ? "-" : o.ready_file,
-               o.manifests.size(), e.manifest.size(), o.min_losses, o.save.empty() ? "-" : o.save);
+  spdlog::info(
+      "stop after {} pairs{}, timeout {} s, {} at start, ready-file {}, manifests {} ({} frames), min losses {}, "
+      "save {}",
+      e.pairs, o.duration_s > 0 ? " or " + std::to_string(o.duration_s) + " s" : "", o.timeout_s,
+      o.wait ? "wait for the device" : "fail if the device is not ready", o.ready_file.empty() ? "-" : o.ready_file,
+      o.manifests.size(), e.manifest.size(), o.min_losses, o.save.empty() ? "-" : o.save);
   if (!o.save.empty()) std::filesystem::create_directories(o.save);
 
   v4l2::StereoCamera cam(c);
@@ -365,8 +377,10 @@ int main(int argc, char** argv) {
   app.add_option("--save-every", o.save_every, "save every K-th pair");
   app.add_option("--json", o.json, "write statistics as JSON");
   // A device that refuses the configuration (not a capture device, format not offered, size refused) is bad input.
-  return agvslam::apps::parse_and_run(app, argc, argv, [&] { return run(o); }, [](const std::exception& e) {
-    const auto* device = dynamic_cast<const v4l2::V4l2Error*>(&e);
-    return device != nullptr && device->configuration();
-  });
+  return agvslam::apps::parse_and_run(
+      app, argc, argv, [&] { return run(o); },
+      [](const std::exception& e) {
+        const auto* device = dynamic_cast<const v4l2::V4l2Error*>(&e);
+        return device != nullptr && device->configuration();
+      });
 }

@@ -9,14 +9,14 @@
 // --all also prints frames whose id is not in the DBC. Exit status: 0 read the whole log (even with CRC errors:
 // they are reported), 1 the log could not be read, 2 bad option / unreadable DBC / malformed log line.
 
+#include <spdlog/sinks/stdout_color_sinks.h>
+#include <spdlog/spdlog.h>
 #include <CLI/CLI.hpp>
 #include <cstdio>
 #include <fstream>
 #include <iostream>
 #include <map>
 #include <nlohmann/json.hpp>
-#include <spdlog/sinks/stdout_color_sinks.h>
-#include <spdlog/spdlog.h>
 
 #include "agvslam/core/error.h"
 #include "agvslam/drivers/can/candump_log.h"
@@ -54,8 +54,12 @@ struct Counts {
 
 void print_error_frame(const Options& o, const can::CandumpRecord& rec) {
   if (o.json) {
-    std::printf("%s\n", nlohmann::json{{"t_ns", rec.t_ns}, {"interface", rec.interface}, {"error_frame", true},
-                                       {"error_class", rec.frame.id}}.dump().c_str());
+    std::printf(
+        "%s\n",
+        nlohmann::json{
+            {"t_ns", rec.t_ns}, {"interface", rec.interface}, {"error_frame", true}, {"error_class", rec.frame.id}}
+            .dump()
+            .c_str());
   } else {
     std::printf("%.6f %s ERROR FRAME class 0x%08X\n", static_cast<double>(rec.t_ns) * 1e-9, rec.interface.c_str(),
                 rec.frame.id);
@@ -149,9 +153,12 @@ int run(const Options& o) {
       std::printf("%s\n", line.c_str());
     }
   }
-  const nlohmann::json summary = {{"lines", n.lines},     {"frames", n.frames},
-                                  {"decoded", n.known},   {"per_message", n.per_message},
-                                  {"crc_bad", n.crc_bad}, {"counter_gaps", n.counter_gaps},
+  const nlohmann::json summary = {{"lines", n.lines},
+                                  {"frames", n.frames},
+                                  {"decoded", n.known},
+                                  {"per_message", n.per_message},
+                                  {"crc_bad", n.crc_bad},
+                                  {"counter_gaps", n.counter_gaps},
                                   {"error_frames", n.error_frames}};
   if (o.json) std::printf("%s\n", nlohmann::json{{"summary", summary}}.dump().c_str());
   spdlog::info("agvslam-can-decode: {} frames, {} decoded, {} CRC errors, {} counter gaps, {} error frames", n.frames,

@@ -23,9 +23,9 @@
 // followed by the counts, regions per frame and per-stage median/p95 times. Exit status: 0 on success, 2 on bad
 // input (the message names the option, file or folder), 1 on any other failure.
 
-#include <CLI/CLI.hpp>
 #include <spdlog/sinks/stdout_color_sinks.h>
 #include <spdlog/spdlog.h>
+#include <CLI/CLI.hpp>
 
 #include <algorithm>
 #include <array>
@@ -35,10 +35,10 @@
 #include <filesystem>
 #include <map>
 #include <memory>
-#include <optional>
 #include <nlohmann/json.hpp>
 #include <opencv2/imgcodecs.hpp>
 #include <opencv2/imgproc.hpp>
+#include <optional>
 #include <string>
 #include <vector>
 
@@ -120,7 +120,8 @@ cv::Mat points_panel(const cv::Mat& left, const dyn::DetectorResult& r) {
   for (const auto& roi : r.rois) cv::rectangle(panel, roi.roi, cv::Scalar(0, 220, 255), 2);
   for (const auto& p : r.points) {
     if (!p.tracked) continue;
-    cv::Scalar colour = p.dynamic ? (p.densified ? cv::Scalar(0, 140, 255) : cv::Scalar(0, 0, 255)) : cv::Scalar(0, 200, 0);
+    cv::Scalar colour =
+        p.dynamic ? (p.densified ? cv::Scalar(0, 140, 255) : cv::Scalar(0, 0, 255)) : cv::Scalar(0, 200, 0);
     cv::line(panel, p.prev_px, p.cur_px, colour, 1, cv::LINE_AA);
     cv::circle(panel, p.cur_px, p.dynamic ? 3 : 2, colour, p.dynamic ? cv::FILLED : 1, cv::LINE_AA);
   }
@@ -152,10 +153,11 @@ cv::Mat superpixel_panel(const cv::Mat& left, const dyn::DetectorResult& r) {
       cv::findContours(roi.outline.clone(), contours, cv::RETR_LIST, cv::CHAIN_APPROX_NONE, roi.roi.tl());
       cv::drawContours(panel, contours, -1, kept ? cv::Scalar(0, 0, 255) : cv::Scalar(0, 140, 255), 1);
       if (!kept) {
-        cv::putText(panel, dyn::to_string(roi.outline_verdict), roi.roi.tl() + cv::Point(2, -4), cv::FONT_HERSHEY_SIMPLEX,
-                    0.4, cv::Scalar(0, 140, 255), 1, cv::LINE_AA);
+        cv::putText(panel, dyn::to_string(roi.outline_verdict), roi.roi.tl() + cv::Point(2, -4),
+                    cv::FONT_HERSHEY_SIMPLEX, 0.4, cv::Scalar(0, 140, 255), 1, cv::LINE_AA);
       }
-      for (int k : roi.points) cv::circle(panel, r.points[static_cast<std::size_t>(k)].cur_px, 2, cv::Scalar(255, 255, 255), cv::FILLED);
+      for (int k : roi.points)
+        cv::circle(panel, r.points[static_cast<std::size_t>(k)].cur_px, 2, cv::Scalar(255, 255, 255), cv::FILLED);
       cv::rectangle(panel, roi.roi, cv::Scalar(0, 220, 255), 1);
       continue;
     }
@@ -177,11 +179,14 @@ cv::Mat superpixel_panel(const cv::Mat& left, const dyn::DetectorResult& r) {
         const int* row = labels.ptr<int>(y);
         for (int x = 0; x < labels.cols; ++x) {
           const int k = row[x];
-          if (k < 0 || static_cast<std::size_t>(k) >= roi.motion.size() || roi.motion[static_cast<std::size_t>(k)].apparent_motion_px < 0) continue;
+          if (k < 0 || static_cast<std::size_t>(k) >= roi.motion.size() ||
+              roi.motion[static_cast<std::size_t>(k)].apparent_motion_px < 0)
+            continue;
           const cv::Point p(roi.roi.x + x, roi.roi.y + y);
           if (p.x >= panel.cols || p.y >= panel.rows) continue;
           cv::Vec3b& px = panel.at<cv::Vec3b>(p);
-          const cv::Vec3b tint = roi.motion[static_cast<std::size_t>(k)].moves_with_background ? cv::Vec3b(0, 255, 0) : cv::Vec3b(255, 0, 255);
+          const cv::Vec3b tint = roi.motion[static_cast<std::size_t>(k)].moves_with_background ? cv::Vec3b(0, 255, 0)
+                                                                                               : cv::Vec3b(255, 0, 255);
           for (int c = 0; c < 3; ++c) px[c] = static_cast<uint8_t>((px[c] * 2 + tint[c]) / 3);
         }
       }
@@ -191,8 +196,10 @@ cv::Mat superpixel_panel(const cv::Mat& left, const dyn::DetectorResult& r) {
       const int* below = y + 1 < labels.rows ? labels.ptr<int>(y + 1) : nullptr;
       for (int x = 0; x < labels.cols; ++x) {
         int other = -1;
-        if (x + 1 < labels.cols && row[x + 1] != row[x]) other = row[x + 1];
-        else if (below && below[x] != row[x]) other = below[x];
+        if (x + 1 < labels.cols && row[x + 1] != row[x])
+          other = row[x + 1];
+        else if (below && below[x] != row[x])
+          other = below[x];
         if (other < 0) continue;
         const cv::Point p(roi.roi.x + x, roi.roi.y + y);
         if (p.x < panel.cols && p.y < panel.rows) panel.at<cv::Vec3b>(p) = colour_of(row[x], other);
@@ -234,8 +241,7 @@ cv::Mat compose_overlay(const cv::Mat& left, const cv::Mat& right, const dyn::De
   label(c, r.rois.empty() || !r.rois.front().labels.empty()
                ? "(c) red occlusion, blue hinge; tint: green static, magenta moved"
                : "(c) ROI disparity; outline: red region, orange dropped");
-  label(d, gt_mask.empty() ? "(d) dynamic mask and regions (red)"
-                           : "(d) mask: green correct, red false, blue missed");
+  label(d, gt_mask.empty() ? "(d) dynamic mask and regions (red)" : "(d) mask: green correct, red false, blue missed");
   cv::Mat top, bottom, all;
   cv::hconcat(a, b, top);
   cv::hconcat(c, d, bottom);
@@ -246,13 +252,24 @@ cv::Mat compose_overlay(const cv::Mat& left, const cv::Mat& right, const dyn::De
 // ---------------------------------------------------------------------------------------------------------------
 // Timing
 
-
 std::vector<std::pair<std::string, double>> stage_values(const dyn::StageTimings& t) {
-  return {{"pyramid", t.pyramid_ms},       {"tracking", t.tracking_ms},     {"point_disparity", t.point_disparity_ms},
-          {"epipolar", t.epipolar_ms},     {"depth_test", t.depth_test_ms}, {"multiframe", t.multiframe_ms}, {"densify", t.densify_ms},
-          {"grouping", t.grouping_ms},     {"roi_disparity", t.roi_disparity_ms}, {"slic", t.slic_ms},
-          {"planes", t.planes_ms},         {"boundaries", t.boundaries_ms}, {"regions", t.regions_ms},
-          {"motion_carve", t.motion_carve_ms}, {"band", t.band_ms},             {"features", t.features_ms},     {"total", t.total_ms}};
+  return {{"pyramid", t.pyramid_ms},
+          {"tracking", t.tracking_ms},
+          {"point_disparity", t.point_disparity_ms},
+          {"epipolar", t.epipolar_ms},
+          {"depth_test", t.depth_test_ms},
+          {"multiframe", t.multiframe_ms},
+          {"densify", t.densify_ms},
+          {"grouping", t.grouping_ms},
+          {"roi_disparity", t.roi_disparity_ms},
+          {"slic", t.slic_ms},
+          {"planes", t.planes_ms},
+          {"boundaries", t.boundaries_ms},
+          {"regions", t.regions_ms},
+          {"motion_carve", t.motion_carve_ms},
+          {"band", t.band_ms},
+          {"features", t.features_ms},
+          {"total", t.total_ms}};
 }
 
 // Per ground-truth object of a frame (moving or not): its visible moving pixels, the tracked and dynamic points on
@@ -301,10 +318,18 @@ nlohmann::json object_diagnostics(const std::vector<agvslam::io::SceneObject>* o
       if (d.matched_object_id == obj.id) iou = d.iou;
     }
     double distance_m = -1;  // unknown
-    if (!disparities.empty() && bf_px_m > 0) distance_m = bf_px_m / static_cast<double>(dyn::median_in_place(disparities, 0.0f));
-    out.push_back({{"id", obj.id}, {"class", obj.object_class}, {"moving", obj.moving}, {"pixels", pixels},
-                   {"in_mask", in_mask}, {"in_roi", in_roi}, {"tracked_points", tracked}, {"dynamic_points", dynamic},
-                   {"iou", iou}, {"distance_m", distance_m}});
+    if (!disparities.empty() && bf_px_m > 0)
+      distance_m = bf_px_m / static_cast<double>(dyn::median_in_place(disparities, 0.0f));
+    out.push_back({{"id", obj.id},
+                   {"class", obj.object_class},
+                   {"moving", obj.moving},
+                   {"pixels", pixels},
+                   {"in_mask", in_mask},
+                   {"in_roi", in_roi},
+                   {"tracked_points", tracked},
+                   {"dynamic_points", dynamic},
+                   {"iou", iou},
+                   {"distance_m", distance_m}});
   }
   return out;
 }
@@ -336,8 +361,8 @@ struct RecallBreakdown {
   static constexpr int kMissBands = 4;
   static constexpr int kMissStages = 5;
   static constexpr const char* kMissBandNames[kMissBands] = {"lt4m", "4_12m", "ge12m", "unknown"};
-  static constexpr const char* kMissStageNames[kMissStages] = {"no_track", "no_dynamic_point", "no_roi", "roi_not_masked",
-                                                               "outline_below_iou"};
+  static constexpr const char* kMissStageNames[kMissStages] = {"no_track", "no_dynamic_point", "no_roi",
+                                                               "roi_not_masked", "outline_below_iou"};
   int misses[kMissBands][kMissStages] = {};
   // By the object's ground-truth image motion against a static object's (eval/object_motion.h, frame to frame;
   // "visible part changed": entering, leaving or passing behind something), per distance band as the misses.
@@ -385,11 +410,11 @@ struct RecallBreakdown {
         motion_found[band][k] += hit;
       }
       if (!hit) {
-        const int stage = d["in_mask"].get<int>() > 0           ? 4
-                          : d["in_roi"].get<int>() > 0          ? 3
-                          : d["dynamic_points"].get<int>() > 0  ? 2
-                          : d["tracked_points"].get<int>() > 0  ? 1
-                                                                : 0;
+        const int stage = d["in_mask"].get<int>() > 0          ? 4
+                          : d["in_roi"].get<int>() > 0         ? 3
+                          : d["dynamic_points"].get<int>() > 0 ? 2
+                          : d["tracked_points"].get<int>() > 0 ? 1
+                                                               : 0;
         ++misses[band][stage];
       }
       if (distance_m > 0) {
@@ -403,7 +428,8 @@ struct RecallBreakdown {
         for (const auto& other : diagnostics) {
           const double other_m = other.value("distance_m", -1.0);
           if (other["id"].get<int>() == id || !(other_m > 0) || other_m >= distance_m) continue;
-          const auto o2 = std::find_if(objects.begin(), objects.end(), [&](const auto& o) { return o.id == other["id"].get<int>(); });
+          const auto o2 = std::find_if(objects.begin(), objects.end(),
+                                       [&](const auto& o) { return o.id == other["id"].get<int>(); });
           covered = covered || (o2 != objects.end() && (o2->box & obj->box).area() > 0);
         }
         if (!covered) {
@@ -441,19 +467,21 @@ struct RecallBreakdown {
     return totals;
   }
   std::string describe_misses() const {
-    return per_band("misses by where they were lost (no track / no dynamic point / no ROI / ROI, not in the mask / "
-                    "outline IoU too low):",
-                    kMissStages, band_totals(misses), [&](int b, int k) { return std::to_string(misses[b][k]); });
+    return per_band(
+        "misses by where they were lost (no track / no dynamic point / no ROI / ROI, not in the mask / "
+        "outline IoU too low):",
+        kMissStages, band_totals(misses), [&](int b, int k) { return std::to_string(misses[b][k]); });
   }
   bool has_motion() const {
     const std::array<int, kMissBands> totals = band_totals(motion_total);
     return std::any_of(totals.begin(), totals.end(), [](int n) { return n > 0; });
   }
   std::string describe_motion() const {
-    return per_band("recall by ground-truth image motion against a static object's, frame to frame (< 1 / 1-2 / 2-4 / "
-                    ">= 4 px / visible part changed):",
-                    kMotionBins, band_totals(motion_total),
-                    [&](int b, int k) { return ratio(motion_found[b][k], motion_total[b][k]); });
+    return per_band(
+        "recall by ground-truth image motion against a static object's, frame to frame (< 1 / 1-2 / 2-4 / "
+        ">= 4 px / visible part changed):",
+        kMotionBins, band_totals(motion_total),
+        [&](int b, int k) { return ratio(motion_found[b][k], motion_total[b][k]); });
   }
   nlohmann::json motion_json() const {
     const char* names[kMotionBins] = {"lt1px", "1_2px", "2_4px", "ge4px", "visible_part_changed"};
@@ -473,18 +501,20 @@ struct RecallBreakdown {
     return j;
   }
   std::string describe() const {
-    return "recall by visible size: <1500 px " + ratio(found[0], total[0]) + ", 1500-5000 px " + ratio(found[1], total[1]) +
-           ", 5000-20000 px " + ratio(found[2], total[2]) + ", >= 20000 px " + ratio(found[3], total[3]) +
-           "; cut by the left/right image border " + ratio(border_found, border_total) + " (left " +
-           ratio(left_found, left_total) + ", right " + ratio(right_found, right_total) + "), inside the image " +
-           ratio(inner_found, inner_total) + "; by tracked points on the object: 0 " + ratio(track_found[0], track_total[0]) +
-           ", 1-2 " + ratio(track_found[1], track_total[1]) + ", 3-4 " + ratio(track_found[2], track_total[2]) + ", 5-9 " +
-           ratio(track_found[3], track_total[3]) + ", >= 10 " + ratio(track_found[4], track_total[4]) +
+    return "recall by visible size: <1500 px " + ratio(found[0], total[0]) + ", 1500-5000 px " +
+           ratio(found[1], total[1]) + ", 5000-20000 px " + ratio(found[2], total[2]) + ", >= 20000 px " +
+           ratio(found[3], total[3]) + "; cut by the left/right image border " + ratio(border_found, border_total) +
+           " (left " + ratio(left_found, left_total) + ", right " + ratio(right_found, right_total) +
+           "), inside the image " + ratio(inner_found, inner_total) + "; by tracked points on the object: 0 " +
+           ratio(track_found[0], track_total[0]) + ", 1-2 " + ratio(track_found[1], track_total[1]) + ", 3-4 " +
+           ratio(track_found[2], track_total[2]) + ", 5-9 " + ratio(track_found[3], track_total[3]) + ", >= 10 " +
+           ratio(track_found[4], track_total[4]) +
            (distance_total[0] + distance_total[1] + distance_total[2] + distance_total[3] == 0
                 ? std::string()
                 : "; by distance: < 4 m " + ratio(distance_found[0], distance_total[0]) + ", 4-7 m " +
-                      ratio(distance_found[1], distance_total[1]) + ", 7-12 m " + ratio(distance_found[2], distance_total[2]) +
-                      ", >= 12 m " + ratio(distance_found[3], distance_total[3]) + "; within 4 m in full view (not cut, " +
+                      ratio(distance_found[1], distance_total[1]) + ", 7-12 m " +
+                      ratio(distance_found[2], distance_total[2]) + ", >= 12 m " +
+                      ratio(distance_found[3], distance_total[3]) + "; within 4 m in full view (not cut, " +
                       "no nearer mover over it) " + ratio(full_view_found, full_view_total));
   }
   nlohmann::json to_json() const {
@@ -509,7 +539,8 @@ struct RecallBreakdown {
 
 // Per detected object: its box and size, the object it matched (-1 none) and how many of its pixels lie on
 // moving ground truth (a false positive on a moving object is a split or merged outline, elsewhere a false alarm).
-nlohmann::json detection_diagnostics(const eval::FrameDetectionScore& f, const cv::Mat& instances, const cv::Mat& gt_mask) {
+nlohmann::json detection_diagnostics(const eval::FrameDetectionScore& f, const cv::Mat& instances,
+                                     const cv::Mat& gt_mask) {
   nlohmann::json out = nlohmann::json::array();
   for (const auto& d : f.detections) {
     // Instances are numbered in the order score_detection_instances lists them (increasing label), so the
@@ -529,8 +560,12 @@ nlohmann::json detection_diagnostics(const eval::FrameDetectionScore& f, const c
     for (int y = d.box.y; y < d.box.br().y; ++y)
       for (int x = d.box.x; x < d.box.br().x; ++x)
         on_moving += instances.at<uint8_t>(y, x) == label && gt_mask.at<uint8_t>(y, x) ? 1 : 0;
-    out.push_back({{"box", {d.box.x, d.box.y, d.box.width, d.box.height}}, {"pixels", d.pixels},
-                   {"matched", d.matched_object_id}, {"iou", d.iou}, {"ignored", d.ignored}, {"on_moving", on_moving}});
+    out.push_back({{"box", {d.box.x, d.box.y, d.box.width, d.box.height}},
+                   {"pixels", d.pixels},
+                   {"matched", d.matched_object_id},
+                   {"iou", d.iou},
+                   {"ignored", d.ignored},
+                   {"on_moving", on_moving}});
   }
   return out;
 }
@@ -609,44 +644,67 @@ void add_points_json(const Options& o, const dyn::DetectorResult& result, const 
       if (!p.tracked) continue;
       const cv::Point q(cvRound(p.cur_px.x), cvRound(p.cur_px.y));
       const int on_gt = gt_mask.empty() ? -1 : (gt_mask.at<uint8_t>(q) ? 1 : 0);
-      jp.push_back({{"x", p.cur_px.x}, {"y", p.cur_px.y}, {"d", p.cur_disparity_px}, {"age", p.age},
-                    {"densified", p.densified}, {"d_epi", p.d_epi_px}, {"t_epi", p.t_epi_px},
-                    {"reproj", p.reprojection_px}, {"disp_res", p.disparity_residual_px},
-                    {"mf", p.multiframe_px}, {"mf_disp", p.multiframe_disparity_residual_px},
-                    {"epipolar", p.dynamic_epipolar}, {"depth", p.dynamic_depth},
-                    {"multiframe", p.dynamic_multiframe}, {"dynamic", p.dynamic}, {"group", p.group},
+      jp.push_back({{"x", p.cur_px.x},
+                    {"y", p.cur_px.y},
+                    {"d", p.cur_disparity_px},
+                    {"age", p.age},
+                    {"densified", p.densified},
+                    {"d_epi", p.d_epi_px},
+                    {"t_epi", p.t_epi_px},
+                    {"reproj", p.reprojection_px},
+                    {"disp_res", p.disparity_residual_px},
+                    {"mf", p.multiframe_px},
+                    {"mf_disp", p.multiframe_disparity_residual_px},
+                    {"epipolar", p.dynamic_epipolar},
+                    {"depth", p.dynamic_depth},
+                    {"multiframe", p.dynamic_multiframe},
+                    {"dynamic", p.dynamic},
+                    {"group", p.group},
                     {"on_gt", on_gt}});
     }
     jf["tracked_points"] = jp;
   }
   jf["points"] = {{"tracked", tracked}, {"epipolar", epi}, {"depth", depth}, {"multiframe", multi}};
-  jf["multiframe"] = {{"valid", result.multiframe.valid}, {"frames_back", result.multiframe.frames_back},
-                      {"translation_m", result.multiframe.translation_m}, {"candidates", result.multiframe.candidates}, {"flagged", result.multiframe.flagged}, {"confirmed", result.multiframe.confirmed},
+  jf["multiframe"] = {{"valid", result.multiframe.valid},
+                      {"frames_back", result.multiframe.frames_back},
+                      {"translation_m", result.multiframe.translation_m},
+                      {"candidates", result.multiframe.candidates},
+                      {"flagged", result.multiframe.flagged},
+                      {"confirmed", result.multiframe.confirmed},
                       {"a_reproj_px", result.multiframe.test.a_reproj_used_px},
                       {"a_disp_px", result.multiframe.test.a_disp_used_px}};
 }
 
 // Every ROI with an outline: its size, verdict, points and motion; with --dump-rois also its outline as a PNG
 // (rois/<frame>_<k>.png, whatever its verdict) and its dynamic points' positions in both frames.
-nlohmann::json rois_json(const Options& o, std::size_t frame, const dyn::DetectorResult& result, const cv::Mat& gt_mask) {
+nlohmann::json rois_json(const Options& o, std::size_t frame, const dyn::DetectorResult& result,
+                         const cv::Mat& gt_mask) {
   nlohmann::json jr = nlohmann::json::array();
   for (std::size_t k = 0; k < result.rois.size(); ++k) {
     const auto& roi = result.rois[k];
     if (roi.outline.empty()) continue;
     const int px = cv::countNonZero(roi.outline);
     const int on_gt = gt_mask.empty() ? -1 : cv::countNonZero(roi.outline & gt_mask(roi.roi));
-    jr.push_back({{"roi", {roi.roi.x, roi.roi.y, roi.roi.width, roi.roi.height}}, {"pixels", px}, {"on_gt", on_gt},
-                  {"points", roi.points.size()}, {"tracked_inside", roi.outline_stats.tracked_inside},
+    jr.push_back({{"roi", {roi.roi.x, roi.roi.y, roi.roi.width, roi.roi.height}},
+                  {"pixels", px},
+                  {"on_gt", on_gt},
+                  {"points", roi.points.size()},
+                  {"tracked_inside", roi.outline_stats.tracked_inside},
                   {"dynamic_inside", roi.outline_stats.dynamic_inside},
                   {"multiframe_tested_inside", roi.outline_stats.multiframe_tested_inside},
-                  {"multiframe_dynamic_inside", roi.outline_stats.multiframe_dynamic_inside}, {"d", roi.mean_disparity_px},
+                  {"multiframe_dynamic_inside", roi.outline_stats.multiframe_dynamic_inside},
+                  {"d", roi.mean_disparity_px},
                   {"motion", roi.outline_motion.apparent_motion_px},
                   {"motion_multiframe", roi.outline_motion_multiframe.apparent_motion_px},
-                  {"verdict", dyn::to_string(roi.outline_verdict)}, {"coasted", roi.coasted}, {"median_offset", roi.outline_stats.median_offset_px},
+                  {"verdict", dyn::to_string(roi.outline_verdict)},
+                  {"coasted", roi.coasted},
+                  {"median_offset", roi.outline_stats.median_offset_px},
                   {"object", roi.object_id},
-                  {"motion_carve", {{"ran", roi.motion_carve.ran}, {"blocks_tested", roi.motion_carve.blocks_tested},
-                                    {"blocks_static", roi.motion_carve.blocks_static},
-                                    {"pixels_removed", roi.motion_carve.pixels_removed}}}});
+                  {"motion_carve",
+                   {{"ran", roi.motion_carve.ran},
+                    {"blocks_tested", roi.motion_carve.blocks_tested},
+                    {"blocks_static", roi.motion_carve.blocks_static},
+                    {"pixels_removed", roi.motion_carve.pixels_removed}}}});
     if (o.dump_rois) {
       char name[48];
       std::snprintf(name, sizeof(name), "%06zu_%02zu.png", frame, k);
@@ -666,8 +724,8 @@ nlohmann::json rois_json(const Options& o, std::size_t frame, const dyn::Detecto
 // The frame scored against the ground-truth masks (eqs. 12-14), with per-object and per-detection diagnostics and
 // each moving object's ground-truth image motion since the last frame (eval/object_motion.h).
 void score_frame(std::size_t i, std::size_t first, const agvslam::io::StereoDataset& dataset, const GroundTruth& gt,
-                 const FrameTruth& truth, const eval::DetectionScoringConfig& scoring, const dyn::DetectorResult& result,
-                 Totals& totals, nlohmann::json& jf) {
+                 const FrameTruth& truth, const eval::DetectionScoringConfig& scoring,
+                 const dyn::DetectorResult& result, Totals& totals, nlohmann::json& jf) {
   std::vector<eval::GroundTruthObject> gt_objects;
   const auto it = gt.objects.find(static_cast<int>(i));
   if (it != gt.objects.end()) {
@@ -715,9 +773,14 @@ void add_detected_frame(const Options& o, std::size_t i, std::size_t first, cons
   totals.frames_with_regions += n_regions > 0 ? 1 : 0;
   jf["regions"] = n_regions;
   if (result.band.ran) {
-    jf["band"] = {{"static_segment_px", result.band.static_segment_px}, {"tracks", result.band.tracks}, {"corners", result.band.corners},
-                  {"seeds", result.band.seeds.size()}, {"regions", result.band.regions.size()},
-                  {"joined", result.band_joined}, {"objects", result.band_objects}, {"ms", result.timings.band_ms}};
+    jf["band"] = {{"static_segment_px", result.band.static_segment_px},
+                  {"tracks", result.band.tracks},
+                  {"corners", result.band.corners},
+                  {"seeds", result.band.seeds.size()},
+                  {"regions", result.band.regions.size()},
+                  {"joined", result.band_joined},
+                  {"objects", result.band_objects},
+                  {"ms", result.timings.band_ms}};
   }
   if (result.band_driving_seeds > 0) {
     jf["band_driving"] = {{"seeds", result.band_driving_seeds}, {"dynamic", result.band_driving_dynamic}};
@@ -740,21 +803,24 @@ void add_detected_frame(const Options& o, std::size_t i, std::size_t first, cons
 void print_summary(bool scored, const eval::DetectionScoringConfig& scoring, Totals& totals) {
   const double nan = std::nan("");
   const eval::DetectionScore& score = totals.score;
-  const double p = scored ? score.precision() : nan, r = scored ? score.recall() : nan, iou = scored ? score.mean_iou() : nan;
+  const double p = scored ? score.precision() : nan, r = scored ? score.recall() : nan,
+               iou = scored ? score.mean_iou() : nan;
   std::printf("PRECISION %s RECALL %s IOU %s\n", fmt(p).c_str(), fmt(r).c_str(), fmt(iou).c_str());
-  std::printf("frames: %d detected (the first has no previous frame); %d regions, %.3f per frame, %d frames with regions\n",
-              totals.frames_detected, totals.regions,
-              totals.frames_detected > 0 ? static_cast<double>(totals.regions) / totals.frames_detected : 0.0,
-              totals.frames_with_regions);
+  std::printf(
+      "frames: %d detected (the first has no previous frame); %d regions, %.3f per frame, %d frames with regions\n",
+      totals.frames_detected, totals.regions,
+      totals.frames_detected > 0 ? static_cast<double>(totals.regions) / totals.frames_detected : 0.0,
+      totals.frames_with_regions);
   if (scored) {
-    std::printf("objects (IoU >= %.2f, objects under %d px don't care; %s): TP %d FP %d FN %d, %d don't-care; "
-                "false regions per 100 frames %.2f\n",
-                scoring.min_iou, scoring.min_object_pixels,
-                totals.instances_scored == score.frames() ? "each object its own pixels (instance_0/)"
-                : totals.instances_scored == 0          ? "each object the moving pixels in its box (no instance_0/)"
-                                                        : "instance_0/ for some frames only",
-                score.true_positives(), score.false_positives(), score.false_negatives(), score.ignored_objects(),
-                score.false_positives_per_100_frames());
+    std::printf(
+        "objects (IoU >= %.2f, objects under %d px don't care; %s): TP %d FP %d FN %d, %d don't-care; "
+        "false regions per 100 frames %.2f\n",
+        scoring.min_iou, scoring.min_object_pixels,
+        totals.instances_scored == score.frames() ? "each object its own pixels (instance_0/)"
+        : totals.instances_scored == 0            ? "each object the moving pixels in its box (no instance_0/)"
+                                                  : "instance_0/ for some frames only",
+        score.true_positives(), score.false_positives(), score.false_negatives(), score.ignored_objects(),
+        score.false_positives_per_100_frames());
     std::printf("pixels: precision %.4f recall %.4f IoU %.4f\n", score.pixel_precision(), score.pixel_recall(),
                 score.pixel_iou());
     std::printf("%s\n", totals.breakdown.describe().c_str());
@@ -765,7 +831,8 @@ void print_summary(bool scored, const eval::DetectionScoringConfig& scoring, Tot
   }
   std::printf("time per frame [ms]      median      p95\n");
   for (const auto& name : totals.stage_order) {
-    std::printf("  %-20s %9.3f %8.3f\n", name.c_str(), totals.timings[name].median(), totals.timings[name].quantile(0.95));
+    std::printf("  %-20s %9.3f %8.3f\n", name.c_str(), totals.timings[name].median(),
+                totals.timings[name].quantile(0.95));
   }
 }
 
@@ -775,11 +842,13 @@ void write_json(const Options& o, const agvslam::io::StereoDataset& dataset, std
   nlohmann::json j;
   j["dataset"] = dataset.root();
   j["frames"] = {{"first", first}, {"last", last}, {"detected", totals.frames_detected}};
-  j["regions"] = {{"total", totals.regions},
-                  {"per_frame", totals.frames_detected > 0 ? static_cast<double>(totals.regions) / totals.frames_detected : 0.0},
-                  {"unconfirmed_objects", totals.unconfirmed}};
+  j["regions"] = {
+      {"total", totals.regions},
+      {"per_frame", totals.frames_detected > 0 ? static_cast<double>(totals.regions) / totals.frames_detected : 0.0},
+      {"unconfirmed_objects", totals.unconfirmed}};
   if (scored) {
-    j["scoring"] = {{"min_iou", scoring.min_iou}, {"min_object_pixels", scoring.min_object_pixels},
+    j["scoring"] = {{"min_iou", scoring.min_iou},
+                    {"min_object_pixels", scoring.min_object_pixels},
                     {"instance_frames", totals.instances_scored}};
     j["precision"] = score.precision();
     j["recall"] = score.recall();
@@ -808,7 +877,8 @@ void write_json(const Options& o, const agvslam::io::StereoDataset& dataset, std
 std::unique_ptr<agvslam::semantic::SemanticMasker> open_semantic(const Options& o) {
   namespace sem = agvslam::semantic;
   if (o.semantic == "off") return nullptr;
-  sem::SemanticConfig config = o.params_semantic.empty() ? sem::SemanticConfig{} : sem::load_semantic_config(o.params_semantic);
+  sem::SemanticConfig config =
+      o.params_semantic.empty() ? sem::SemanticConfig{} : sem::load_semantic_config(o.params_semantic);
   config.model.path = o.semantic;
   config.fusion.synchronous = true;
   std::unique_ptr<sem::Segmenter> segmenter;
@@ -818,7 +888,8 @@ std::unique_ptr<agvslam::semantic::SemanticMasker> open_semantic(const Options& 
     spdlog::warn("--semantic: {}; continuing with the geometric detector alone", e.what());
     return nullptr;
   }
-  spdlog::info("  semantic settings{}", o.params_semantic.empty() ? " (built-in defaults)" : " from " + o.params_semantic);
+  spdlog::info("  semantic settings{}",
+               o.params_semantic.empty() ? " (built-in defaults)" : " from " + o.params_semantic);
   for (const auto& line : config.describe()) spdlog::info("    {}", line);
   return std::make_unique<sem::SemanticMasker>(config, std::move(segmenter));
 }
@@ -835,7 +906,8 @@ int run(const Options& o) {
   spdlog::info("agvslam-dynamic: {} dataset {} ({} frames, using {}..{})", dataset->kind(), dataset->root(),
                dataset->size(), first, last);
   spdlog::info("  calibration: {}", dataset->calibration().summary());
-  spdlog::info("  detector settings{}", o.params_dynamic.empty() ? " (built-in defaults)" : " from " + o.params_dynamic);
+  spdlog::info("  detector settings{}",
+               o.params_dynamic.empty() ? " (built-in defaults)" : " from " + o.params_dynamic);
   for (const auto& line : dynamic_config.describe()) spdlog::info("    {}", line);
   spdlog::info("  stereo settings{}", o.params_stereo.empty() ? " (built-in defaults)" : " from " + o.params_stereo);
   for (const auto& line : stereo_config.describe()) spdlog::info("    {}", line);
@@ -876,7 +948,8 @@ int run(const Options& o) {
     }
     nlohmann::json jf;
     jf["frame"] = i;
-    if (result.has_previous) add_detected_frame(o, i, first, *dataset, gt, truth, scoring, result, detect_cpu_ms, totals, jf);
+    if (result.has_previous)
+      add_detected_frame(o, i, first, *dataset, gt, truth, scoring, result, detect_cpu_ms, totals, jf);
     totals.per_frame.push_back(jf);
     gt.last_instances = truth.instances;
     gt.last_disparity_px = truth.disparity_px;
@@ -889,9 +962,10 @@ int run(const Options& o) {
 
   if (semantic) {
     const agvslam::semantic::SemanticStats st = semantic->stats();
-    spdlog::info("semantic: {} frames sent to the network, {} segmented ({:.1f} ms each), {} carried late, {} dropped stale",
-                 st.requests, st.segmented, st.segmented ? st.segment_ms_total / static_cast<double>(st.segmented) : 0.0,
-                 st.late_results, st.stale_results);
+    spdlog::info(
+        "semantic: {} frames sent to the network, {} segmented ({:.1f} ms each), {} carried late, {} dropped stale",
+        st.requests, st.segmented, st.segmented ? st.segment_ms_total / static_cast<double>(st.segmented) : 0.0,
+        st.late_results, st.stale_results);
   }
   const bool scored = gt.has_masks && totals.score.frames() > 0;
   print_summary(scored, scoring, totals);
@@ -904,10 +978,12 @@ int run(const Options& o) {
 int main(int argc, char** argv) {
   // Logs go to stderr: stdout carries the results, starting with the PRECISION line.
   spdlog::set_default_logger(spdlog::stderr_color_mt("agvslam-dynamic"));
-  CLI::App app{"agvslam-dynamic: dynamic-region detection (paper 004) over a stereo sequence, scored where the "
-               "dataset has ground-truth masks"};
+  CLI::App app{
+      "agvslam-dynamic: dynamic-region detection (paper 004) over a stereo sequence, scored where the "
+      "dataset has ground-truth masks"};
   Options o;
-  app.add_option("--dataset", o.dataset, "sequence folder (KITTI layout as agvslam-sim writes it, or EuRoC)")->required();
+  app.add_option("--dataset", o.dataset, "sequence folder (KITTI layout as agvslam-sim writes it, or EuRoC)")
+      ->required();
   app.add_option("--out", o.out_dir, "output folder: mask/ and overlay/")->required();
   app.add_option("--json", o.json_path, "write the scores, per-stage timings and per-frame figures as JSON");
   app.add_option("--frames", o.frames, "inclusive frame range A:B (default: all)");
@@ -917,17 +993,22 @@ int main(int argc, char** argv) {
   app.add_option("--semantic", o.semantic,
                  "segmentation model (ONNX) whose moving objects join the detector's mask, or off (default)");
   app.add_option("--params-semantic", o.params_semantic, "params/semantic.yaml (with --semantic MODEL)");
-  app.add_flag("--dump-rois", o.dump_rois,
-               "debugging: write every ROI's outline (kept or dropped) to rois/, the reported objects to instances/ (8-bit ids) "
-               "and the ROIs' dynamic points to the --json output");
-  app.add_flag("--json-points", o.json_points, "add every tracked point (position, disparity, age, tests, residuals) "
+  app.add_flag(
+      "--dump-rois", o.dump_rois,
+      "debugging: write every ROI's outline (kept or dropped) to rois/, the reported objects to instances/ (8-bit ids) "
+      "and the ROIs' dynamic points to the --json output");
+  app.add_flag("--json-points", o.json_points,
+               "add every tracked point (position, disparity, age, tests, residuals) "
                "of every frame to the --json output (large)");
   app.add_option("--opencv-threads", o.opencv_threads,
                  "OpenCV worker threads (1: the detector on one core, as its timings are specified)")
       ->check(CLI::PositiveNumber);
-  app.add_option("--overlay-every", o.overlay_every, "write an overlay every N frames (0 = none)")->check(CLI::NonNegativeNumber);
+  app.add_option("--overlay-every", o.overlay_every, "write an overlay every N frames (0 = none)")
+      ->check(CLI::NonNegativeNumber);
   app.add_option("--min-object-pixels", o.min_object_pixels,
-                 "ground-truth objects with fewer visible moving pixels are don't-care")->check(CLI::NonNegativeNumber);
-  app.add_option("--min-iou", o.min_iou, "IoU for a detection to match an object (paper: 0.5)")->check(CLI::Range(0.01, 1.0));
+                 "ground-truth objects with fewer visible moving pixels are don't-care")
+      ->check(CLI::NonNegativeNumber);
+  app.add_option("--min-iou", o.min_iou, "IoU for a detection to match an object (paper: 0.5)")
+      ->check(CLI::Range(0.01, 1.0));
   return agvslam::apps::parse_and_run(app, argc, argv, [&] { return run(o); });
 }

@@ -12,6 +12,8 @@
 // --count was not reached). Without either it runs until SIGINT/SIGTERM.
 // Exit status: 0 done, 1 timeout or DDS failure, 2 bad option.
 
+#include <spdlog/sinks/stdout_color_sinks.h>
+#include <spdlog/spdlog.h>
 #include <CLI/CLI.hpp>
 #include <algorithm>
 #include <atomic>
@@ -19,10 +21,8 @@
 #include <csignal>
 #include <cstdio>
 #include <fstream>
-#include <nlohmann/json.hpp>
 #include <map>
-#include <spdlog/sinks/stdout_color_sinks.h>
-#include <spdlog/spdlog.h>
+#include <nlohmann/json.hpp>
 #include <vector>
 
 #include "agvslam/core/error.h"
@@ -90,9 +90,8 @@ int run(const Options& o) {
     h.on_odom = [&](const dds::OdomMsg& m, int64_t recv) {
       const auto& p = m.pose.pose.position;
       const auto& v = m.twist.twist;
-      std::snprintf(buf, sizeof buf, "[%s -> %s] x %.3f y %.3f yaw %.2f deg v %.3f m/s w %.3f rad/s",
-                    m.header.frame_id, m.child_frame_id, p.x, p.y, yaw_deg(m.pose.pose.orientation), v.linear.x,
-                    v.angular.z);
+      std::snprintf(buf, sizeof buf, "[%s -> %s] x %.3f y %.3f yaw %.2f deg v %.3f m/s w %.3f rad/s", m.header.frame_id,
+                    m.child_frame_id, p.x, p.y, yaw_deg(m.pose.pose.orientation), v.linear.x, v.angular.z);
       emit("odom", dds::to_json(m), dds::from_ros_time(m.header.stamp), recv, buf);
     };
   }
@@ -135,8 +134,8 @@ int run(const Options& o) {
     if (!out) throw agvslam::InputError(o.summary_path, "--summary", "expected a writable file");
     out << summary.dump(2) << "\n";
   }
-  spdlog::info("agvslam-echo: received {} samples; latency stamp->receive median {:.3f} ms, p99 {:.3f} ms{}",
-               received, latency_ms.median(), latency_ms.quantile(0.99), timed_out ? " (timed out)" : "");
+  spdlog::info("agvslam-echo: received {} samples; latency stamp->receive median {:.3f} ms, p99 {:.3f} ms{}", received,
+               latency_ms.median(), latency_ms.quantile(0.99), timed_out ? " (timed out)" : "");
   return timed_out && o.count > 0 && received < o.count ? 1 : 0;
 }
 
@@ -150,7 +149,8 @@ int main(int argc, char** argv) {
       ->check(CLI::IsMember({"pose", "odom", "status", "all"}))
       ->capture_default_str();
   app.add_option("--domain", o.domain, "DDS domain id (ROS_DOMAIN_ID)")->capture_default_str();
-  app.add_option("--interface", o.interface, "network interface for DDS (default: Cyclone's choice, or CYCLONEDDS_URI)");
+  app.add_option("--interface", o.interface,
+                 "network interface for DDS (default: Cyclone's choice, or CYCLONEDDS_URI)");
   app.add_option("--namespace", o.ns, "topic namespace: rt/<ns>/pose ...")->capture_default_str();
   app.add_option("--count", o.count, "stop after N samples (0: run until interrupted)")->capture_default_str();
   app.add_option("--timeout", o.timeout_s, "give up after S seconds (0: never)")->capture_default_str();

@@ -12,13 +12,13 @@
 // the first line is `ODOMETRY_DISTANCE_RATIO <value>`.
 // Exit status: 0 on success, 2 on bad input (with a message naming the file or option), 1 on any other failure.
 
+#include <spdlog/sinks/stdout_color_sinks.h>
+#include <spdlog/spdlog.h>
 #include <CLI/CLI.hpp>
 #include <cstdio>
 #include <fstream>
 #include <nlohmann/json.hpp>
 #include <optional>
-#include <spdlog/sinks/stdout_color_sinks.h>
-#include <spdlog/spdlog.h>
 
 #include "agvslam/core/error.h"
 #include "agvslam/eval/metrics.h"
@@ -68,11 +68,12 @@ void compare_with_ground_truth(const Options& o, eval::AlignMode align, const ag
       gt_format == TrajectoryFormat::kKitti && est_format == TrajectoryFormat::kKitti && o.times_path.empty();
   if (!by_index && o.times_path.empty() &&
       (gt_format == TrajectoryFormat::kKitti || est_format == TrajectoryFormat::kKitti))
-    throw InputError("--times", "", "a KITTI pose file has no time stamps: give --times times.txt to associate it "
+    throw InputError("--times", "",
+                     "a KITTI pose file has no time stamps: give --times times.txt to associate it "
                      "with a time-stamped (TUM/EuRoC) trajectory");
-  const eval::PosePairs pairs =
-      by_index ? eval::associate_by_index(gt, est)
-               : eval::associate_by_timestamp(gt, est, static_cast<int64_t>(o.max_dt_ms * 1e6));
+  const eval::PosePairs pairs = by_index
+                                    ? eval::associate_by_index(gt, est)
+                                    : eval::associate_by_timestamp(gt, est, static_cast<int64_t>(o.max_dt_ms * 1e6));
   if (pairs.size() < 2)
     throw InputError(o.est_path, "association",
                      "expected at least 2 poses matching the ground truth " +
@@ -86,14 +87,14 @@ void compare_with_ground_truth(const Options& o, eval::AlignMode align, const ag
   const double gt_length = eval::path_length_m(pairs.T_w_c_gt);
 
   std::printf("ATE_RMSE_M %.6f\n", ate.translation_m.rmse);
-  std::printf("poses: %zu associated (%s) of %zu estimated, %zu ground truth; ground-truth path %.3f m\n",
-              pairs.size(), by_index ? "by index" : "by time stamp", est.size(), gt.size(), gt_length);
+  std::printf("poses: %zu associated (%s) of %zu estimated, %zu ground truth; ground-truth path %.3f m\n", pairs.size(),
+              by_index ? "by index" : "by time stamp", est.size(), gt.size(), gt_length);
   std::printf("alignment: %s", eval::to_string(align).c_str());
   if (align == eval::AlignMode::kSim3) std::printf(" (scale %.6f)", ate.alignment.scale);
   std::printf("\n");
   const auto& a = ate.translation_m;
-  std::printf("ATE [m]:       rmse %.6f  mean %.6f  median %.6f  std %.6f  max %.6f\n", a.rmse, a.mean, a.median,
-              a.std, a.max);
+  std::printf("ATE [m]:       rmse %.6f  mean %.6f  median %.6f  std %.6f  max %.6f\n", a.rmse, a.mean, a.median, a.std,
+              a.max);
   std::printf("RPE/%d [m]:     rmse %.6f  mean %.6f  median %.6f  std %.6f  max %.6f\n", rpe.delta_frames,
               rpe.translation_m.rmse, rpe.translation_m.mean, rpe.translation_m.median, rpe.translation_m.std,
               rpe.translation_m.max);
@@ -122,10 +123,14 @@ void compare_with_ground_truth(const Options& o, eval::AlignMode align, const ag
     if (kitti) {
       nlohmann::json segs = nlohmann::json::array();
       for (const auto& s : kitti->per_length)
-        segs.push_back({{"length_m", s.length_m}, {"count", s.count}, {"t_rel_pct", s.t_rel_pct},
+        segs.push_back({{"length_m", s.length_m},
+                        {"count", s.count},
+                        {"t_rel_pct", s.t_rel_pct},
                         {"r_rel_deg_per_100m", s.r_rel_deg_per_100m}});
-      j["kitti"] = {{"t_rel_pct", kitti->t_rel_pct}, {"r_rel_deg_per_100m", kitti->r_rel_deg_per_100m},
-                    {"count", kitti->count}, {"segments", segs}};
+      j["kitti"] = {{"t_rel_pct", kitti->t_rel_pct},
+                    {"r_rel_deg_per_100m", kitti->r_rel_deg_per_100m},
+                    {"count", kitti->count},
+                    {"segments", segs}};
     } else {
       j["kitti"] = nullptr;
     }
@@ -144,17 +149,18 @@ void compare_with_ground_truth(const Options& o, eval::AlignMode align, const ag
 void compare_with_odometry(const Options& o, const agvslam::Trajectory& est, bool first_line, nlohmann::json& j) {
   const eval::BodyAxes est_axes = eval::parse_body_axes(o.est_axes, "--est-axes");
   const eval::BodyAxes odometry_axes = eval::parse_body_axes(o.odometry_axes, "--odometry-axes");
-  const bool csv = o.odometry_format.empty() ? agvslam::io::looks_like_odometry_csv(o.odometry_path)
-                                             : o.odometry_format == "csv";
+  const bool csv =
+      o.odometry_format.empty() ? agvslam::io::looks_like_odometry_csv(o.odometry_path) : o.odometry_format == "csv";
   eval::PlanarTrack odometry;
   if (csv) {
     odometry = eval::planar_track(agvslam::io::read_odometry_csv(o.odometry_path));
   } else {
     TrajectoryFormat format{};
-    odometry = eval::planar_track(load(o.odometry_path, o.odometry_format, "--odometry-format", "", &format),
-                                  odometry_axes);
+    odometry =
+        eval::planar_track(load(o.odometry_path, o.odometry_format, "--odometry-format", "", &format), odometry_axes);
   }
-  const eval::OdometryCheckResult r = eval::check_against_odometry(est, est_axes, odometry, o.odometry, o.odometry_path);
+  const eval::OdometryCheckResult r =
+      eval::check_against_odometry(est, est_axes, odometry, o.odometry, o.odometry_path);
   if (first_line) std::printf("ODOMETRY_DISTANCE_RATIO %.6f\n", r.distance_ratio);
   std::printf("odometry: %zu poses over %.1f s compared with %s (%s)\n", r.frames_compared, r.duration_s,
               o.odometry_path.c_str(), csv ? "speed / yaw rate" : "poses");
@@ -162,10 +168,11 @@ void compare_with_odometry(const Options& o, const agvslam::Trajectory& est, boo
               r.trajectory_distance_m, r.odometry_distance_m, r.distance_ratio,
               r.distance_within_tolerance ? "within" : "OUTSIDE", 100 * o.odometry.distance_tolerance);
   std::printf("speed: RMSE %.4f m/s over %zu windows of %.2f s\n", r.speed_rmse_mps, r.windows, o.odometry.window_s);
-  std::printf("heading change: trajectory %.2f deg, odometry %.2f deg, difference %.2f deg (largest on the way %.2f "
-              "deg)\n",
-              r.trajectory_heading_change_deg, r.odometry_heading_change_deg, r.heading_difference_deg,
-              r.max_heading_difference_deg);
+  std::printf(
+      "heading change: trajectory %.2f deg, odometry %.2f deg, difference %.2f deg (largest on the way %.2f "
+      "deg)\n",
+      r.trajectory_heading_change_deg, r.odometry_heading_change_deg, r.heading_difference_deg,
+      r.max_heading_difference_deg);
   std::printf("disagreements (> %.0f %%): %zu of %zu windows\n", 100 * o.odometry.disagreement_ratio,
               r.disagreeing_windows, r.windows);
   nlohmann::json ranges = nlohmann::json::array();
@@ -173,8 +180,12 @@ void compare_with_odometry(const Options& o, const agvslam::Trajectory& est, boo
     std::printf("  frames %zu-%zu (%.2f-%.2f s): trajectory %.3f m / %.1f deg, odometry %.3f m / %.1f deg\n",
                 d.first_frame, d.last_frame, d.t_first_s, d.t_last_s, d.trajectory_m, d.trajectory_heading_deg,
                 d.odometry_m, d.odometry_heading_deg);
-    ranges.push_back({{"first_frame", d.first_frame}, {"last_frame", d.last_frame}, {"t_first_s", d.t_first_s},
-                      {"t_last_s", d.t_last_s}, {"trajectory_m", d.trajectory_m}, {"odometry_m", d.odometry_m},
+    ranges.push_back({{"first_frame", d.first_frame},
+                      {"last_frame", d.last_frame},
+                      {"t_first_s", d.t_first_s},
+                      {"t_last_s", d.t_last_s},
+                      {"trajectory_m", d.trajectory_m},
+                      {"odometry_m", d.odometry_m},
                       {"trajectory_heading_deg", d.trajectory_heading_deg},
                       {"odometry_heading_deg", d.odometry_heading_deg}});
   }
@@ -218,8 +229,9 @@ int run(const Options& o) {
 int main(int argc, char** argv) {
   // Logs go to stderr: stdout carries the results, starting with the ATE_RMSE_M line.
   spdlog::set_default_logger(spdlog::stderr_color_mt("agvslam-eval"));
-  CLI::App app{"agvslam-eval: ATE, RPE and KITTI relative errors of an estimated trajectory against ground truth; "
-               "its consistency with wheel odometry"};
+  CLI::App app{
+      "agvslam-eval: ATE, RPE and KITTI relative errors of an estimated trajectory against ground truth; "
+      "its consistency with wheel odometry"};
   Options o;
   app.add_option("--gt", o.gt_path, "ground-truth trajectory file");
   app.add_option("--est", o.est_path, "estimated trajectory file")->required();
@@ -232,19 +244,26 @@ int main(int argc, char** argv) {
   app.add_option("--rpe-delta", o.rpe_delta, "frame step of the relative pose error")->capture_default_str();
   app.add_option("--json", o.json_path, "write every figure to this JSON file");
   app.add_option("--plot", o.plot_path, "write a top-view PNG of both trajectories (with --gt)");
-  app.add_option("--odometry", o.odometry_path,
-                 "wheel odometry to check the trajectory against: poses (TUM / EuRoC) or CSV t_s,speed_mps,yaw_rate_radps");
+  app.add_option(
+      "--odometry", o.odometry_path,
+      "wheel odometry to check the trajectory against: poses (TUM / EuRoC) or CSV t_s,speed_mps,yaw_rate_radps");
   app.add_option("--odometry-format", o.odometry_format, "tum|euroc|csv (default: guessed from the file)");
-  app.add_option("--est-axes", o.est_axes, "body axes of the estimate: camera (x right, y down, z forward) or base "
-                 "(x forward, z up)")->capture_default_str();
-  app.add_option("--odometry-axes", o.odometry_axes, "body axes of odometry poses: camera or base")->capture_default_str();
+  app.add_option("--est-axes", o.est_axes,
+                 "body axes of the estimate: camera (x right, y down, z forward) or base "
+                 "(x forward, z up)")
+      ->capture_default_str();
+  app.add_option("--odometry-axes", o.odometry_axes, "body axes of odometry poses: camera or base")
+      ->capture_default_str();
   app.add_option("--odometry-window-s", o.odometry.window_s, "window over which speeds are compared (s)")
-      ->capture_default_str()->check(CLI::Range(0.05, 60.0));
+      ->capture_default_str()
+      ->check(CLI::Range(0.05, 60.0));
   app.add_option("--odometry-disagreement", o.odometry.disagreement_ratio,
                  "a window disagrees when distances (or headings while turning) differ by more than this fraction")
-      ->capture_default_str()->check(CLI::Range(0.01, 10.0));
+      ->capture_default_str()
+      ->check(CLI::Range(0.01, 10.0));
   app.add_option("--odometry-tolerance", o.odometry.distance_tolerance,
                  "|distance ratio - 1| accepted over the run (the odometry's own scale error)")
-      ->capture_default_str()->check(CLI::Range(0.0, 1.0));
+      ->capture_default_str()
+      ->check(CLI::Range(0.0, 1.0));
   return agvslam::apps::parse_and_run(app, argc, argv, [&] { return run(o); });
 }

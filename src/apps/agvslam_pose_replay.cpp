@@ -16,14 +16,14 @@
 // the publisher's thread.
 // Exit status: 0 done, 1 no subscriber within --wait-timeout or an output failed to start, 2 bad input.
 
+#include <spdlog/sinks/stdout_color_sinks.h>
+#include <spdlog/spdlog.h>
 #include <CLI/CLI.hpp>
 #include <chrono>
 #include <cstdio>
 #include <memory>
 #include <nlohmann/json.hpp>
 #include <optional>
-#include <spdlog/sinks/stdout_color_sinks.h>
-#include <spdlog/spdlog.h>
 #include <thread>
 
 #include "agvslam/core/error.h"
@@ -152,7 +152,8 @@ void send(const Options& o, std::size_t i, const drv::PoseSample& s, Publishers&
   }
   if (pub.can) {
     const can::CanPublishResult r = pub.can->publish(s);
-    if (o.json) line["can"] = {{"due", r.due}, {"sent", r.sent}, {"counter", r.counter}, {"frames_sent", r.frames_sent}};
+    if (o.json)
+      line["can"] = {{"due", r.due}, {"sent", r.sent}, {"counter", r.counter}, {"frames_sent", r.frames_sent}};
   }
   if (o.json) {
     std::printf("%s\n", line.dump().c_str());
@@ -188,10 +189,10 @@ void summarise(const Options& o, std::size_t n, Publishers& pub) {
                       {"bus_off", st.error_frames.bus_off},
                       {"open", st.open},
                       {"last_error", pub.can->last_error()}};
-    spdlog::info("agvslam-pose-replay: can {} cycles, {} sent whole, {} frames sent, dropped {} (no buffer) {} (down), "
-                 "{} opens",
-                 st.cycles, st.cycles_sent, st.frames_sent, st.frames_dropped_no_buffer, st.frames_dropped_down,
-                 st.reopens);
+    spdlog::info(
+        "agvslam-pose-replay: can {} cycles, {} sent whole, {} frames sent, dropped {} (no buffer) {} (down), "
+        "{} opens",
+        st.cycles, st.cycles_sent, st.frames_sent, st.frames_dropped_no_buffer, st.frames_dropped_down, st.reopens);
   }
   if (o.json) std::printf("%s\n", nlohmann::json{{"summary", summary}}.dump().c_str());
 }
@@ -211,8 +212,8 @@ int run(const Options& o) {
   spdlog::info("agvslam-pose-replay: {} samples ({}), rate {} Hz, stamps {}", n,
                o.synthetic > 0 ? "synthetic" : o.trajectory, o.rate_hz, o.stamp);
 
-  const auto period = o.rate_hz > 0 ? std::chrono::nanoseconds(static_cast<int64_t>(1e9 / o.rate_hz))
-                                    : std::chrono::nanoseconds(0);
+  const auto period =
+      o.rate_hz > 0 ? std::chrono::nanoseconds(static_cast<int64_t>(1e9 / o.rate_hz)) : std::chrono::nanoseconds(0);
   auto next = std::chrono::steady_clock::now();
   for (std::size_t i = 0; i < n; ++i) {
     if (period.count() > 0) {

@@ -19,8 +19,9 @@
 //
 // --mapping thread runs local mapping in its own thread, as on the vehicle; --mapping inline maps each keyframe
 // before the next frame (deterministic: the same input gives the same trajectory; the tracking times then include
-// that mapping work, shown separately as inline_mapping: take speed figures with --mapping thread). --speed 1 feeds frames at the
-// dataset's rate (the real-time case; none is dropped when the pipeline falls behind), 0 as fast as tracking goes.
+// that mapping work, shown separately as inline_mapping: take speed figures with --mapping thread). --speed 1 feeds
+// frames at the dataset's rate (the real-time case; none is dropped when the pipeline falls behind), 0 as fast as
+// tracking goes.
 //
 // Writes TRAJ with the pose of every tracked frame (each relative to its reference keyframe, composed with the
 // keyframe's final pose, as ORB-SLAM2 saves trajectories); with --format kitti and frames missing, TRAJ.times
@@ -45,10 +46,10 @@
 // T_w1_c = T_map_cam1(0)^-1 * T_map_cam2(0) * T_w2_c, and `MAP_FRAME_ATE_M <x>` is the RMSE of the estimated
 // positions against it without any alignment (the estimate is in the saved map's frame).
 
-#include <CLI/CLI.hpp>
 #include <spdlog/sinks/stdout_color_sinks.h>
 #include <spdlog/spdlog.h>
 #include <unistd.h>
+#include <CLI/CLI.hpp>
 
 #include <algorithm>
 #include <chrono>
@@ -145,21 +146,26 @@ Settings check_options(const Options& o) {
   Settings s;
   s.dynamic = parse_dynamic_mode(o.dynamic);
   s.format = agvslam::io::parse_trajectory_format(o.format, "--format");
-  if (s.format == agvslam::io::TrajectoryFormat::kEuroc) throw InputError("--format", o.format, "expected tum or kitti");
-  if (o.mapping != "thread" && o.mapping != "inline") throw InputError("--mapping", o.mapping, "expected thread or inline");
-  if (!(o.speed >= 0)) throw InputError("--speed", std::to_string(o.speed), "expected a factor >= 0 (0: as fast as possible)");
+  if (s.format == agvslam::io::TrajectoryFormat::kEuroc)
+    throw InputError("--format", o.format, "expected tum or kitti");
+  if (o.mapping != "thread" && o.mapping != "inline")
+    throw InputError("--mapping", o.mapping, "expected thread or inline");
+  if (!(o.speed >= 0))
+    throw InputError("--speed", std::to_string(o.speed), "expected a factor >= 0 (0: as fast as possible)");
   if (o.opencv_threads < 1 || o.opencv_threads > 64) {
     throw InputError("--opencv-threads", std::to_string(o.opencv_threads), "expected an integer in [1, 64]");
   }
   if (o.loop != "on" && o.loop != "off") throw InputError("--loop", o.loop, "expected on or off");
-  if (o.repeat < 1 || o.repeat > 100) throw InputError("--repeat", std::to_string(o.repeat), "expected an integer in [1, 100]");
+  if (o.repeat < 1 || o.repeat > 100)
+    throw InputError("--repeat", std::to_string(o.repeat), "expected an integer in [1, 100]");
   if (!o.mode.empty()) {
     if (o.load_map.empty()) throw InputError("--mode", o.mode, "expected only with --load-map");
     s.map_mode = slam::parse_map_mode(o.mode, "--mode");
   } else if (!o.load_map.empty()) {
     throw InputError("--load-map", o.load_map, "expected --mode localise or --mode map with it");
   }
-  if (!o.map_dataset.empty() && o.load_map.empty()) throw InputError("--map-dataset", o.map_dataset, "expected only with --load-map");
+  if (!o.map_dataset.empty() && o.load_map.empty())
+    throw InputError("--map-dataset", o.map_dataset, "expected only with --load-map");
   if (!o.blank.empty()) s.blank = parse_blank(o.blank);
   if (!o.save_map.empty()) {
     // Checked now rather than after the whole run.
@@ -167,7 +173,8 @@ Settings check_options(const Options& o) {
     if (folder.empty()) folder = ".";
     std::error_code ec;
     if (!std::filesystem::is_directory(folder, ec)) {
-      throw InputError("--save-map", o.save_map, "expected a file in an existing folder (" + folder.string() + " is not one)");
+      throw InputError("--save-map", o.save_map,
+                       "expected a file in an existing folder (" + folder.string() + " is not one)");
     }
   }
   return s;
@@ -194,7 +201,8 @@ agvslam::SE3d simulator_world_offset(const std::string& map_dir, const std::stri
       so.layout_seed = j.at("layout_seed").get<uint64_t>();
       so.start_offset_m = j.at("start_offset_m").get<double>();
     } catch (const std::exception& e) {
-      throw InputError(path, "scenario, frames, seed, layout_seed, start_offset_m", std::string("expected them (") + e.what() + ")");
+      throw InputError(path, "scenario, frames, seed, layout_seed, start_offset_m",
+                       std::string("expected them (") + e.what() + ")");
     }
     const agvslam::sim::Simulator sim(agvslam::sim::SimConfig{}, so);
     return std::make_pair(agvslam::SE3d(sim.T_map_cam(0)), so.effective_layout_seed());
@@ -202,16 +210,17 @@ agvslam::SE3d simulator_world_offset(const std::string& map_dir, const std::stri
   const auto [T_map_c1, layout1] = first_camera(map_dir);
   const auto [T_map_c2, layout2] = first_camera(run_dir);
   if (layout1 != layout2) {
-    throw InputError("--map-dataset", map_dir, "expected a run through the same warehouse (layout seed " +
-                                                   std::to_string(layout2) + ", that folder has " + std::to_string(layout1) + ")");
+    throw InputError("--map-dataset", map_dir,
+                     "expected a run through the same warehouse (layout seed " + std::to_string(layout2) +
+                         ", that folder has " + std::to_string(layout1) + ")");
   }
   return T_map_c1.inverse() * T_map_c2;
 }
 
 // The dataset, the frames played, whether it has ground-truth masks, and (--map-dataset) the map's world frame.
 struct Input {
-  daemon::SourceSetup setup;  // the dataset and frames first..last
-  bool has_gt_masks = false;  // mask_0/ (simulator): every mode scores the pose's inliers against them
+  daemon::SourceSetup setup;             // the dataset and frames first..last
+  bool has_gt_masks = false;             // mask_0/ (simulator): every mode scores the pose's inliers against them
   std::optional<agvslam::SE3d> T_w1_w2;  // --map-dataset: this run's world frame in the map's
 };
 
@@ -222,8 +231,9 @@ Input open_input(const Options& o, const Settings& s) {
   Input in;
   in.has_gt_masks = !dataset->ground_truth_mask(first).empty();
   if (s.dynamic == DynamicMode::kGroundTruth && !in.has_gt_masks) {
-    throw InputError("--dynamic", "gt", "expected a dataset with ground-truth masks (mask_0/, as agvslam-sim writes); " +
-                                            dataset->root() + " has none");
+    throw InputError("--dynamic", "gt",
+                     "expected a dataset with ground-truth masks (mask_0/, as agvslam-sim writes); " + dataset->root() +
+                         " has none");
   }
   in.setup = daemon::dataset_setup(std::move(dataset), first, last);
   if (!o.map_dataset.empty()) in.T_w1_w2 = simulator_world_offset(o.map_dataset, o.dataset);
@@ -270,12 +280,16 @@ void log_settings(const Options& o, const Settings& s, const Input& in, const da
   spdlog::info("agvslam-run: {} dataset {} ({} frames at {:.1f} Hz, using {}..{})", dataset.kind(), dataset.root(),
                dataset.size(), dataset.rate_hz(), in.setup.first, in.setup.last);
   spdlog::info("  calibration: {}", dataset.calibration().summary());
-  spdlog::info("  dynamic regions: {}", o.dynamic == "detector" ? "detector (paper 004 III.A-B), one frame ahead in its own thread"
-                                        : o.dynamic == "gt"     ? "ground-truth masks (mask_0/)"
-                                                                : "off (ORB-SLAM2-like baseline)");
-  spdlog::info("  mapping: {}, speed {}, OpenCV threads per stage {}", o.mapping == "thread" ? "own thread" : "inline (deterministic)",
-               o.speed > 0 ? std::to_string(o.speed) + "x the dataset rate" : std::string("as fast as possible"), o.opencv_threads);
-  spdlog::info("  output: {} ({}){}", o.out, agvslam::io::to_string(s.format), o.json.empty() ? "" : ", stats " + o.json);
+  spdlog::info("  dynamic regions: {}", o.dynamic == "detector"
+                                            ? "detector (paper 004 III.A-B), one frame ahead in its own thread"
+                                        : o.dynamic == "gt" ? "ground-truth masks (mask_0/)"
+                                                            : "off (ORB-SLAM2-like baseline)");
+  spdlog::info("  mapping: {}, speed {}, OpenCV threads per stage {}",
+               o.mapping == "thread" ? "own thread" : "inline (deterministic)",
+               o.speed > 0 ? std::to_string(o.speed) + "x the dataset rate" : std::string("as fast as possible"),
+               o.opencv_threads);
+  spdlog::info("  output: {} ({}){}", o.out, agvslam::io::to_string(s.format),
+               o.json.empty() ? "" : ", stats " + o.json);
   spdlog::info("  slam settings{}", o.params_slam.empty() ? " (built-in defaults)" : " from " + o.params_slam);
   spdlog::info("  place recognition from {}: {}", o.params_place, c.place->describe());
   spdlog::info("  loop closing {}; map: {}{}{}", o.loop, o.load_map.empty() ? "new" : "load " + o.load_map,
@@ -284,12 +298,15 @@ void log_settings(const Options& o, const Settings& s, const Input& in, const da
   if (s.blank) spdlog::info("  blank (covered camera) frames {}..{}", s.blank->first, s.blank->second);
   if (o.repeat > 1) spdlog::info("  {} laps of frames {}..{}", o.repeat, in.setup.first, in.setup.last);
   if (in.T_w1_w2) {
-    spdlog::info("  map frame: the ground truth is expressed in {}'s world frame (t = {:.3f} {:.3f} {:.3f} m)", o.map_dataset,
-                 in.T_w1_w2->translation().x(), in.T_w1_w2->translation().y(), in.T_w1_w2->translation().z());
+    spdlog::info("  map frame: the ground truth is expressed in {}'s world frame (t = {:.3f} {:.3f} {:.3f} m)",
+                 o.map_dataset, in.T_w1_w2->translation().x(), in.T_w1_w2->translation().y(),
+                 in.T_w1_w2->translation().z());
   }
-  spdlog::info("  feature settings{}", o.params_features.empty() ? " (built-in defaults)" : " from " + o.params_features);
+  spdlog::info("  feature settings{}",
+               o.params_features.empty() ? " (built-in defaults)" : " from " + o.params_features);
   if (s.dynamic == DynamicMode::kDetector) {
-    spdlog::info("  detector settings{}", o.params_dynamic.empty() ? " (built-in defaults)" : " from " + o.params_dynamic);
+    spdlog::info("  detector settings{}",
+                 o.params_dynamic.empty() ? " (built-in defaults)" : " from " + o.params_dynamic);
     for (const auto& line : c.detector.describe()) spdlog::info("    {}", line);
     spdlog::info("  stereo settings{}", o.params_stereo.empty() ? " (built-in defaults)" : " from " + o.params_stereo);
     for (const auto& line : c.stereo.describe()) spdlog::info("    {}", line);
@@ -336,9 +353,10 @@ class ProgressBar {
 class FrameLog {
  public:
   // Stages in the order of the timing table.
-  static constexpr const char* kStageOrder[] = {"extract", "stereo", "map_wait", "frame", "local_map", "keyframe",
-                                                "inline_mapping", "tracking", "tracking_cpu", "detector", "detector_cpu",
-                                                "frontend_sum", "frontend_cpu", "frame_interval", "read"};
+  static constexpr const char* kStageOrder[] = {
+      "extract",      "stereo",         "map_wait",     "frame",          "local_map",
+      "keyframe",     "inline_mapping", "tracking",     "tracking_cpu",   "detector",
+      "detector_cpu", "frontend_sum",   "frontend_cpu", "frame_interval", "read"};
 
   FrameLog(bool inline_mapping, std::size_t last, std::size_t total_frames)
       : inline_mapping_(inline_mapping), last_(last), total_frames_(total_frames) {}
@@ -383,7 +401,8 @@ class FrameLog {
     const bool ok = r.state == slam::TrackingState::kOk;
     if (ok && first_tracked < 0) first_tracked = step;
     if (c.blank && c.lap == 0) blank_end_step_ = step;
-    if (blank_end_step_ >= 0 && blank_recovered_after < 0 && !c.blank && ok) blank_recovered_after = step - blank_end_step_ - 1;
+    if (blank_end_step_ >= 0 && blank_recovered_after < 0 && !c.blank && ok)
+      blank_recovered_after = step - blank_end_step_ - 1;
     if (static_cast<std::size_t>(c.source_index) == last_) {
       laps_keyframes.push_back(r.keyframes);
       laps_points.push_back(r.map_points);
@@ -436,28 +455,29 @@ class FrameLog {
 
   void add_record(const daemon::TrackedFrame& f, int moving_inliers) {
     const slam::TrackResult& r = f.result;
-    per_frame.push_back({{"frame", f.captured.source_index},
-                         {"lap", f.captured.lap},
-                         {"blank", f.captured.blank},
-                         {"loops", r.loops_closed},
-                         {"t_ns", f.captured.frame.t_ns},
-                         {"state", slam::to_string(r.state)},
-                         {"features", r.counts.features},
-                         {"stereo_features", r.counts.stereo_features},
-                         {"method", r.counts.method},
-                         {"frame_matches", r.counts.frame_matches},
-                         {"inliers", r.counts.inliers},
-                         {"keyframe", r.counts.new_keyframe},
-                         {"keyframes", r.keyframes},
-                         {"map_points", r.map_points},
-                         {"mapping_queue", r.mapping_queue},
-                         {"mask_pixels", f.mask.empty() ? 0 : cv::countNonZero(f.mask)},
-                         {"moving_inliers", moving_inliers},
-                         {"p_w_c", r.pose_valid ? nlohmann::json::array({r.T_w_c.translation().x(), r.T_w_c.translation().y(),
-                                                                         r.T_w_c.translation().z()})
-                                                : nlohmann::json()},
-                         {"tracking_ms", r.timings.total_ms},
-                         {"detector_ms", f.times.detector_ms}});
+    per_frame.push_back(
+        {{"frame", f.captured.source_index},
+         {"lap", f.captured.lap},
+         {"blank", f.captured.blank},
+         {"loops", r.loops_closed},
+         {"t_ns", f.captured.frame.t_ns},
+         {"state", slam::to_string(r.state)},
+         {"features", r.counts.features},
+         {"stereo_features", r.counts.stereo_features},
+         {"method", r.counts.method},
+         {"frame_matches", r.counts.frame_matches},
+         {"inliers", r.counts.inliers},
+         {"keyframe", r.counts.new_keyframe},
+         {"keyframes", r.keyframes},
+         {"map_points", r.map_points},
+         {"mapping_queue", r.mapping_queue},
+         {"mask_pixels", f.mask.empty() ? 0 : cv::countNonZero(f.mask)},
+         {"moving_inliers", moving_inliers},
+         {"p_w_c", r.pose_valid ? nlohmann::json::array(
+                                      {r.T_w_c.translation().x(), r.T_w_c.translation().y(), r.T_w_c.translation().z()})
+                                : nlohmann::json()},
+         {"tracking_ms", r.timings.total_ms},
+         {"detector_ms", f.times.detector_ms}});
   }
 
   const bool inline_mapping_;
@@ -479,19 +499,22 @@ struct SlamResults {
 
 nlohmann::json load_map(slam::System& system, const Options& o, const Settings& s) {
   const slam::MapLoadStats ls = system.load_map(o.load_map, s.map_mode);
-  spdlog::info("  loaded {}: {} keyframes, {} map points, {:.1f} MB (read {:.0f} ms, decode {:.0f} ms, bag of words {:.0f} ms)",
-               o.load_map, ls.keyframes, ls.map_points, static_cast<double>(ls.bytes) / 1e6, ls.read_ms, ls.decode_ms, ls.bow_ms);
-  return {{"file", o.load_map}, {"mode", slam::to_string(s.map_mode)}, {"keyframes", ls.keyframes},
-          {"map_points", ls.map_points}, {"bytes", ls.bytes}, {"read_ms", ls.read_ms}, {"decode_ms", ls.decode_ms},
-          {"bow_ms", ls.bow_ms}};
+  spdlog::info(
+      "  loaded {}: {} keyframes, {} map points, {:.1f} MB (read {:.0f} ms, decode {:.0f} ms, bag of words {:.0f} ms)",
+      o.load_map, ls.keyframes, ls.map_points, static_cast<double>(ls.bytes) / 1e6, ls.read_ms, ls.decode_ms,
+      ls.bow_ms);
+  return {{"file", o.load_map},        {"mode", slam::to_string(s.map_mode)},
+          {"keyframes", ls.keyframes}, {"map_points", ls.map_points},
+          {"bytes", ls.bytes},         {"read_ms", ls.read_ms},
+          {"decode_ms", ls.decode_ms}, {"bow_ms", ls.bow_ms}};
 }
 
 nlohmann::json save_map(slam::System& system, const std::string& file) {
   const slam::MapSaveStats ss = system.save_map(file);
-  spdlog::info("saved {}: {} keyframes, {} map points, {:.1f} MB (encode {:.0f} ms, write {:.0f} ms)", file, ss.keyframes,
-               ss.map_points, static_cast<double>(ss.bytes) / 1e6, ss.encode_ms, ss.write_ms);
-  return {{"file", file}, {"keyframes", ss.keyframes}, {"map_points", ss.map_points}, {"bytes", ss.bytes},
-          {"encode_ms", ss.encode_ms}, {"write_ms", ss.write_ms}};
+  spdlog::info("saved {}: {} keyframes, {} map points, {:.1f} MB (encode {:.0f} ms, write {:.0f} ms)", file,
+               ss.keyframes, ss.map_points, static_cast<double>(ss.bytes) / 1e6, ss.encode_ms, ss.write_ms);
+  return {{"file", file},      {"keyframes", ss.keyframes}, {"map_points", ss.map_points},
+          {"bytes", ss.bytes}, {"encode_ms", ss.encode_ms}, {"write_ms", ss.write_ms}};
 }
 
 // Plays the dataset through the pipeline; the frames' figures go to `log`. False when a pipeline thread failed
@@ -508,8 +531,8 @@ bool play(const Options& o, const Settings& s, const Input& in, FrameLog& log, S
   options.ground_truth_masks = s.dynamic == DynamicMode::kGroundTruth;
   options.on_tracked = [&log](const daemon::TrackedFrame& f) { log.add(f); };
   options.settle_mapping = true;
-  daemon::Pipeline pipeline(config, in.setup, std::make_unique<daemon::DatasetSource>(in.setup, config.source, playback),
-                            std::move(options));
+  daemon::Pipeline pipeline(
+      config, in.setup, std::make_unique<daemon::DatasetSource>(in.setup, config.source, playback), std::move(options));
   slam::System& system = pipeline.system();
   for (const auto& line : system.describe()) spdlog::info("    {}", line);
   if (!o.load_map.empty()) results.load_map = load_map(system, o, s);
@@ -557,22 +580,28 @@ std::optional<agvslam::Trajectory> played_ground_truth(const Options& o, const d
 }
 
 // ATE_RMSE_M (SE(3)-aligned) and DRIFT_M lines; j["ate"].
-void report_accuracy(const agvslam::Trajectory& trajectory, const std::optional<agvslam::Trajectory>& gt, nlohmann::json& j) {
+void report_accuracy(const agvslam::Trajectory& trajectory, const std::optional<agvslam::Trajectory>& gt,
+                     nlohmann::json& j) {
   // Drift: the largest distance of a tracked position from the first one (for sequences where the camera stands
   // still, e.g. simulator scene1 and the EuRoC excerpt).
   double drift_m = 0;
-  for (const auto& p : trajectory) drift_m = std::max(drift_m, (p.T_w_c.translation() - trajectory.front().T_w_c.translation()).norm());
+  for (const auto& p : trajectory)
+    drift_m = std::max(drift_m, (p.T_w_c.translation() - trajectory.front().T_w_c.translation()).norm());
   if (gt && !trajectory.empty()) {
     const auto pairs = agvslam::eval::associate_by_timestamp(*gt, trajectory, 5'000'000);
     if (pairs.size() >= 3) {
       const auto ate = agvslam::eval::compute_ate(pairs, agvslam::eval::AlignMode::kSE3);
       const std::vector<agvslam::SE3d>& gt_poses = pairs.T_w_c_gt;
       double gt_motion_m = 0;
-      for (const auto& T : gt_poses) gt_motion_m = std::max(gt_motion_m, (T.translation() - gt_poses.front().translation()).norm());
+      for (const auto& T : gt_poses)
+        gt_motion_m = std::max(gt_motion_m, (T.translation() - gt_poses.front().translation()).norm());
       std::printf("ATE_RMSE_M %.5f (SE3-aligned, %zu poses, ground-truth path %.2f m)\n", ate.translation_m.rmse,
                   ate.translation_m.count, agvslam::eval::path_length_m(gt_poses));
-      j["ate"] = {{"rmse_m", ate.translation_m.rmse}, {"mean_m", ate.translation_m.mean}, {"max_m", ate.translation_m.max},
-                  {"poses", ate.translation_m.count}, {"gt_path_m", agvslam::eval::path_length_m(gt_poses)},
+      j["ate"] = {{"rmse_m", ate.translation_m.rmse},
+                  {"mean_m", ate.translation_m.mean},
+                  {"max_m", ate.translation_m.max},
+                  {"poses", ate.translation_m.count},
+                  {"gt_path_m", agvslam::eval::path_length_m(gt_poses)},
                   {"gt_max_displacement_m", gt_motion_m}};
     }
   }
@@ -585,14 +614,17 @@ void report_moving_inliers(const FrameLog& log, nlohmann::json& j) {
   if (log.moving_inlier_fraction.empty()) return;
   Series f;
   for (double x : log.moving_inlier_fraction) f.add(x);
-  const double mean = log.inliers_total ? static_cast<double>(log.moving_inliers_total) / static_cast<double>(log.inliers_total) : 0;
-  const auto over10 = static_cast<std::size_t>(
-      std::count_if(f.values().begin(), f.values().end(), [](double x) { return x > 0.10; }));
-  std::printf("MOVING_INLIERS %.4f (of the pose inliers on ground-truth moving objects; p95 %.4f, max %.4f, %zu of %zu "
-              "frames over 10%%)\n",
-              mean, f.quantile(0.95), f.max(), over10, f.count());
-  j["moving_inliers"] = {{"fraction", mean}, {"p95_fraction", f.quantile(0.95)}, {"max_fraction", f.max()},
-                         {"frames_over_10pct", over10}, {"frames_scored", f.count()}, {"total", log.moving_inliers_total}};
+  const double mean =
+      log.inliers_total ? static_cast<double>(log.moving_inliers_total) / static_cast<double>(log.inliers_total) : 0;
+  const auto over10 =
+      static_cast<std::size_t>(std::count_if(f.values().begin(), f.values().end(), [](double x) { return x > 0.10; }));
+  std::printf(
+      "MOVING_INLIERS %.4f (of the pose inliers on ground-truth moving objects; p95 %.4f, max %.4f, %zu of %zu "
+      "frames over 10%%)\n",
+      mean, f.quantile(0.95), f.max(), over10, f.count());
+  j["moving_inliers"] = {{"fraction", mean},           {"p95_fraction", f.quantile(0.95)},
+                         {"max_fraction", f.max()},    {"frames_over_10pct", over10},
+                         {"frames_scored", f.count()}, {"total", log.moving_inliers_total}};
 }
 
 // MAP_FRAME_ATE_M line (positions in the saved map's frame, without alignment); j["map_frame_ate"].
@@ -606,8 +638,8 @@ void report_map_frame_accuracy(const agvslam::Trajectory& trajectory, const std:
   const auto ate = agvslam::eval::compute_ate(pairs, agvslam::eval::AlignMode::kNone);
   std::printf("MAP_FRAME_ATE_M %.5f (no alignment, %zu poses, max %.4f m)\n", ate.translation_m.rmse,
               ate.translation_m.count, ate.translation_m.max);
-  j["map_frame_ate"] = {{"rmse_m", ate.translation_m.rmse}, {"max_m", ate.translation_m.max},
-                        {"poses", ate.translation_m.count}};
+  j["map_frame_ate"] = {
+      {"rmse_m", ate.translation_m.rmse}, {"max_m", ate.translation_m.max}, {"poses", ate.translation_m.count}};
 }
 
 // LOOPS line; returns the loops as JSON.
@@ -619,14 +651,25 @@ nlohmann::json report_loops(const slam::LoopClosingStats& lstats) {
                 static_cast<unsigned long long>(e.keyframe_id), static_cast<unsigned long long>(e.loop_keyframe_id),
                 static_cast<unsigned long long>(e.frame_id), static_cast<unsigned long long>(e.loop_frame_id),
                 e.total_matches, e.correction_m, e.correction_deg);
-    loops_json.push_back({{"keyframe", e.keyframe_id}, {"loop_keyframe", e.loop_keyframe_id}, {"frame", e.frame_id},
-                          {"loop_frame", e.loop_frame_id}, {"t_ns", e.t_ns}, {"bow_matches", e.bow_matches},
-                          {"ransac_inliers", e.ransac_inliers}, {"refined_inliers", e.refined_inliers},
-                          {"total_matches", e.total_matches}, {"correction_m", e.correction_m},
-                          {"correction_deg", e.correction_deg}, {"fused_points", e.fused_points},
-                          {"graph_keyframes", e.graph_keyframes}, {"graph_edges", e.graph_edges},
-                          {"detect_ms", e.detect_ms}, {"correct_ms", e.correct_ms}, {"pose_graph_ms", e.pose_graph_ms},
-                          {"global_ba_ms", e.global_ba_ms}, {"global_ba_merge_ms", e.global_ba_merge_ms}});
+    loops_json.push_back({{"keyframe", e.keyframe_id},
+                          {"loop_keyframe", e.loop_keyframe_id},
+                          {"frame", e.frame_id},
+                          {"loop_frame", e.loop_frame_id},
+                          {"t_ns", e.t_ns},
+                          {"bow_matches", e.bow_matches},
+                          {"ransac_inliers", e.ransac_inliers},
+                          {"refined_inliers", e.refined_inliers},
+                          {"total_matches", e.total_matches},
+                          {"correction_m", e.correction_m},
+                          {"correction_deg", e.correction_deg},
+                          {"fused_points", e.fused_points},
+                          {"graph_keyframes", e.graph_keyframes},
+                          {"graph_edges", e.graph_edges},
+                          {"detect_ms", e.detect_ms},
+                          {"correct_ms", e.correct_ms},
+                          {"pose_graph_ms", e.pose_graph_ms},
+                          {"global_ba_ms", e.global_ba_ms},
+                          {"global_ba_merge_ms", e.global_ba_merge_ms}});
   }
   std::printf("\n");
   return loops_json;
@@ -646,14 +689,15 @@ void report_counts(const Options& o, const Settings& s, const FrameLog& log, con
   }
   const slam::LocalMappingStats& m = results.mapping;
   const slam::MapCounts& map = results.map_counts;
-  std::printf("counts: %zu frames, %zu tracked, %zu lost, %zu recovered, %zu resets; %zu keyframes, %zu map points "
-              "(%.1f MB); mapping: %llu keyframes processed, %llu skipped (queue full), max queue %zu, %llu culled "
-              "keyframes, %llu created / %llu culled points\n",
-              log.frames, log.tracked, log.lost, log.recovered, log.resets, map.keyframes, map.map_points,
-              static_cast<double>(map.memory_bytes) / 1e6, static_cast<unsigned long long>(m.keyframes_processed),
-              static_cast<unsigned long long>(m.keyframes_skipped), log.max_queue,
-              static_cast<unsigned long long>(m.keyframes_culled), static_cast<unsigned long long>(m.points_created),
-              static_cast<unsigned long long>(m.points_culled));
+  std::printf(
+      "counts: %zu frames, %zu tracked, %zu lost, %zu recovered, %zu resets; %zu keyframes, %zu map points "
+      "(%.1f MB); mapping: %llu keyframes processed, %llu skipped (queue full), max queue %zu, %llu culled "
+      "keyframes, %llu created / %llu culled points\n",
+      log.frames, log.tracked, log.lost, log.recovered, log.resets, map.keyframes, map.map_points,
+      static_cast<double>(map.memory_bytes) / 1e6, static_cast<unsigned long long>(m.keyframes_processed),
+      static_cast<unsigned long long>(m.keyframes_skipped), log.max_queue,
+      static_cast<unsigned long long>(m.keyframes_culled), static_cast<unsigned long long>(m.points_created),
+      static_cast<unsigned long long>(m.points_culled));
 }
 
 // Local mapping's per-keyframe times (ms) by step.
@@ -699,24 +743,37 @@ void write_json(const Options& o, const Input& in, const FrameLog& log, const Sl
   j["semantic"] = o.semantic;
   j["mapping"] = o.mapping;
   j["speed"] = o.speed;
-  j["frames"] = {{"first", in.setup.first}, {"last", in.setup.last}, {"processed", log.frames}, {"tracked", log.tracked},
-                 {"lost", log.lost}, {"recovered", log.recovered}, {"resets", log.resets}};
+  j["frames"] = {{"first", in.setup.first}, {"last", in.setup.last}, {"processed", log.frames},
+                 {"tracked", log.tracked},  {"lost", log.lost},      {"recovered", log.recovered},
+                 {"resets", log.resets}};
   j["loops"] = loops_json;
-  j["loop_closing"] = {{"enabled", o.loop == "on"}, {"keyframes_processed", l.keyframes_processed},
-                       {"keyframes_dropped", l.keyframes_dropped}, {"consistent_detections", l.consistent_detections},
-                       {"rejected_geometry", l.rejected_geometry}, {"rejected_correction", l.rejected_correction},
-                       {"loops_closed", l.loops_closed}, {"global_ba_runs", l.global_ba_runs},
+  j["loop_closing"] = {{"enabled", o.loop == "on"},
+                       {"keyframes_processed", l.keyframes_processed},
+                       {"keyframes_dropped", l.keyframes_dropped},
+                       {"consistent_detections", l.consistent_detections},
+                       {"rejected_geometry", l.rejected_geometry},
+                       {"rejected_correction", l.rejected_correction},
+                       {"loops_closed", l.loops_closed},
+                       {"global_ba_runs", l.global_ba_runs},
                        {"global_ba_aborted", l.global_ba_aborted}};
   j["relocalisation"] = {{"first_tracked", log.first_tracked}, {"blank_recovered_after", log.blank_recovered_after}};
   if (!results.load_map.is_null()) j["load_map"] = results.load_map;
   if (!results.save_map.is_null()) j["save_map"] = results.save_map;
   if (o.repeat > 1) j["laps"] = {{"keyframes", log.laps_keyframes}, {"map_points", log.laps_points}};
-  j["map"] = {{"keyframes", map.keyframes}, {"map_points", map.map_points}, {"observations", map.observations},
+  j["map"] = {{"keyframes", map.keyframes},
+              {"map_points", map.map_points},
+              {"observations", map.observations},
               {"memory_bytes", map.memory_bytes}};
-  j["local_mapping"] = {{"keyframes_processed", m.keyframes_processed}, {"keyframes_skipped", m.keyframes_skipped},
-                        {"keyframes_culled", m.keyframes_culled}, {"points_created", m.points_created},
-                        {"points_fused", m.points_fused}, {"points_culled", m.points_culled}, {"ba_runs", m.ba_runs},
-                        {"ba_aborted", m.ba_aborted}, {"ba_outliers", m.ba_outliers}, {"max_queue", log.max_queue}};
+  j["local_mapping"] = {{"keyframes_processed", m.keyframes_processed},
+                        {"keyframes_skipped", m.keyframes_skipped},
+                        {"keyframes_culled", m.keyframes_culled},
+                        {"points_created", m.points_created},
+                        {"points_fused", m.points_fused},
+                        {"points_culled", m.points_culled},
+                        {"ba_runs", m.ba_runs},
+                        {"ba_aborted", m.ba_aborted},
+                        {"ba_outliers", m.ba_outliers},
+                        {"max_queue", log.max_queue}};
   nlohmann::json jt, jm;
   for (const auto& [name, s] : log.series) jt[name] = timing_json(s);
   for (const auto& [name, s] : mapping) jm[name] = timing_json(s);
@@ -732,7 +789,8 @@ int run(const Options& o) {
   cv::setNumThreads(o.opencv_threads);
   const Input in = open_input(o, s);
 
-  FrameLog log(o.mapping == "inline", in.setup.last, (in.setup.last - in.setup.first + 1) * static_cast<std::size_t>(o.repeat));
+  FrameLog log(o.mapping == "inline", in.setup.last,
+               (in.setup.last - in.setup.first + 1) * static_cast<std::size_t>(o.repeat));
   SlamResults results;
   if (!play(o, s, in, log, results)) return 1;
   const double run_s = log.finish();
@@ -759,9 +817,11 @@ int main(int argc, char** argv) {
   spdlog::set_default_logger(spdlog::stderr_color_mt("agvslam-run"));
   CLI::App app{"agvslam-run: stereo SLAM with dynamic-region removal (paper 004) over a dataset folder"};
   Options o;
-  app.add_option("--dataset", o.dataset, "sequence folder: KITTI layout (also agvslam-sim output) or EuRoC ASL")->required();
+  app.add_option("--dataset", o.dataset, "sequence folder: KITTI layout (also agvslam-sim output) or EuRoC ASL")
+      ->required();
   app.add_option("--out", o.out, "trajectory file to write (every tracked frame)")->required();
-  app.add_option("--calib", o.calib, "calibration file instead of the dataset's own (KITTI calib.txt, ORB-SLAM YAML, Kalibr)");
+  app.add_option("--calib", o.calib,
+                 "calibration file instead of the dataset's own (KITTI calib.txt, ORB-SLAM YAML, Kalibr)");
   app.add_option("--format", o.format, "trajectory format: tum (default) or kitti");
   app.add_option("--dynamic", o.dynamic, "dynamic regions: detector (default), gt (dataset masks) or off");
   app.add_option("--json", o.json, "statistics file (timings, counts, per-frame records)");
@@ -773,9 +833,12 @@ int main(int argc, char** argv) {
   app.add_option("--semantic", o.semantic,
                  "segmentation model (ONNX) whose moving objects join the detector's mask, or off (default)");
   app.add_option("--params-semantic", o.params_semantic, "params/semantic.yaml (with --semantic MODEL)");
-  app.add_option("--mapping", o.mapping, "local mapping: thread (default, as on the vehicle) or inline (deterministic)");
-  app.add_option("--speed", o.speed, "feed frames at this multiple of the dataset rate (0, default: as fast as possible)");
-  app.add_option("--opencv-threads", o.opencv_threads, "OpenCV's threads inside a stage (default 1: one core per thread)");
+  app.add_option("--mapping", o.mapping,
+                 "local mapping: thread (default, as on the vehicle) or inline (deterministic)");
+  app.add_option("--speed", o.speed,
+                 "feed frames at this multiple of the dataset rate (0, default: as fast as possible)");
+  app.add_option("--opencv-threads", o.opencv_threads,
+                 "OpenCV's threads inside a stage (default 1: one core per thread)");
   app.add_option("--params-place", o.params_place, "params/place.yaml (the vocabulary; default: the source tree's)");
   app.add_option("--loop", o.loop, "loop closing: on (default) or off");
   app.add_option("--save-map", o.save_map, "write the final map to this file (atomically)");
@@ -783,6 +846,7 @@ int main(int argc, char** argv) {
   app.add_option("--mode", o.mode, "with --load-map: localise (track without changing the map) or map (extend it)");
   app.add_option("--blank", o.blank, "black out frames A:B (inclusive): a covered camera, forced loss");
   app.add_option("--repeat", o.repeat, "play the frame range this many times in a row (laps of a loop)");
-  app.add_option("--map-dataset", o.map_dataset, "with --load-map on simulator folders: the folder the map was made from (MAP_FRAME_ATE_M)");
+  app.add_option("--map-dataset", o.map_dataset,
+                 "with --load-map on simulator folders: the folder the map was made from (MAP_FRAME_ATE_M)");
   return agvslam::apps::parse_and_run(app, argc, argv, [&] { return run(o); });
 }

@@ -13,9 +13,9 @@
 // The output is identical for any --threads. Exit status: 0 on success, 2 on bad input (the message names the
 // option, file or folder), 1 on any other failure.
 
-#include <CLI/CLI.hpp>
 #include <spdlog/sinks/stdout_color_sinks.h>
 #include <spdlog/spdlog.h>
+#include <CLI/CLI.hpp>
 
 #include <chrono>
 #include <cstdio>
@@ -72,13 +72,19 @@ nlohmann::json describe(const sim::Simulator& s) {
   j["actors"] = actors;
   j["min_camera_clearance_m"] = sc.actors.empty() ? nlohmann::json(nullptr) : nlohmann::json(sc.min_camera_clearance_m);
   const sim::SimConfig& c = s.config();
-  j["camera"] = {{"width", c.width},       {"height", c.height},          {"fx", c.fx},
-                 {"fy", c.fy_px()},        {"cx", c.cx_px()},             {"cy", c.cy_px()},
-                 {"baseline_m", c.baseline_m}, {"height_above_floor_m", c.camera_height_m}};
-  j["conventions"] = "poses.txt: T_w_cam0 (world = left camera at frame 0; camera x right, y down, z forward); "
-                     "disp_0: uint16 disparity*256 of the left image, 0 = none; mask_0: 255 = moving object; "
-                     "instance_0: uint8 actor id (objects.txt) of each pixel, 0 = none; class_0: uint8 class id "
-                     "(classes) of each pixel";
+  j["camera"] = {{"width", c.width},
+                 {"height", c.height},
+                 {"fx", c.fx},
+                 {"fy", c.fy_px()},
+                 {"cx", c.cx_px()},
+                 {"cy", c.cy_px()},
+                 {"baseline_m", c.baseline_m},
+                 {"height_above_floor_m", c.camera_height_m}};
+  j["conventions"] =
+      "poses.txt: T_w_cam0 (world = left camera at frame 0; camera x right, y down, z forward); "
+      "disp_0: uint16 disparity*256 of the left image, 0 = none; mask_0: 255 = moving object; "
+      "instance_0: uint8 actor id (objects.txt) of each pixel, 0 = none; class_0: uint8 class id "
+      "(classes) of each pixel";
   nlohmann::json classes = nlohmann::json::array();
   for (int id = 0; id < sim::kSemanticClassCount; ++id)
     classes.push_back({{"id", id}, {"name", sim::semantic_class_name(static_cast<sim::SemanticClass>(id))}});
@@ -129,8 +135,7 @@ int run(const Options& o) {
     if (sc.agv_speed_mps() > 2.5)
       spdlog::warn("  the AGV drives unusually fast ({:.2f} m/s) for so few frames", sc.agv_speed_mps());
   }
-  for (const auto& a : sc.actors)
-    spdlog::info("  actor {}: {} ({})", a.id, sim::to_string(a.cls), a.role);
+  for (const auto& a : sc.actors) spdlog::info("  actor {}: {} ({})", a.id, sim::to_string(a.cls), a.role);
   if (!sc.actors.empty())
     spdlog::info("  closest approach of an actor to the camera: {:.2f} m", sc.min_camera_clearance_m);
   spdlog::info("  warehouse: {} boxes, rendering with {} thread(s) into {}", simulator.warehouse().boxes.size(),

@@ -13,20 +13,20 @@
 // --manifest writes "index left_hash right_hash" per frame (64-bit FNV-1a of the grey pixels, hex) before
 // playing, for agvslam-camera --expect-manifest. Exit status: 0 done, 1 device or timing failure, 2 bad input.
 
+#include <spdlog/sinks/stdout_color_sinks.h>
+#include <spdlog/spdlog.h>
 #include <CLI/CLI.hpp>
 #include <algorithm>
 #include <chrono>
 #include <cstdio>
+#include <ctime>
 #include <filesystem>
 #include <fstream>
 #include <memory>
 #include <nlohmann/json.hpp>
-#include <spdlog/sinks/stdout_color_sinks.h>
-#include <spdlog/spdlog.h>
 #include <opencv2/imgcodecs.hpp>
 #include <opencv2/imgproc.hpp>
 #include <thread>
-#include <ctime>
 
 #include "agvslam/core/error.h"
 #include "agvslam/core/stats.h"
@@ -209,14 +209,18 @@ PlayStats play(const Options& o, const Frames& f, const Jpegs& jpegs, Outputs& o
 }
 
 void report(const Options& o, std::size_t frames, double rate_hz, const PlayStats& st) {
-  spdlog::info("sent {} frames at {} Hz; {} started more than half a period late; write per pair median {:.2f} ms, "
-               "p95 {:.2f} ms, max {:.2f} ms",
-               frames, rate_hz, st.late, st.write_ms.median(), st.write_ms.quantile(0.95), st.write_ms.max());
+  spdlog::info(
+      "sent {} frames at {} Hz; {} started more than half a period late; write per pair median {:.2f} ms, "
+      "p95 {:.2f} ms, max {:.2f} ms",
+      frames, rate_hz, st.late, st.write_ms.median(), st.write_ms.quantile(0.95), st.write_ms.max());
   std::printf("SENT %zu LATE %zu\n", frames, st.late);
   if (!o.json.empty()) {
-    nlohmann::json j = {{"frames", frames}, {"rate_hz", rate_hz}, {"late", st.late},
-                        {"write_ms", {{"median", st.write_ms.median()}, {"p95", st.write_ms.quantile(0.95)},
-                                      {"max", st.write_ms.max()}}}};
+    nlohmann::json j = {
+        {"frames", frames},
+        {"rate_hz", rate_hz},
+        {"late", st.late},
+        {"write_ms",
+         {{"median", st.write_ms.median()}, {"p95", st.write_ms.quantile(0.95)}, {"max", st.write_ms.max()}}}};
     std::ofstream(o.json) << j.dump(2) << "\n";
   }
 }
@@ -227,12 +231,12 @@ int run(const Options& o) {
   std::size_t a = 0, b = 0;
   parse_range(o.frames, ds->size(), a, b);
   const double rate = o.rate_hz > 0 ? o.rate_hz : ds->rate_hz();
-  spdlog::info("agvslam-v4l2-feed: dataset {} ({}, {} frames, {} Hz), frames {}:{}, rate {} Hz, {} {}{}{}, manifest {}, "
-               "wait-file {} (timeout {} s), start delay {} s, stamps {}, format {} (JPEG quality {})",
-               ds->root(), ds->kind(), ds->size(), ds->rate_hz(), a, b, rate, o.side_by_side ? "side-by-side" : "left",
-               o.left, o.side_by_side ? "" : " right ", o.side_by_side ? "" : o.right,
-               o.manifest.empty() ? "-" : o.manifest, o.wait_file.empty() ? "-" : o.wait_file, o.wait_timeout_s,
-               o.start_delay_s, o.stamp, o.format, o.jpeg_quality);
+  spdlog::info(
+      "agvslam-v4l2-feed: dataset {} ({}, {} frames, {} Hz), frames {}:{}, rate {} Hz, {} {}{}{}, manifest {}, "
+      "wait-file {} (timeout {} s), start delay {} s, stamps {}, format {} (JPEG quality {})",
+      ds->root(), ds->kind(), ds->size(), ds->rate_hz(), a, b, rate, o.side_by_side ? "side-by-side" : "left", o.left,
+      o.side_by_side ? "" : " right ", o.side_by_side ? "" : o.right, o.manifest.empty() ? "-" : o.manifest,
+      o.wait_file.empty() ? "-" : o.wait_file, o.wait_timeout_s, o.start_delay_s, o.stamp, o.format, o.jpeg_quality);
 
   const Frames frames = load_frames(o, *ds, a, b);
   if (!o.manifest.empty()) write_manifest(o.manifest, ds->root(), frames, a);
@@ -268,11 +272,14 @@ int main(int argc, char** argv) {
       ->check(CLI::IsMember({"queue", "write"}));
   app.add_option("--format", o.format, "grey (default) or mjpeg (each frame a JPEG, as UVC cameras send)")
       ->check(CLI::IsMember({"grey", "mjpeg"}));
-  app.add_option("--jpeg-quality", o.jpeg_quality, "JPEG quality for --format mjpeg (1..100)")->check(CLI::Range(1, 100));
+  app.add_option("--jpeg-quality", o.jpeg_quality, "JPEG quality for --format mjpeg (1..100)")
+      ->check(CLI::Range(1, 100));
   app.add_option("--json", o.json, "write statistics as JSON");
   // A device that refuses the configuration (not an output device, size or format refused) is bad input.
-  return agvslam::apps::parse_and_run(app, argc, argv, [&] { return run(o); }, [](const std::exception& e) {
-    const auto* device = dynamic_cast<const v4l2::V4l2Error*>(&e);
-    return device != nullptr && device->configuration();
-  });
+  return agvslam::apps::parse_and_run(
+      app, argc, argv, [&] { return run(o); },
+      [](const std::exception& e) {
+        const auto* device = dynamic_cast<const v4l2::V4l2Error*>(&e);
+        return device != nullptr && device->configuration();
+      });
 }

@@ -27,9 +27,9 @@
 // wrong top-1 answer.) Then TRANSFORM <vocabulary> median_ms / p95_ms of the transform per frame.
 // Exit status: 0 on success, 2 on bad input (the message names the option, file or folder), 1 on other failures.
 
-#include <CLI/CLI.hpp>
 #include <spdlog/sinks/stdout_color_sinks.h>
 #include <spdlog/spdlog.h>
+#include <CLI/CLI.hpp>
 
 #include <algorithm>
 #include <atomic>
@@ -75,7 +75,6 @@ struct Options {
   double max_distance_m = 1.0, max_angle_deg = 20.0, min_gap_s = 10.0;
   float threshold = 0.f;
 };
-
 
 json stats_of(std::vector<double> v) {
   if (v.empty()) return {{"median", nullptr}, {"p95", nullptr}, {"max", nullptr}, {"count", 0}};
@@ -208,7 +207,8 @@ int train(const Options& o) {
   if (o.out.empty()) throw InputError("--out", "", "expected the vocabulary file to write");
   spdlog::info("agvslam-vocab: train");
   spdlog::info("  {}", cfg.describe());
-  spdlog::info("  features: {} (from {})", orb.describe(), o.params_features.empty() ? "built-in defaults" : o.params_features);
+  spdlog::info("  features: {} (from {})", orb.describe(),
+               o.params_features.empty() ? "built-in defaults" : o.params_features);
   spdlog::info("  max features per image {} (0: all), frame step {}, out {}", o.max_features, o.frame_step, o.out);
 
   std::vector<ImageItem> items;
@@ -247,10 +247,10 @@ int train(const Options& o) {
   spdlog::info("features: {} descriptors from {} images in {:.1f} s", set.size(), set.image_count(), extract_s);
 
   std::string description = o.description.empty() ? "" : o.description + "\n";
-  description += "agvslam-vocab: " + cfg.describe() + "\nfeatures: " + orb.describe() +
-                 "\nmax features per image " + std::to_string(o.max_features) + ", frame step " +
-                 std::to_string(o.frame_step) + "\n" + std::to_string(set.image_count()) + " images, " +
-                 std::to_string(set.size()) + " descriptors, from " + std::to_string(sources.size()) + " sources: ";
+  description += "agvslam-vocab: " + cfg.describe() + "\nfeatures: " + orb.describe() + "\nmax features per image " +
+                 std::to_string(o.max_features) + ", frame step " + std::to_string(o.frame_step) + "\n" +
+                 std::to_string(set.image_count()) + " images, " + std::to_string(set.size()) + " descriptors, from " +
+                 std::to_string(sources.size()) + " sources: ";
   for (std::size_t i = 0; i < sources.size(); ++i) description += (i ? " " : "") + sources[i];
   description += "\n";
 
@@ -279,7 +279,9 @@ int train(const Options& o) {
               {"images", set.image_count()},
               {"descriptors", set.size()},
               {"timings",
-               {{"extract_total_s", extract_s}, {"train_s", train_s}, {"load_ms", load_ms},
+               {{"extract_total_s", extract_s},
+                {"train_s", train_s},
+                {"load_ms", load_ms},
                 {"extract_ms", stats_of(extract_ms)}}}};
     agvslam::io::write_file_atomically(o.json_path, j.dump(2) + "\n");
   }
@@ -314,7 +316,8 @@ agvslam::SE3d T_map_w_of_simulator_folder(const std::string& dir, const agvslam:
     const agvslam::sim::Simulator sim(config, s);
     return sim.T_w_map().inverse();
   } catch (const json::exception& e) {
-    throw InputError(path, "", std::string("expected scenario, frames, seed, layout_seed, start_offset_m: ") + e.what());
+    throw InputError(path, "",
+                     std::string("expected scenario, frames, seed, layout_seed, start_offset_m: ") + e.what());
   }
 }
 
@@ -357,27 +360,43 @@ json report(const std::string& vocabulary, const std::string& mode, const std::s
   float max_false = 0;  // the best score of a wrong answer: a loop threshold must stay above it
   for (const auto& q : e.queries)
     if (q.match >= 0 && !q.correct) max_false = std::max(max_false, q.score);
-  std::printf("PR %s %s %s positives %d queries %zu AP %.3f R@P1 %.3f (t %.3f) R@P0.95 %.3f (t %.3f) "
-              "P@R0.5 %.3f max_false %.3f at_threshold(%.3f): P %.3f R %.3f\n",
-              fs::path(vocabulary).filename().c_str(), mode.c_str(), fs::path(sequence).filename().c_str(),
-              e.positives, e.queries.size(), e.average_precision, r100, double(t100), r95, double(t95),
-              e.precision_at_recall(0.5), double(max_false), double(threshold), at.precision, at.recall);
+  std::printf(
+      "PR %s %s %s positives %d queries %zu AP %.3f R@P1 %.3f (t %.3f) R@P0.95 %.3f (t %.3f) "
+      "P@R0.5 %.3f max_false %.3f at_threshold(%.3f): P %.3f R %.3f\n",
+      fs::path(vocabulary).filename().c_str(), mode.c_str(), fs::path(sequence).filename().c_str(), e.positives,
+      e.queries.size(), e.average_precision, r100, double(t100), r95, double(t95), e.precision_at_recall(0.5),
+      double(max_false), double(threshold), at.precision, at.recall);
   json curve = json::array();
   for (const auto& p : e.curve)
-    curve.push_back({{"threshold", p.threshold}, {"precision", p.precision}, {"recall", p.recall},
-                     {"tp", p.true_positives}, {"fp", p.false_positives}});
+    curve.push_back({{"threshold", p.threshold},
+                     {"precision", p.precision},
+                     {"recall", p.recall},
+                     {"tp", p.true_positives},
+                     {"fp", p.false_positives}});
   json queries = json::array();
   for (const auto& q : e.queries)
-    queries.push_back({{"query", q.query}, {"match", q.match}, {"score", q.score}, {"positive", q.positive},
-                       {"correct", q.correct}, {"distance_m", q.match_distance_m}, {"angle_deg", q.match_angle_deg}});
-  return {{"vocabulary", vocabulary},       {"mode", mode},
-          {"sequence", sequence},           {"positives", e.positives},
-          {"queries", e.queries.size()},    {"average_precision", e.average_precision},
-          {"recall_at_precision_1", r100},  {"threshold_at_precision_1", t100},
-          {"recall_at_precision_0.95", r95}, {"threshold_at_precision_0.95", t95},
-          {"precision_at_recall_0.5", e.precision_at_recall(0.5)}, {"max_false_score", max_false},
+    queries.push_back({{"query", q.query},
+                       {"match", q.match},
+                       {"score", q.score},
+                       {"positive", q.positive},
+                       {"correct", q.correct},
+                       {"distance_m", q.match_distance_m},
+                       {"angle_deg", q.match_angle_deg}});
+  return {{"vocabulary", vocabulary},
+          {"mode", mode},
+          {"sequence", sequence},
+          {"positives", e.positives},
+          {"queries", e.queries.size()},
+          {"average_precision", e.average_precision},
+          {"recall_at_precision_1", r100},
+          {"threshold_at_precision_1", t100},
+          {"recall_at_precision_0.95", r95},
+          {"threshold_at_precision_0.95", t95},
+          {"precision_at_recall_0.5", e.precision_at_recall(0.5)},
+          {"max_false_score", max_false},
           {"at_threshold", {{"threshold", threshold}, {"precision", at.precision}, {"recall", at.recall}}},
-          {"curve", curve},                 {"per_query", queries}};
+          {"curve", curve},
+          {"per_query", queries}};
 }
 
 int evaluate(const Options& o) {
@@ -407,9 +426,13 @@ int evaluate(const Options& o) {
     const double load_ms = ms_since(t0);
     const auto& v = vocabularies.back();
     spdlog::info("{}: {} ({:.1f} ms to load)", path, v.describe(), load_ms);
-    j["vocabularies"].push_back({{"file", path}, {"k", v.branching()}, {"levels", v.levels()},
-                                 {"words", v.word_count()}, {"bytes", fs::file_size(path)},
-                                 {"identity", v.identity_hex()}, {"load_ms", load_ms}});
+    j["vocabularies"].push_back({{"file", path},
+                                 {"k", v.branching()},
+                                 {"levels", v.levels()},
+                                 {"words", v.word_count()},
+                                 {"bytes", fs::file_size(path)},
+                                 {"identity", v.identity_hex()},
+                                 {"load_ms", load_ms}});
   }
   cv::setNumThreads(1);
   std::vector<Sequence> loops;
@@ -459,8 +482,9 @@ int info(const Options& o) {
 
 int main(int argc, char** argv) {
   spdlog::set_default_logger(spdlog::stderr_color_mt("agvslam-vocab"));
-  CLI::App app{"agvslam-vocab: train a bag-of-binary-words vocabulary on the project's ORB descriptors, evaluate "
-               "vocabularies on place-recognition revisits, or print a vocabulary file's header"};
+  CLI::App app{
+      "agvslam-vocab: train a bag-of-binary-words vocabulary on the project's ORB descriptors, evaluate "
+      "vocabularies on place-recognition revisits, or print a vocabulary file's header"};
   Options o;
   app.add_option("--images", o.images, "folders of images to train on")->delimiter(',');
   app.add_option("--datasets", o.datasets, "sequence folders (or folders of sequences) to train on")->delimiter(',');
@@ -468,12 +492,15 @@ int main(int argc, char** argv) {
   app.add_option("--k", o.k, "branching factor")->capture_default_str();
   app.add_option("--levels", o.levels, "depth of the tree (L)")->capture_default_str();
   app.add_option("--max-features-per-image", o.max_features, "keep at most N descriptors per image (0: all)")
-      ->check(CLI::NonNegativeNumber)->capture_default_str();
-  app.add_option("--frame-step", o.frame_step, "use every N-th image or frame")->check(CLI::PositiveNumber)
+      ->check(CLI::NonNegativeNumber)
+      ->capture_default_str();
+  app.add_option("--frame-step", o.frame_step, "use every N-th image or frame")
+      ->check(CLI::PositiveNumber)
       ->capture_default_str();
   app.add_option("--seed", o.seed, "training seed (k-means++, feature subsets)")->capture_default_str();
   app.add_option("--threads", o.threads, "threads for features and training (the result does not depend on it)")
-      ->check(CLI::Range(1, 256))->capture_default_str();
+      ->check(CLI::Range(1, 256))
+      ->capture_default_str();
   app.add_option("--max-iterations", o.max_iterations, "k-medians iterations per node")->capture_default_str();
   app.add_option("--params-features", o.params_features,
                  "ORB settings (params/features.yaml; default: that file when it exists, else built-in)");
@@ -484,10 +511,14 @@ int main(int argc, char** argv) {
   app.add_option("--loop", o.loops, "sequences (or folders of sequences) for loop revisits")->delimiter(',');
   app.add_option("--map", o.map, "simulator sequence whose frames form the database (relocalisation)");
   app.add_option("--query", o.query, "simulator sequence of the same warehouse whose frames are the queries");
-  app.add_option("--max-distance-m", o.max_distance_m, "same place: cameras within this distance")->capture_default_str();
-  app.add_option("--max-angle-deg", o.max_angle_deg, "same place: relative rotation within this angle")->capture_default_str();
-  app.add_option("--min-gap-s", o.min_gap_s, "loop revisits: database frames at least this much older")->capture_default_str();
-  app.add_option("--threshold", o.threshold, "score threshold reported with its precision and recall")->capture_default_str();
+  app.add_option("--max-distance-m", o.max_distance_m, "same place: cameras within this distance")
+      ->capture_default_str();
+  app.add_option("--max-angle-deg", o.max_angle_deg, "same place: relative rotation within this angle")
+      ->capture_default_str();
+  app.add_option("--min-gap-s", o.min_gap_s, "loop revisits: database frames at least this much older")
+      ->capture_default_str();
+  app.add_option("--threshold", o.threshold, "score threshold reported with its precision and recall")
+      ->capture_default_str();
   app.add_option("--params-sim", o.params_sim, "simulator settings the --map/--query folders were rendered with");
   app.add_option("--info", o.info, "print a vocabulary file's header and description");
   return agvslam::apps::parse_and_run(app, argc, argv, [&] {

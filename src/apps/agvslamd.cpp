@@ -21,13 +21,13 @@
 #include <pthread.h>
 #include <signal.h>
 
+#include <spdlog/spdlog.h>
 #include <CLI/CLI.hpp>
 #include <chrono>
 #include <csignal>
 #include <ctime>
 #include <nlohmann/json.hpp>
 #include <opencv2/core.hpp>
-#include <spdlog/spdlog.h>
 
 #include "agvslam/core/error.h"
 #include "agvslam/daemon/daemon_config.h"
@@ -67,21 +67,35 @@ nlohmann::json stats_json(const daemon::PipelineStats& s, double run_s) {
           {"latency_ms", {{"median", s.latency_p50_ms}, {"p99", s.latency_p99_ms}, {"max", s.latency_max_ms}}},
           {"tracking_ms", {{"median", s.tracking_p50_ms}, {"p99", s.tracking_p99_ms}}},
           {"detector_ms", {{"median", s.detector_p50_ms}}},
-          {"source", {{"frames", s.source.frames}, {"losses", s.source.losses}, {"reopens", s.source.reopens},
-                      {"connected", s.source.connected}, {"line", s.source.line}}},
-          {"dds", {{"pose_published", s.outputs.dds_pose.published}, {"pose_dropped", s.outputs.dds_pose.dropped_queue_full},
-                   {"status_published", s.outputs.dds_status.published},
-                   {"write_errors", s.outputs.dds_pose.write_errors + s.outputs.dds_status.write_errors}}},
-          {"can", {{"enabled", s.outputs.can_enabled}, {"cycles", s.outputs.can.cycles}, {"cycles_sent", s.outputs.can.cycles_sent},
-                   {"frames_sent", s.outputs.can.frames_sent}, {"dropped_down", s.outputs.can.frames_dropped_down},
-                   {"dropped_no_buffer", s.outputs.can.frames_dropped_no_buffer}, {"reopens", s.outputs.can.reopens},
-                   {"last_error", s.outputs.can_last_error}}},
-          {"odometry", {{"enabled", s.outputs.odometry_enabled}, {"samples", s.outputs.odometry_samples},
-                        {"can_frames", s.outputs.can_odometry.frames}, {"crc_bad", s.outputs.can_odometry.crc_bad},
-                        {"counter_repeated", s.outputs.can_odometry.counter_repeated},
-                        {"counter_gaps", s.outputs.can_odometry.counter_gaps},
-                        {"disagreements", s.outputs.odometry_disagreements},
-                        {"check", daemon::odometry_check_json(s.outputs.odometry_check)}}}};
+          {"source",
+           {{"frames", s.source.frames},
+            {"losses", s.source.losses},
+            {"reopens", s.source.reopens},
+            {"connected", s.source.connected},
+            {"line", s.source.line}}},
+          {"dds",
+           {{"pose_published", s.outputs.dds_pose.published},
+            {"pose_dropped", s.outputs.dds_pose.dropped_queue_full},
+            {"status_published", s.outputs.dds_status.published},
+            {"write_errors", s.outputs.dds_pose.write_errors + s.outputs.dds_status.write_errors}}},
+          {"can",
+           {{"enabled", s.outputs.can_enabled},
+            {"cycles", s.outputs.can.cycles},
+            {"cycles_sent", s.outputs.can.cycles_sent},
+            {"frames_sent", s.outputs.can.frames_sent},
+            {"dropped_down", s.outputs.can.frames_dropped_down},
+            {"dropped_no_buffer", s.outputs.can.frames_dropped_no_buffer},
+            {"reopens", s.outputs.can.reopens},
+            {"last_error", s.outputs.can_last_error}}},
+          {"odometry",
+           {{"enabled", s.outputs.odometry_enabled},
+            {"samples", s.outputs.odometry_samples},
+            {"can_frames", s.outputs.can_odometry.frames},
+            {"crc_bad", s.outputs.can_odometry.crc_bad},
+            {"counter_repeated", s.outputs.can_odometry.counter_repeated},
+            {"counter_gaps", s.outputs.can_odometry.counter_gaps},
+            {"disagreements", s.outputs.odometry_disagreements},
+            {"check", daemon::odometry_check_json(s.outputs.odometry_check)}}}};
 }
 
 // Signals: blocked in every thread (the pipeline's, Cyclone's) and taken by the main thread with sigtimedwait.
@@ -140,10 +154,10 @@ StopReason supervise(const daemon::DaemonConfig& config, const sigset_t& signals
     if (!ready) {
       const bool waited = now - t_start >= std::chrono::duration<double>(config.systemd.ready_timeout_s);
       if (pipeline.frames_published() > 0 || waited) {
-        const std::string why = pipeline.frames_published() > 0 ? "first frame processed"
-                                                                 : "no frame yet after " +
-                                                                       std::to_string(config.systemd.ready_timeout_s) +
-                                                                       " s, reporting state lost";
+        const std::string why =
+            pipeline.frames_published() > 0
+                ? "first frame processed"
+                : "no frame yet after " + std::to_string(config.systemd.ready_timeout_s) + " s, reporting state lost";
         notifier.ready(why + "; " + pipeline.stats().one_line());
         spdlog::info("agvslamd: ready ({})", why);
         ready = true;
@@ -153,7 +167,8 @@ StopReason supervise(const daemon::DaemonConfig& config, const sigset_t& signals
       notifier.status(pipeline.stats().one_line());
       last_status = now;
     }
-    if (config.log.stats_every_s > 0 && now - last_stats_log >= std::chrono::duration<double>(config.log.stats_every_s)) {
+    if (config.log.stats_every_s > 0 &&
+        now - last_stats_log >= std::chrono::duration<double>(config.log.stats_every_s)) {
       spdlog::info("status: {}", pipeline.stats().one_line());
       last_stats_log = now;
     }
@@ -166,7 +181,8 @@ bool save_map(const daemon::DaemonConfig& config, daemon::Pipeline& pipeline) {
     const auto saved = pipeline.save_map();
     if (saved) {
       spdlog::info("agvslamd: map saved to {} ({} keyframes, {} map points, {} bytes; {:.0f} ms)", config.map.file,
-                   saved->keyframes, saved->map_points, saved->bytes, saved->wait_ms + saved->encode_ms + saved->write_ms);
+                   saved->keyframes, saved->map_points, saved->bytes,
+                   saved->wait_ms + saved->encode_ms + saved->write_ms);
       std::printf("MAP_SAVED %s KEYFRAMES %zu MAP_POINTS %zu BYTES %zu\n", config.map.file.c_str(), saved->keyframes,
                   saved->map_points, saved->bytes);
     }
@@ -182,11 +198,11 @@ bool save_map(const daemon::DaemonConfig& config, daemon::Pipeline& pipeline) {
 // The FRAMES line and --json.
 void report(const Options& o, const daemon::PipelineStats& st, double run_s, const std::string& stop_reason) {
   spdlog::info("agvslamd: stopped after {:.1f} s: {}", run_s, st.one_line());
-  std::printf("FRAMES %llu TRACKED %llu LOST %llu DROPPED %llu PUBLISHED %llu LATENCY_P50_MS %.2f LATENCY_P99_MS %.2f\n",
-              static_cast<unsigned long long>(st.processed), static_cast<unsigned long long>(st.tracked),
-              static_cast<unsigned long long>(st.lost),
-              static_cast<unsigned long long>(st.dropped_queue + st.dropped_source),
-              static_cast<unsigned long long>(st.published), st.latency_p50_ms, st.latency_p99_ms);
+  std::printf(
+      "FRAMES %llu TRACKED %llu LOST %llu DROPPED %llu PUBLISHED %llu LATENCY_P50_MS %.2f LATENCY_P99_MS %.2f\n",
+      static_cast<unsigned long long>(st.processed), static_cast<unsigned long long>(st.tracked),
+      static_cast<unsigned long long>(st.lost), static_cast<unsigned long long>(st.dropped_queue + st.dropped_source),
+      static_cast<unsigned long long>(st.published), st.latency_p50_ms, st.latency_p99_ms);
   std::fflush(stdout);
   if (!o.json.empty()) {
     nlohmann::json j = stats_json(st, run_s);
@@ -218,8 +234,9 @@ int run(const Options& o) {
                    : std::string("off"));
   daemon::Pipeline pipeline(config, setup, open_source(setup, config));
   // Watchdog from the processing loop, only while every loop of the pipeline turns.
-  const auto max_age = std::max(std::chrono::milliseconds(1000),
-                                std::chrono::duration_cast<std::chrono::milliseconds>(notifier.watchdog_interval() / 2));
+  const auto max_age =
+      std::max(std::chrono::milliseconds(1000),
+               std::chrono::duration_cast<std::chrono::milliseconds>(notifier.watchdog_interval() / 2));
   pipeline.set_processing_hook([&pipeline, &notifier, max_age] {
     if (pipeline.alive(max_age)) notifier.watchdog();
   });

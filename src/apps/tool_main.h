@@ -4,8 +4,8 @@
 // names the option, file or field and what was expected; an exception the tool's `is_bad_input` accepts, such as a
 // camera that refuses the configuration), 1 any other failure. Errors go to the log.
 
-#include <CLI/CLI.hpp>
 #include <spdlog/spdlog.h>
+#include <CLI/CLI.hpp>
 
 #include <exception>
 #include <utility>

@@ -32,12 +32,11 @@ StereoCalibration rectify_rig(const RawStereoRig& rig) {
   cv::Mat R_cv, t_cv;
   Eigen::Matrix3d R = rig.T_cam1_cam0.linear();
   Eigen::Vector3d t = rig.T_cam1_cam0.translation();
-  R_cv = (cv::Mat_<double>(3, 3) << R(0, 0), R(0, 1), R(0, 2), R(1, 0), R(1, 1), R(1, 2), R(2, 0), R(2, 1),
-          R(2, 2));
+  R_cv = (cv::Mat_<double>(3, 3) << R(0, 0), R(0, 1), R(0, 2), R(1, 0), R(1, 1), R(1, 2), R(2, 0), R(2, 1), R(2, 2));
   t_cv = (cv::Mat_<double>(3, 1) << t.x(), t.y(), t.z());
   cv::Mat R0, R1, P0, P1, Q;
-  cv::stereoRectify(K0, D0.empty() ? cv::Mat() : D0.reshape(1, 1), K1, D1.empty() ? cv::Mat() : D1.reshape(1, 1),
-                    size, R_cv, t_cv, R0, R1, P0, P1, Q, cv::CALIB_ZERO_DISPARITY, 0.0, size);
+  cv::stereoRectify(K0, D0.empty() ? cv::Mat() : D0.reshape(1, 1), K1, D1.empty() ? cv::Mat() : D1.reshape(1, 1), size,
+                    R_cv, t_cv, R0, R1, P0, P1, Q, cv::CALIB_ZERO_DISPARITY, 0.0, size);
 
   StereoCalibration calib;
   calib.left.fx = P0.at<double>(0, 0);

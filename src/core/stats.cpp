@@ -22,7 +22,8 @@ double Series::quantile(double q) const {
 double Series::max() const { return values_.empty() ? 0 : *std::max_element(values_.begin(), values_.end()); }
 
 double Series::mean() const {
-  return values_.empty() ? 0 : std::accumulate(values_.begin(), values_.end(), 0.0) / static_cast<double>(values_.size());
+  return values_.empty() ? 0
+                         : std::accumulate(values_.begin(), values_.end(), 0.0) / static_cast<double>(values_.size());
 }
 
 RollingSeries::RollingSeries(std::size_t capacity) : values_(std::max<std::size_t>(capacity, 1), 0.0) {

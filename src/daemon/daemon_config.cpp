@@ -30,47 +30,54 @@ const params::EnumNames<SourceType>& source_type_names() {
 const params::Table<SourceConfig>& source_params() {
   using S = SourceConfig;
   static const params::Table<S> table =
-      params::Table<S>("source", {
-          {"type", &S::type, source_type_names()},
-          {"dataset", &S::dataset, Text::any(), "a dataset folder"},
-          {"rate", &S::rate, Range::any(), "x the dataset's rate", "0: as fast as the pipeline takes frames"},
-          {"rate_hz", &S::rate_hz, Range::any(), "Hz", "0: use source.rate"},
-          {"loop", &S::loop},
-          {"frames", &S::frames, Text::any(), "an inclusive frame range A:B, \"\" = all"},
-          {"wait_for_camera", &S::wait_for_camera},
-      })
-          .check("dataset", [](const S& s) { return s.type != SourceType::kDataset || !s.dataset.empty(); },
-                 "a dataset folder (source.type dataset)")
-          .check("rate", [](const S& s) { return s.type != SourceType::kDataset || (s.rate >= 0 && s.rate <= 1000); },
-                 "a speed factor in [0, 1000] (0: as fast as the pipeline goes)")
-          .check("rate_hz",
-                 [](const S& s) { return s.type != SourceType::kDataset || (s.rate_hz >= 0 && s.rate_hz <= 1000); },
-                 "a rate in [0, 1000] Hz (0: use source.rate)");
+      params::Table<S>(
+          "source",
+          {
+              {"type", &S::type, source_type_names()},
+              {"dataset", &S::dataset, Text::any(), "a dataset folder"},
+              {"rate", &S::rate, Range::any(), "x the dataset's rate", "0: as fast as the pipeline takes frames"},
+              {"rate_hz", &S::rate_hz, Range::any(), "Hz", "0: use source.rate"},
+              {"loop", &S::loop},
+              {"frames", &S::frames, Text::any(), "an inclusive frame range A:B, \"\" = all"},
+              {"wait_for_camera", &S::wait_for_camera},
+          })
+          .check(
+              "dataset", [](const S& s) { return s.type != SourceType::kDataset || !s.dataset.empty(); },
+              "a dataset folder (source.type dataset)")
+          .check(
+              "rate", [](const S& s) { return s.type != SourceType::kDataset || (s.rate >= 0 && s.rate <= 1000); },
+              "a speed factor in [0, 1000] (0: as fast as the pipeline goes)")
+          .check(
+              "rate_hz",
+              [](const S& s) { return s.type != SourceType::kDataset || (s.rate_hz >= 0 && s.rate_hz <= 1000); },
+              "a rate in [0, 1000] Hz (0: use source.rate)");
   return table;
 }
 
 const params::Table<DaemonConfig>& calibration_params() {
   static const params::Table<DaemonConfig> table =
-      params::Table<DaemonConfig>("calibration", {
-          {"file", &DaemonConfig::calibration_file, Text::any(), "KITTI calib.txt, ORB-SLAM YAML or Kalibr camchain"},
-      })
-          .check("file",
-                 [](const DaemonConfig& d) {
-                   return d.source.type != SourceType::kV4l2 || !d.calibration_file.empty();
-                 },
-                 "a calibration file for the V4L2 camera (source.type v4l2)");
+      params::Table<DaemonConfig>("calibration",
+                                  {
+                                      {"file", &DaemonConfig::calibration_file, Text::any(),
+                                       "KITTI calib.txt, ORB-SLAM YAML or Kalibr camchain"},
+                                  })
+          .check(
+              "file",
+              [](const DaemonConfig& d) { return d.source.type != SourceType::kV4l2 || !d.calibration_file.empty(); },
+              "a calibration file for the V4L2 camera (source.type v4l2)");
   return table;
 }
 
 const params::Table<StageFiles>& stages_params() {
-  static const params::Table<StageFiles> table("stages", {
-      {"features", &StageFiles::features, Text::any(), "params/features.yaml; \"\" = built-in defaults"},
-      {"slam", &StageFiles::slam, Text::any(), "params/slam.yaml; \"\" = built-in defaults"},
-      {"dynamic", &StageFiles::dynamic, Text::any(), "params/dynamic.yaml; \"\" = built-in defaults"},
-      {"stereo", &StageFiles::stereo, Text::any(), "params/stereo.yaml; \"\" = built-in defaults"},
-      {"place", &StageFiles::place, Text::any(), "params/place.yaml; \"\" = no vocabulary"},
-      {"semantic", &StageFiles::semantic, Text::any(), "params/semantic.yaml; \"\" = no semantic stage"},
-  });
+  static const params::Table<StageFiles> table(
+      "stages", {
+                    {"features", &StageFiles::features, Text::any(), "params/features.yaml; \"\" = built-in defaults"},
+                    {"slam", &StageFiles::slam, Text::any(), "params/slam.yaml; \"\" = built-in defaults"},
+                    {"dynamic", &StageFiles::dynamic, Text::any(), "params/dynamic.yaml; \"\" = built-in defaults"},
+                    {"stereo", &StageFiles::stereo, Text::any(), "params/stereo.yaml; \"\" = built-in defaults"},
+                    {"place", &StageFiles::place, Text::any(), "params/place.yaml; \"\" = no vocabulary"},
+                    {"semantic", &StageFiles::semantic, Text::any(), "params/semantic.yaml; \"\" = no semantic stage"},
+                });
   return table;
 }
 
@@ -80,43 +87,48 @@ const params::Table<PipelineConfig>& pipeline_params() {
                                                             {"off", DynamicMode::kOff}};
   static const params::EnumNames<MappingMode> mapping_names{{"thread", MappingMode::kThread},
                                                             {"inline", MappingMode::kInline}};
-  static const params::Table<P> table("pipeline", {
-      {"dynamic", &P::dynamic, dynamic_names},
-      {"mapping", &P::mapping, mapping_names},
-      {"capture_queue", &P::capture_queue, Range::closed(1, 64), "frames"},
-      {"output_queue", &P::output_queue, Range::closed(1, 1024), "samples"},
-      {"frame_rate_hz", &P::frame_rate_hz, Range::closed(0, 1000), "Hz", "0: the camera's or dataset's"},
-      {"opencv_threads", &P::opencv_threads, Range::closed(1, 64)},
-      {"heartbeat_ms", &P::heartbeat_ms, Range::closed(10, 60000), "ms"},
-      {"poll_ms", &P::poll_ms, Range::closed(1, 5000), "ms"},
-  });
+  static const params::Table<P> table(
+      "pipeline",
+      {
+          {"dynamic", &P::dynamic, dynamic_names},
+          {"mapping", &P::mapping, mapping_names},
+          {"capture_queue", &P::capture_queue, Range::closed(1, 64), "frames"},
+          {"output_queue", &P::output_queue, Range::closed(1, 1024), "samples"},
+          {"frame_rate_hz", &P::frame_rate_hz, Range::closed(0, 1000), "Hz", "0: the camera's or dataset's"},
+          {"opencv_threads", &P::opencv_threads, Range::closed(1, 64)},
+          {"heartbeat_ms", &P::heartbeat_ms, Range::closed(10, 60000), "ms"},
+          {"poll_ms", &P::poll_ms, Range::closed(1, 5000), "ms"},
+      });
   return table;
 }
 
 const params::Table<BaseLinkConfig>& base_link_params() {
   using B = BaseLinkConfig;
-  static const params::Table<B> table("base_link", {
-      {"x_m", &B::x_m, Range::closed(-100, 100), "m"},
-      {"y_m", &B::y_m, Range::closed(-100, 100), "m"},
-      {"z_m", &B::z_m, Range::closed(-100, 100), "m"},
-      {"roll_deg", &B::roll_deg, Range::closed(-360, 360), "deg"},
-      {"pitch_deg", &B::pitch_deg, Range::closed(-360, 360), "deg"},
-      {"yaw_deg", &B::yaw_deg, Range::closed(-360, 360), "deg"},
-      {"optical", &B::optical, "true: the angles are of the camera_link frame, false: of the optical frame"},
-  });
+  static const params::Table<B> table(
+      "base_link",
+      {
+          {"x_m", &B::x_m, Range::closed(-100, 100), "m"},
+          {"y_m", &B::y_m, Range::closed(-100, 100), "m"},
+          {"z_m", &B::z_m, Range::closed(-100, 100), "m"},
+          {"roll_deg", &B::roll_deg, Range::closed(-360, 360), "deg"},
+          {"pitch_deg", &B::pitch_deg, Range::closed(-360, 360), "deg"},
+          {"yaw_deg", &B::yaw_deg, Range::closed(-360, 360), "deg"},
+          {"optical", &B::optical, "true: the angles are of the camera_link frame, false: of the optical frame"},
+      });
   return table;
 }
 
 const params::Table<CovarianceConfig>& covariance_params() {
   using V = CovarianceConfig;
-  static const params::Table<V> table("covariance", {
-      {"position_sd_m", &V::position_sd_m, Range::left_open(0, 1000), "m"},
-      {"rotation_sd_deg", &V::rotation_sd_deg, Range::left_open(0, 1000), "deg"},
-      {"velocity_sd_mps", &V::velocity_sd_mps, Range::left_open(0, 1000), "m/s"},
-      {"angular_sd_degps", &V::angular_sd_degps, Range::left_open(0, 1000), "deg/s"},
-      {"reference_inliers", &V::reference_inliers, Range::at_least(1)},
-      {"min_inliers", &V::min_inliers, Range::at_least(1)},
-  });
+  static const params::Table<V> table(
+      "covariance", {
+                        {"position_sd_m", &V::position_sd_m, Range::left_open(0, 1000), "m"},
+                        {"rotation_sd_deg", &V::rotation_sd_deg, Range::left_open(0, 1000), "deg"},
+                        {"velocity_sd_mps", &V::velocity_sd_mps, Range::left_open(0, 1000), "m/s"},
+                        {"angular_sd_degps", &V::angular_sd_degps, Range::left_open(0, 1000), "deg/s"},
+                        {"reference_inliers", &V::reference_inliers, Range::at_least(1)},
+                        {"min_inliers", &V::min_inliers, Range::at_least(1)},
+                    });
   return table;
 }
 
@@ -124,12 +136,13 @@ const params::Table<CovarianceConfig>& covariance_params() {
 const params::Table<OutputsConfig>& dds_section_params() {
   using O = OutputsConfig;
   static const params::Table<O> table =
-      params::Table<O>("dds", {
-          {"enabled", &O::dds_enabled},
-          {"wait_for_subscribers", &O::dds_wait_for_subscribers, Range::closed(0, 100), "subscribers",
-           "0: do not wait"},
-          {"wait_timeout_s", &O::dds_wait_timeout_s, Range::left_open(0, 3600), "s"},
-      })
+      params::Table<O>("dds",
+                       {
+                           {"enabled", &O::dds_enabled},
+                           {"wait_for_subscribers", &O::dds_wait_for_subscribers, Range::closed(0, 100), "subscribers",
+                            "0: do not wait"},
+                           {"wait_timeout_s", &O::dds_wait_timeout_s, Range::left_open(0, 3600), "s"},
+                       })
           .include(&O::dds, drivers::dds::dds_params());
   return table;
 }
@@ -143,17 +156,19 @@ const params::Table<OutputsConfig>& can_section_params() {
 
 const params::Table<OdometryMonitorConfig>& odometry_check_params() {
   using M = OdometryMonitorConfig;
-  static const params::Table<M> table("odometry", {
-      {"window_s", &M::window_s, Range::closed(1, 60), "s",
-       "long against the pose noise and the odometry's stamp jitter, short enough to flag a divergence in seconds"},
-      {"min_distance_m", &M::min_distance_m, Range::closed(0.05, 100), "m",
-       "travel a window needs before its distance ratio is judged"},
-      {"tolerance", &M::tolerance, Range::open(0, 1), "", "fraction: 0.2 flags a ratio outside 0.8..1.2"},
-      {"min_yaw_rate_degps", &M::min_yaw_rate_degps, Range::closed(0.1, 180), "deg/s",
-       "heading differences are judged against at least this rate times the window"},
-      {"stale_ms", &M::stale_ms, Range::closed(10, 60000), "ms"},
-      {"warn_every_s", &M::warn_every_s, Range::at_least(0), "s", "0: every time the state turns to disagrees"},
-  });
+  static const params::Table<M> table(
+      "odometry",
+      {
+          {"window_s", &M::window_s, Range::closed(1, 60), "s",
+           "long against the pose noise and the odometry's stamp jitter, short enough to flag a divergence in seconds"},
+          {"min_distance_m", &M::min_distance_m, Range::closed(0.05, 100), "m",
+           "travel a window needs before its distance ratio is judged"},
+          {"tolerance", &M::tolerance, Range::open(0, 1), "", "fraction: 0.2 flags a ratio outside 0.8..1.2"},
+          {"min_yaw_rate_degps", &M::min_yaw_rate_degps, Range::closed(0.1, 180), "deg/s",
+           "heading differences are judged against at least this rate times the window"},
+          {"stale_ms", &M::stale_ms, Range::closed(10, 60000), "ms"},
+          {"warn_every_s", &M::warn_every_s, Range::at_least(0), "s", "0: every time the state turns to disagrees"},
+      });
   return table;
 }
 
@@ -168,7 +183,8 @@ const params::Table<OdometryConfig>& odometry_params() {
 
 const params::Table<OdometryConfig>& can_odometry_section_params() {
   static const params::Table<OdometryConfig> table =
-      params::Table<OdometryConfig>("can_odometry", {}).include(&OdometryConfig::can, drivers::can::can_odometry_params());
+      params::Table<OdometryConfig>("can_odometry", {})
+          .include(&OdometryConfig::can, drivers::can::can_odometry_params());
   return table;
 }
 
@@ -177,22 +193,23 @@ const params::Table<TrajectoryConfig>& trajectory_params() {
   static const params::EnumNames<TrajectoryFrame> frame_names{{"base_link", TrajectoryFrame::kBaseLink},
                                                               {"camera", TrajectoryFrame::kCamera}};
   static const params::Table<T> table("trajectory", {
-      {"file", &T::file, Text::any(), "TUM; \"\" = none"},
-      {"frame", &T::frame, frame_names},
-      {"flush_every", &T::flush_every, Range::at_least(1), "poses"},
-      {"final_file", &T::final_file, Text::any(), "TUM; \"\" = none"},
-  });
+                                                        {"file", &T::file, Text::any(), "TUM; \"\" = none"},
+                                                        {"frame", &T::frame, frame_names},
+                                                        {"flush_every", &T::flush_every, Range::at_least(1), "poses"},
+                                                        {"final_file", &T::final_file, Text::any(), "TUM; \"\" = none"},
+                                                    });
   return table;
 }
 
 const params::Table<LogConfig>& log_params() {
   using L = LogConfig;
-  static const params::Table<L> table("log", {
-      {"file", &L::file, Text::any(), "\"\" = stderr only"},
-      {"level", &L::level, Text::one_of({"trace", "debug", "info", "warn", "error"})},
-      {"pose_log", &L::pose_log, Text::any(), "JSON lines; \"\" = none"},
-      {"stats_every_s", &L::stats_every_s, Range::at_least(0), "s", "0: only at stop"},
-  });
+  static const params::Table<L> table(
+      "log", {
+                 {"file", &L::file, Text::any(), "\"\" = stderr only"},
+                 {"level", &L::level, Text::one_of({"trace", "debug", "info", "warn", "error"})},
+                 {"pose_log", &L::pose_log, Text::any(), "JSON lines; \"\" = none"},
+                 {"stats_every_s", &L::stats_every_s, Range::at_least(0), "s", "0: only at stop"},
+             });
   return table;
 }
 
@@ -200,10 +217,11 @@ const params::Table<SystemdConfig>& systemd_params() {
   using Y = SystemdConfig;
   static const params::EnumNames<ReadyWhen> ready_names{{"first_frame", ReadyWhen::kFirstFrame},
                                                         {"startup", ReadyWhen::kStartup}};
-  static const params::Table<Y> table("systemd", {
-      {"ready", &Y::ready, ready_names},
-      {"ready_timeout_s", &Y::ready_timeout_s, Range::left_open(0, 3600), "s"},
-  });
+  static const params::Table<Y> table("systemd",
+                                      {
+                                          {"ready", &Y::ready, ready_names},
+                                          {"ready_timeout_s", &Y::ready_timeout_s, Range::left_open(0, 3600), "s"},
+                                      });
   return table;
 }
 
@@ -215,16 +233,16 @@ const params::Table<MapConfig>& map_params() {
       {"mapping", slam::MapMode::kMapping},       {"localisation", slam::MapMode::kLocalisation},
       {"localize", slam::MapMode::kLocalisation}, {"localization", slam::MapMode::kLocalisation}};
   static const params::Table<M> table =
-      params::Table<M>("map", {
-          {"file", &M::file, Text::any(), "\"\" = no map file"},
-          {"mode", &M::mode, mode_names},
-          {"save_on_stop", &M::save_on_stop},
-      })
-          .check("file",
-                 [](const M& m) {
-                   return m.file.empty() || m.mode != slam::MapMode::kLocalisation || fs::exists(m.file);
-                 },
-                 [](const M& m) { return "an existing map file in mode localise (" + m.file + " does not exist)"; });
+      params::Table<M>("map",
+                       {
+                           {"file", &M::file, Text::any(), "\"\" = no map file"},
+                           {"mode", &M::mode, mode_names},
+                           {"save_on_stop", &M::save_on_stop},
+                       })
+          .check(
+              "file",
+              [](const M& m) { return m.file.empty() || m.mode != slam::MapMode::kLocalisation || fs::exists(m.file); },
+              [](const M& m) { return "an existing map file in mode localise (" + m.file + " does not exist)"; });
   return table;
 }
 
@@ -266,8 +284,9 @@ void DaemonConfig::validate() const {
   odometry_params().validate(p, odometry);
   if (odometry.source == OdometrySource::kCan) {
     if (!outputs.can_enabled) {
-      throw InputError(p, "odometry.source", "expected none, or can.enabled true (the odometry frames are read on "
-                                             "the CAN output's interface), got can");
+      throw InputError(p, "odometry.source",
+                       "expected none, or can.enabled true (the odometry frames are read on "
+                       "the CAN output's interface), got can");
     }
     can_odometry_section_params().validate(p, odometry);
   }
@@ -276,13 +295,16 @@ void DaemonConfig::validate() const {
   systemd_params().validate(p, systemd);
   map_params().validate(p, map);
   if (!map.file.empty() && stage_files.place.empty()) {
-    throw InputError(p, "stages.place", "expected the place params (vocabulary) when map.file is set: relocalising "
-                                        "in a saved map needs the vocabulary it was saved with");
+    throw InputError(p, "stages.place",
+                     "expected the place params (vocabulary) when map.file is set: relocalising "
+                     "in a saved map needs the vocabulary it was saved with");
   }
   // Two outputs writing one file would interleave.
-  const std::vector<std::pair<const char*, std::string>> files = {
-      {"trajectory.file", trajectory.file}, {"trajectory.final_file", trajectory.final_file},
-      {"log.file", log.file}, {"log.pose_log", log.pose_log}, {"map.file", map.file}};
+  const std::vector<std::pair<const char*, std::string>> files = {{"trajectory.file", trajectory.file},
+                                                                  {"trajectory.final_file", trajectory.final_file},
+                                                                  {"log.file", log.file},
+                                                                  {"log.pose_log", log.pose_log},
+                                                                  {"map.file", map.file}};
   for (std::size_t i = 0; i < files.size(); ++i) {
     for (std::size_t j = i + 1; j < files.size(); ++j) {
       if (!files[i].second.empty() && files[i].second == files[j].second) {
@@ -347,23 +369,32 @@ DaemonConfig load_daemon_config(const std::string& path) {
     f.require_section("camera");
     drivers::v4l2::camera_params().read(f, c.camera);
   };
-  params::read_sections(in, {source_params().reader(c.source), {"camera", camera}, calibration_params().reader(c),
-                             stages_params().reader(c.stage_files), pipeline_params().reader(c.pipeline),
-                             base_link_params().reader(c.base_link), covariance_params().reader(c.covariance),
-                             dds_section_params().reader(c.outputs), can_section_params().reader(c.outputs),
-                             odometry_params().reader(c.odometry), can_odometry_section_params().reader(c.odometry),
-                             trajectory_params().reader(c.trajectory), log_params().reader(c.log),
-                             systemd_params().reader(c.systemd), map_params().reader(c.map)});
+  params::read_sections(in, {source_params().reader(c.source),
+                             {"camera", camera},
+                             calibration_params().reader(c),
+                             stages_params().reader(c.stage_files),
+                             pipeline_params().reader(c.pipeline),
+                             base_link_params().reader(c.base_link),
+                             covariance_params().reader(c.covariance),
+                             dds_section_params().reader(c.outputs),
+                             can_section_params().reader(c.outputs),
+                             odometry_params().reader(c.odometry),
+                             can_odometry_section_params().reader(c.odometry),
+                             trajectory_params().reader(c.trajectory),
+                             log_params().reader(c.log),
+                             systemd_params().reader(c.systemd),
+                             map_params().reader(c.map)});
   const fs::path dir = fs::absolute(fs::path(path)).parent_path();
-  for (std::string* f : {&c.source.dataset, &c.calibration_file, &c.stage_files.features, &c.stage_files.slam,
-                         &c.stage_files.dynamic, &c.stage_files.stereo, &c.stage_files.place, &c.stage_files.semantic,
-                         &c.trajectory.file, &c.trajectory.final_file, &c.log.file, &c.log.pose_log, &c.map.file,
-                         &c.odometry.can.dbc}) {
+  for (std::string* f :
+       {&c.source.dataset, &c.calibration_file, &c.stage_files.features, &c.stage_files.slam, &c.stage_files.dynamic,
+        &c.stage_files.stereo, &c.stage_files.place, &c.stage_files.semantic, &c.trajectory.file,
+        &c.trajectory.final_file, &c.log.file, &c.log.pose_log, &c.map.file, &c.odometry.can.dbc}) {
     *f = resolve(dir, *f);
   }
   c.validate();
   // The DBC, its message and signals: wrong ones stop the daemon here, not when the first frame arrives.
-  if (c.odometry.source == OdometrySource::kCan) drivers::can::CanOdometryDecoder(c.odometry.can, c.outputs.can.layout(), path);
+  if (c.odometry.source == OdometrySource::kCan)
+    drivers::can::CanOdometryDecoder(c.odometry.can, c.outputs.can.layout(), path);
 
   // The stage files (their own errors name them and their fields).
   if (!c.stage_files.slam.empty()) c.system.slam = slam::load_slam_config(c.stage_files.slam);
@@ -376,8 +407,8 @@ DaemonConfig load_daemon_config(const std::string& path) {
   if (!c.stage_files.place.empty()) {
     c.place = place::load_place_config(c.stage_files.place);
     if (!fs::is_regular_file(c.place->vocabulary_file)) {
-      throw InputError(c.stage_files.place, "vocabulary.file", "expected an existing vocabulary file (" +
-                                                                  c.place->vocabulary_file + " does not exist)");
+      throw InputError(c.stage_files.place, "vocabulary.file",
+                       "expected an existing vocabulary file (" + c.place->vocabulary_file + " does not exist)");
     }
     c.system.direct_index_level = c.place->direct_index_level;
   }

@@ -45,10 +45,11 @@ SourceSetup prepare_source(const DaemonConfig& config) {
     } catch (const InputError& e) {
       // The dataset reader names the file inside the folder; say which setting led there.
       const bool calib = !config.calibration_file.empty() && std::string(e.what()).find(config.calibration_file) == 0;
-      throw InputError(config.path, calib ? "calibration.file" : "source.dataset",
-                       std::string(calib ? "expected a calibration file agvslam::io reads: "
-                                         : "expected a dataset folder (KITTI layout, agvslam-sim output or EuRoC ASL): ") +
-                           e.what());
+      throw InputError(
+          config.path, calib ? "calibration.file" : "source.dataset",
+          std::string(calib ? "expected a calibration file agvslam::io reads: "
+                            : "expected a dataset folder (KITTI layout, agvslam-sim output or EuRoC ASL): ") +
+              e.what());
     }
     std::size_t first = 0, last = 0;
     io::parse_frame_range(config.source.frames, s.dataset->size(), config.path, "source.frames", first, last);

@@ -34,7 +34,8 @@ void OdometryMonitor::add_odometry(const OdometryRate& sample) {
 
 OdometryCheckState OdometryMonitor::odometry_state(int64_t t_ns) const {
   if (odometry_samples_ == 0) return OdometryCheckState::kNoOdometry;
-  if (t_ns - odometry_.back().t_ns > static_cast<int64_t>(config_.stale_ms) * 1000000) return OdometryCheckState::kStale;
+  if (t_ns - odometry_.back().t_ns > static_cast<int64_t>(config_.stale_ms) * 1000000)
+    return OdometryCheckState::kStale;
   return OdometryCheckState::kOff;  // neither: the window decides
 }
 
@@ -66,9 +67,8 @@ OdometryCheck OdometryMonitor::evaluate() const {
   c.state = OdometryCheckState::kTooLittleMotion;
   if (poses_.size() < 2 || odometry_.size() < 2) return c;
   const int64_t odo_first = odometry_.front().t_ns, odo_last = odometry_.back().t_ns;
-  const auto covered = std::count_if(poses_.begin(), poses_.end(), [&](const StampedPose& p) {
-    return p.t_ns >= odo_first && p.t_ns <= odo_last;
-  });
+  const auto covered = std::count_if(poses_.begin(), poses_.end(),
+                                     [&](const StampedPose& p) { return p.t_ns >= odo_first && p.t_ns <= odo_last; });
   if (covered < 2) return c;
 
   eval::OdometryCheckConfig ec;

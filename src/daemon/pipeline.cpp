@@ -1,14 +1,14 @@
-#include "agvslam/core/clock.h"
 #include "agvslam/daemon/pipeline.h"
+#include "agvslam/core/clock.h"
 
-#include <algorithm>
-#include <filesystem>
+#include <spdlog/spdlog.h>
 #include <unistd.h>
-#include <cstring>
+#include <algorithm>
 #include <cerrno>
 #include <cmath>
 #include <cstdio>
-#include <spdlog/spdlog.h>
+#include <cstring>
+#include <filesystem>
 
 #include "agvslam/core/error.h"
 #include "agvslam/drivers/dds/subscriber.h"
@@ -22,7 +22,6 @@ namespace {
 using drivers::v4l2::monotonic_now_ns;
 using Clock = std::chrono::steady_clock;
 
-
 constexpr std::size_t kFpsRing = 512;
 
 }  // namespace
@@ -35,8 +34,9 @@ std::string PipelineStats::one_line() const {
                 "%s, %.1f fps, %llu frames (%llu tracked, %llu lost), dropped %llu (queue %llu, source %llu), "
                 "latency p50 %.1f ms p99 %.1f ms, keyframes %zu, camera %s, published %llu (dds pose %llu, "
                 "status %llu, can %llu)",
-                state.c_str(), fps, static_cast<unsigned long long>(processed), static_cast<unsigned long long>(tracked),
-                static_cast<unsigned long long>(lost), static_cast<unsigned long long>(dropped_queue + dropped_source),
+                state.c_str(), fps, static_cast<unsigned long long>(processed),
+                static_cast<unsigned long long>(tracked), static_cast<unsigned long long>(lost),
+                static_cast<unsigned long long>(dropped_queue + dropped_source),
                 static_cast<unsigned long long>(dropped_queue), static_cast<unsigned long long>(dropped_source),
                 latency_p50_ms, latency_p99_ms, keyframes, source.connected ? "ok" : "lost, reopening",
                 static_cast<unsigned long long>(published), static_cast<unsigned long long>(outputs.dds_pose.published),
@@ -90,10 +90,11 @@ Pipeline::Pipeline(const DaemonConfig& config, const SourceSetup& setup, std::un
     if (std::filesystem::exists(config.map.file)) {
       // A file that cannot be loaded is an InputError naming it (agvslamd exits 2); it is never overwritten.
       const slam::MapLoadStats st = system_->load_map(config.map.file, config.map.mode);
-      spdlog::info("agvslamd: map {} loaded ({} keyframes, {} map points, {} bytes, {:.0f} ms), mode {}: the first "
-                   "frames relocalise in it and poses are in its frame",
-                   config.map.file, st.keyframes, st.map_points, st.bytes, st.read_ms + st.decode_ms + st.bow_ms,
-                   slam::to_string(config.map.mode));
+      spdlog::info(
+          "agvslamd: map {} loaded ({} keyframes, {} map points, {} bytes, {:.0f} ms), mode {}: the first "
+          "frames relocalise in it and poses are in its frame",
+          config.map.file, st.keyframes, st.map_points, st.bytes, st.read_ms + st.decode_ms + st.bow_ms,
+          slam::to_string(config.map.mode));
     } else {
       spdlog::info("agvslamd: map {} does not exist yet: building a new map (saved at stop)", config.map.file);
     }
@@ -106,8 +107,9 @@ Pipeline::Pipeline(const DaemonConfig& config, const SourceSetup& setup, std::un
       const std::filesystem::path probe = folder / (".agvslamd-write-test-" + std::to_string(::getpid()));
       std::FILE* f = std::fopen(probe.c_str(), "wb");
       if (!f) {
-        throw InputError(config.path, "map.file", "expected a file in a writable folder (" + folder.string() +
-                                                      ": " + std::strerror(errno) + ")");
+        throw InputError(
+            config.path, "map.file",
+            "expected a file in a writable folder (" + folder.string() + ": " + std::strerror(errno) + ")");
       }
       std::fclose(f);
       std::filesystem::remove(probe, ec);
@@ -168,7 +170,8 @@ void Pipeline::wait() {
       system_->wait_for_mapping();
       const Trajectory trajectory = system_->trajectory();
       io::write_tum(config_.trajectory.final_file, trajectory);
-      spdlog::info("trajectory: {} keyframe-refined poses written to {}", trajectory.size(), config_.trajectory.final_file);
+      spdlog::info("trajectory: {} keyframe-refined poses written to {}", trajectory.size(),
+                   config_.trajectory.final_file);
     } catch (const std::exception& e) {
       spdlog::error("trajectory: writing {} failed: {}", config_.trajectory.final_file, e.what());
     }
@@ -195,9 +198,9 @@ void Pipeline::fail(const std::string& where, const std::exception& e) {
 }
 
 double Pipeline::fps_locked(int64_t now_mono_ns) const {
-  return static_cast<double>(std::count_if(recent_frames_mono_ns_.begin(), recent_frames_mono_ns_.end(), [&](int64_t t) {
-    return t != INT64_MIN && now_mono_ns - t <= 1000000000LL;
-  }));
+  return static_cast<double>(
+      std::count_if(recent_frames_mono_ns_.begin(), recent_frames_mono_ns_.end(),
+                    [&](int64_t t) { return t != INT64_MIN && now_mono_ns - t <= 1000000000LL; }));
 }
 
 void Pipeline::beat(std::atomic<int64_t>& slot) const { slot.store(monotonic_now_ns(), std::memory_order_relaxed); }
@@ -356,7 +359,8 @@ void Pipeline::tracking_loop() {
       const int64_t slam_t_ns = c.source_index >= 0 ? c.frame.t_ns : c.capture_t_ns;
       OutputItem item;
       item.times = d->times;
-      if (d->detected_mono_ns > 0) item.times.detected_queue_ms = static_cast<double>(monotonic_now_ns() - d->detected_mono_ns) * 1e-6;
+      if (d->detected_mono_ns > 0)
+        item.times.detected_queue_ms = static_cast<double>(monotonic_now_ns() - d->detected_mono_ns) * 1e-6;
       const cv::Mat& mask = options_.ground_truth_masks ? c.ground_truth_mask : d->mask;
       const auto t0 = Clock::now();
       const double cpu0 = thread_cpu_ms();

@@ -19,14 +19,18 @@ drivers::Matrix6d diagonal(double sd_translation, double sd_rotation) {
 
 drivers::TrackingState to_output_state(slam::TrackingState state) {
   switch (state) {
-    case slam::TrackingState::kOk: return drivers::TrackingState::kTracking;
-    case slam::TrackingState::kInitialising: return drivers::TrackingState::kNotInitialized;
-    case slam::TrackingState::kLost: return drivers::TrackingState::kLost;
+    case slam::TrackingState::kOk:
+      return drivers::TrackingState::kTracking;
+    case slam::TrackingState::kInitialising:
+      return drivers::TrackingState::kNotInitialized;
+    case slam::TrackingState::kLost:
+      return drivers::TrackingState::kLost;
   }
   return drivers::TrackingState::kLost;
 }
 
-PoseSampleBuilder::PoseSampleBuilder(const SE3d& T_base_cam, const CovarianceConfig& covariance, double max_velocity_gap_s)
+PoseSampleBuilder::PoseSampleBuilder(const SE3d& T_base_cam, const CovarianceConfig& covariance,
+                                     double max_velocity_gap_s)
     : T_base_cam_(T_base_cam), T_cam_base_(T_base_cam.inverse()), cov_(covariance), max_gap_s_(max_velocity_gap_s) {}
 
 double PoseSampleBuilder::position_sd_m(int inliers) const {

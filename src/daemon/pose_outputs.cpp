@@ -1,10 +1,10 @@
 #include "agvslam/daemon/pose_outputs.h"
 
+#include <spdlog/spdlog.h>
 #include <cerrno>
 #include <cinttypes>
 #include <cstring>
 #include <nlohmann/json.hpp>
-#include <spdlog/spdlog.h>
 
 #include "agvslam/core/error.h"
 #include "agvslam/drivers/dds/subscriber.h"
@@ -34,7 +34,9 @@ TextFile::~TextFile() {
   if (file_ != nullptr) std::fclose(file_);
 }
 
-TextFile::TextFile(TextFile&& other) noexcept : file_(other.file_), path_(std::move(other.path_)) { other.file_ = nullptr; }
+TextFile::TextFile(TextFile&& other) noexcept : file_(other.file_), path_(std::move(other.path_)) {
+  other.file_ = nullptr;
+}
 
 TextFile& TextFile::operator=(TextFile&& other) noexcept {
   if (this != &other) {
@@ -114,11 +116,12 @@ void PoseOutputs::check_odometry(OutputItem& item, bool tracking) {
     const auto now = std::chrono::steady_clock::now();
     const auto every = std::chrono::duration<double>(config_.odometry.check.warn_every_s);
     if (odometry_disagreements_ == 1 || now - last_odometry_warning_ >= every) {
-      spdlog::warn("odometry: the pose disagrees with the wheel odometry over the last {:.1f} s: distance ratio {:.3f} "
-                   "(SLAM / odometry), heading difference {:.1f} deg, speed RMSE {:.3f} m/s (tolerance {:.0f} %; "
-                   "{} time(s) so far)",
-                   c.window_s, c.distance_ratio, c.heading_difference_deg, c.speed_rmse_mps,
-                   config_.odometry.check.tolerance * 100.0, odometry_disagreements_);
+      spdlog::warn(
+          "odometry: the pose disagrees with the wheel odometry over the last {:.1f} s: distance ratio {:.3f} "
+          "(SLAM / odometry), heading difference {:.1f} deg, speed RMSE {:.3f} m/s (tolerance {:.0f} %; "
+          "{} time(s) so far)",
+          c.window_s, c.distance_ratio, c.heading_difference_deg, c.speed_rmse_mps,
+          config_.odometry.check.tolerance * 100.0, odometry_disagreements_);
       last_odometry_warning_ = now;
     }
   }
@@ -143,8 +146,9 @@ void PoseOutputs::publish(OutputItem& item) {
     const Eigen::Vector3d& t = T.translation();
     char line[256];
     const int64_t sec = s.t_ns / 1000000000LL, nsec = s.t_ns % 1000000000LL;
-    const int n = std::snprintf(line, sizeof line, "%" PRId64 ".%09" PRId64 " %.10f %.10f %.10f %.12f %.12f %.12f %.12f",
-                                sec, nsec, t.x(), t.y(), t.z(), q.x(), q.y(), q.z(), q.w());
+    const int n =
+        std::snprintf(line, sizeof line, "%" PRId64 ".%09" PRId64 " %.10f %.10f %.10f %.12f %.12f %.12f %.12f", sec,
+                      nsec, t.x(), t.y(), t.z(), q.x(), q.y(), q.z(), q.w());
     trajectory_.write_line(line, static_cast<std::size_t>(n));
     if (++unflushed_ >= config_.trajectory.flush_every) {
       trajectory_.flush();
@@ -158,14 +162,19 @@ void PoseOutputs::publish(OutputItem& item) {
                         {"source_index", item.source_index},
                         {"source_t_ns", item.source_t_ns},
                         {"sample", drivers::pose_sample_to_json(s)},
-                        {"times_ms", {{"capture_queue", item.times.capture_queue_ms}, {"detector", item.times.detector_ms},
-                                      {"detector_cpu", item.times.detector_cpu_ms},
-                                      {"detected_queue", item.times.detected_queue_ms}, {"tracking", item.times.tracking_ms},
-                                      {"tracking_cpu", item.times.tracking_cpu_ms},
-                                      {"output_queue", item.times.output_queue_ms}}},
+                        {"times_ms",
+                         {{"capture_queue", item.times.capture_queue_ms},
+                          {"detector", item.times.detector_ms},
+                          {"detector_cpu", item.times.detector_cpu_ms},
+                          {"detected_queue", item.times.detected_queue_ms},
+                          {"tracking", item.times.tracking_ms},
+                          {"tracking_cpu", item.times.tracking_cpu_ms},
+                          {"output_queue", item.times.output_queue_ms}}},
                         {"dds", {{"pose", tracking && dds_pose_ != nullptr}, {"status", dds_status_ != nullptr}}}};
     if (can_) {
-      j["can"] = {{"due", can_result.due}, {"sent", can_result.sent}, {"counter", can_result.counter},
+      j["can"] = {{"due", can_result.due},
+                  {"sent", can_result.sent},
+                  {"counter", can_result.counter},
                   {"frames_sent", can_result.frames_sent}};
     }
     if (odometry_monitor_) j["odometry_check"] = odometry_check_json(s.odometry_check);
@@ -195,7 +204,8 @@ void PoseOutputs::flush(std::chrono::milliseconds timeout) {
   const auto deadline = std::chrono::steady_clock::now() + timeout;
   for (auto* pub : {dds_pose_.get(), dds_status_.get()}) {
     if (pub == nullptr) continue;
-    const auto left = std::chrono::duration_cast<std::chrono::milliseconds>(deadline - std::chrono::steady_clock::now());
+    const auto left =
+        std::chrono::duration_cast<std::chrono::milliseconds>(deadline - std::chrono::steady_clock::now());
     if (!pub->flush(std::max(left, std::chrono::milliseconds(0)))) {
       spdlog::warn("dds: not every sample was acknowledged by the subscribers within {} ms", timeout.count());
     }
@@ -225,7 +235,8 @@ bool PoseOutputs::wait_for_subscribers(int count, std::chrono::milliseconds time
   const auto deadline = std::chrono::steady_clock::now() + timeout;
   for (auto* pub : {dds_pose_.get(), dds_status_.get()}) {
     if (pub == nullptr) continue;
-    const auto left = std::chrono::duration_cast<std::chrono::milliseconds>(deadline - std::chrono::steady_clock::now());
+    const auto left =
+        std::chrono::duration_cast<std::chrono::milliseconds>(deadline - std::chrono::steady_clock::now());
     if (!pub->wait_for_subscribers(count, std::max(left, std::chrono::milliseconds(0)))) return false;
   }
   return true;

@@ -2,8 +2,8 @@
 
 #include <systemd/sd-daemon.h>
 
-#include <cstdlib>
 #include <spdlog/spdlog.h>
+#include <cstdlib>
 
 namespace agvslam::daemon {
 

@@ -54,8 +54,10 @@ double BandSegmenter::static_segment_distance(const PinholeCamera& camera, doubl
       have_a = false;
       continue;
     }
-    if (have_a) best = std::min(best, point_segment_distance(prev_px.x, prev_px.y, au, av, bu, bv));
-    else if (k == kPieces) best = std::min(best, std::hypot(prev_px.x - bu, prev_px.y - bv));
+    if (have_a)
+      best = std::min(best, point_segment_distance(prev_px.x, prev_px.y, au, av, bu, bv));
+    else if (k == kPieces)
+      best = std::min(best, std::hypot(prev_px.x - bu, prev_px.y - bv));
     au = bu;
     av = bv;
     have_a = true;
@@ -97,7 +99,8 @@ void BandSegmenter::untracked_strip_corners(const cv::Mat& cur_left, const cv::M
     if (p.x < c.border_px || p.y < c.border_px || p.y >= h - c.border_px) continue;
     const int cell = cell_of(p);
     if (tracked_cell_[static_cast<std::size_t>(cell)]) continue;
-    if (!masked.empty() && masked.at<uint8_t>(std::clamp(cvRound(p.y), 0, h - 1), std::clamp(cvRound(p.x), 0, w - 1))) continue;
+    if (!masked.empty() && masked.at<uint8_t>(std::clamp(cvRound(p.y), 0, h - 1), std::clamp(cvRound(p.x), 0, w - 1)))
+      continue;
     int& b = best_corner_[static_cast<std::size_t>(cell)];
     if (b < 0 || keypoints_[k].response > keypoints_[static_cast<std::size_t>(b)].response) b = static_cast<int>(k);
   }
@@ -206,7 +209,8 @@ void BandSegmenter::static_hypothesis(const cv::Mat& cur_left, const cv::Mat& pr
   // turned on the spot.)
   const BandSegmenterConfig& c = config_;
   const StaticWarp warp(camera, bf_px_m, T_cur_prev);
-  const int samples = longest < c.segment_step_px ? 1 : std::clamp(static_cast<int>(std::ceil(longest / c.segment_step_px)) + 1, 2, 64);
+  const int samples =
+      longest < c.segment_step_px ? 1 : std::clamp(static_cast<int>(std::ceil(longest / c.segment_step_px)) + 1, 2, 64);
   static_error_.create(area.size(), CV_32F);
   static_error_.setTo(kInvalid);
   for (int k = 0; k < samples; ++k) {
@@ -245,7 +249,8 @@ void BandSegmenter::seed_hypotheses(const cv::Mat& cur_left, const cv::Mat& prev
       fy1 = std::max(fy1, seeds[k].cur_px.y);
     }
     const cv::Rect box = cv::Rect(cv::Point(static_cast<int>(fx0) - reach, static_cast<int>(fy0) - reach),
-                                  cv::Point(static_cast<int>(fx1) + reach + 1, static_cast<int>(fy1) + reach + 1)) & area;
+                                  cv::Point(static_cast<int>(fx1) + reach + 1, static_cast<int>(fy1) + reach + 1)) &
+                         area;
     seed_error_[j].create(area.size(), CV_32F);
     seed_error_[j].setTo(kInvalid);
     if (box.empty()) continue;
@@ -273,7 +278,8 @@ void BandSegmenter::evidence(const cv::Rect& area, const std::vector<BandSeed>& 
   evidence_.create(area.size(), CV_32F);
   for (int by = 0; by < area.height; by += kBlock) {
     for (int bx = 0; bx < area.width; bx += kBlock) {
-      const float cx_px = static_cast<float>(area.x + bx) + 0.5f * kBlock, cy_px = static_cast<float>(area.y + by) + 0.5f * kBlock;
+      const float cx_px = static_cast<float>(area.x + bx) + 0.5f * kBlock,
+                  cy_px = static_cast<float>(area.y + by) + 0.5f * kBlock;
       for (std::size_t j = 0; j < n_seeds; ++j) {
         const float dx = seeds[j].cur_px.x - cx_px, dy = seeds[j].cur_px.y - cy_px;
         by_distance_[j] = {dx * dx + dy * dy, flow_of_[j]};
@@ -292,7 +298,8 @@ void BandSegmenter::evidence(const cv::Rect& area, const std::vector<BandSeed>& 
           for (int f : block_flows_) oe = std::min(oe, seed_error_[static_cast<std::size_t>(f)].ptr<float>(y)[x]);
           // A pixel no seed's motion explains (uncovered background, or another surface) gets no evidence for it.
           ev[x] = (se[x] >= kInvalidMean || oe >= kInvalidMean) ? 0.0f
-                  : oe > max_object_error ? std::min(0.0f, se[x] - oe) : se[x] - oe;
+                  : oe > max_object_error                       ? std::min(0.0f, se[x] - oe)
+                                                                : se[x] - oe;
         }
       }
     }
@@ -357,9 +364,9 @@ void BandSegmenter::seeded_regions(const cv::Rect& area, BandResult& out) {
 
 void BandSegmenter::segment(const cv::Mat& cur_left, const cv::Mat& prev_left, const std::vector<cv::Mat>& cur_pyramid,
                             const std::vector<cv::Mat>& prev_pyramid, LkTracker& tracker, int lk_levels,
-                            const PinholeCamera& camera, double bf_px_m, const SE3d& T_cur_prev,
-                            const cv::Mat& masked, const std::vector<cv::Point2f>& track_prev,
-                            const std::vector<cv::Point2f>& track_cur, BandResult& out) {
+                            const PinholeCamera& camera, double bf_px_m, const SE3d& T_cur_prev, const cv::Mat& masked,
+                            const std::vector<cv::Point2f>& track_prev, const std::vector<cv::Point2f>& track_cur,
+                            BandResult& out) {
   CV_Assert(track_prev.size() == track_cur.size());
   out = BandResult{};
   const BandSegmenterConfig& c = config_;

@@ -6,11 +6,16 @@ namespace agvslam::dynamic {
 
 const char* to_string(BoundaryType type) {
   switch (type) {
-    case BoundaryType::kCoplanar: return "coplanar";
-    case BoundaryType::kHinge: return "hinge";
-    case BoundaryType::kLeftOcclusion: return "left-occlusion";
-    case BoundaryType::kRightOcclusion: return "right-occlusion";
-    case BoundaryType::kUnknown: return "unknown";
+    case BoundaryType::kCoplanar:
+      return "coplanar";
+    case BoundaryType::kHinge:
+      return "hinge";
+    case BoundaryType::kLeftOcclusion:
+      return "left-occlusion";
+    case BoundaryType::kRightOcclusion:
+      return "right-occlusion";
+    case BoundaryType::kUnknown:
+      return "unknown";
   }
   return "?";
 }

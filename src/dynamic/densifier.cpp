@@ -21,7 +21,7 @@ bool Densifier::select_seeds(const DetectorResult& result, const PointTracks& tr
   auto strong_depth = [&](const TrackedPoint& p) {
     return options_.depth_seed_factor > 0 && p.dynamic_depth && p.reprojection_px >= 0 &&
            p.reprojection_px >= options_.depth_seed_factor * tracks.depth_test().reprojection_threshold_px(
-                                                                  result.depth, std::max(0.0f, p.cur_disparity_px));
+                                                                 result.depth, std::max(0.0f, p.cur_disparity_px));
   };
   seed_pts_.clear();
   seed_disp_.clear();
@@ -93,9 +93,11 @@ void Densifier::add_corners(const DynamicGroup& g, const cv::Mat& prev_left, con
     x1 = std::max(x1, p.x);
     y1 = std::max(y1, p.y);
   }
-  const int r = static_cast<int>(std::lround(options_.radius_px + options_.radius_disparity_factor * g.mean_disparity_px));
+  const int r =
+      static_cast<int>(std::lround(options_.radius_px + options_.radius_disparity_factor * g.mean_disparity_px));
   const cv::Rect window = cv::Rect(cv::Point(static_cast<int>(x0) - r, static_cast<int>(y0) - r),
-                                   cv::Point(static_cast<int>(x1) + r + 1, static_cast<int>(y1) + r + 1)) & inner;
+                                   cv::Point(static_cast<int>(x1) + r + 1, static_cast<int>(y1) + r + 1)) &
+                          inner;
   if (window.width < 8 || window.height < 8) return;
   keypoints_.clear();
   cv::FAST(prev_left(window), keypoints_, context_.features.min_threshold, true);
@@ -185,11 +187,11 @@ void Densifier::track_into_reference(const cv::Mat& cur_left, const cv::Mat& ref
   cv::buildOpticalFlowPyramid(cur_left(area), mf_cur_pyramid_, win, levels, false);
   cv::buildOpticalFlowPyramid(ref_left(area), mf_ref_pyramid_, win, levels, false);
   mf_ref_ = mf_pred_;
-  cv::calcOpticalFlowPyrLK(mf_cur_pyramid_, mf_ref_pyramid_, mf_cur_, mf_ref_, mf_status_, mf_errors_, win, levels, crit,
-                           cv::OPTFLOW_USE_INITIAL_FLOW, trk.min_eigen_threshold);
-  mf_back_ = mf_cur_;
-  cv::calcOpticalFlowPyrLK(mf_ref_pyramid_, mf_cur_pyramid_, mf_ref_, mf_back_, mf_back_status_, mf_errors_, win, levels,
+  cv::calcOpticalFlowPyrLK(mf_cur_pyramid_, mf_ref_pyramid_, mf_cur_, mf_ref_, mf_status_, mf_errors_, win, levels,
                            crit, cv::OPTFLOW_USE_INITIAL_FLOW, trk.min_eigen_threshold);
+  mf_back_ = mf_cur_;
+  cv::calcOpticalFlowPyrLK(mf_ref_pyramid_, mf_cur_pyramid_, mf_ref_, mf_back_, mf_back_status_, mf_errors_, win,
+                           levels, crit, cv::OPTFLOW_USE_INITIAL_FLOW, trk.min_eigen_threshold);
   for (std::size_t k = 0; k < mf_cur_.size(); ++k) {
     mf_cur_[k] += origin;
     mf_pred_[k] += origin;
@@ -253,11 +255,12 @@ void Densifier::test_multiframe(const StereoFrame& frame, const DetectorResult& 
   mf_pred_.clear();
   mf_index_.clear();
   for (std::size_t i = 0; i < n; ++i) {
-    if (!extra_ok_[i] || !extra_group_valid_[i] || !(extra_cur_disp_[i] >= context_.multiframe.min_disparity_px)) continue;
+    if (!extra_ok_[i] || !extra_group_valid_[i] || !(extra_cur_disp_[i] >= context_.multiframe.min_disparity_px))
+      continue;
     Eigen::Vector2d pred;
     double depth_m = 0;
-    if (!DepthConsistencyTest::predict(calibration_.left, calibration_.bf(), T_ref_cur, extra_cur_[i], extra_cur_disp_[i],
-                                       pred, depth_m)) {
+    if (!DepthConsistencyTest::predict(calibration_.left, calibration_.bf(), T_ref_cur, extra_cur_[i],
+                                       extra_cur_disp_[i], pred, depth_m)) {
       continue;
     }
     const cv::Point2f q(static_cast<float>(pred.x()), static_cast<float>(pred.y()));

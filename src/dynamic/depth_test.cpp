@@ -21,8 +21,8 @@ SE3d pose_of(const cv::Mat& rvec, const cv::Mat& tvec) {
 }
 
 // The indices of the tracks a motion puts within threshold_px of where they are seen.
-void inliers_of(const std::vector<cv::Point3f>& object, const std::vector<cv::Point2f>& image, const PinholeCamera& camera,
-                const SE3d& T_cur_prev, double threshold_px, std::vector<int>& inliers) {
+void inliers_of(const std::vector<cv::Point3f>& object, const std::vector<cv::Point2f>& image,
+                const PinholeCamera& camera, const SE3d& T_cur_prev, double threshold_px, std::vector<int>& inliers) {
   inliers.clear();
   const double max_err2 = threshold_px * threshold_px;
   for (std::size_t i = 0; i < object.size(); ++i) {
@@ -37,9 +37,9 @@ void inliers_of(const std::vector<cv::Point3f>& object, const std::vector<cv::Po
 // threshold_px (the projection done here, a few ns per track, where cv::solvePnPRansac's projectPoints costs most of
 // its time); the sample count adapts to the best inlier ratio as in OpenCV's RANSAC. Fixed seed: reproducible.
 // Returns the best motion's inliers (empty when no sample gave a motion).
-void ransac_p3p(const std::vector<cv::Point3f>& object, const std::vector<cv::Point2f>& image, const PinholeCamera& camera,
-                double threshold_px, double confidence, int max_iterations, cv::Mat& rvec, cv::Mat& tvec,
-                std::vector<int>& inliers) {
+void ransac_p3p(const std::vector<cv::Point3f>& object, const std::vector<cv::Point2f>& image,
+                const PinholeCamera& camera, double threshold_px, double confidence, int max_iterations, cv::Mat& rvec,
+                cv::Mat& tvec, std::vector<int>& inliers) {
   inliers.clear();
   const int n = static_cast<int>(object.size());
   if (n < 4) return;
@@ -148,8 +148,8 @@ void set_constants(const DepthTestConfig& config, const std::vector<int>& tested
       if (r >= 0) scratch.push_back(r);
     }
     if (!scratch.empty()) {
-      a_disp = std::clamp(config.adaptive_k * robust_sigma(scratch), config.a_disp_px,
-                          config.max_scale * config.a_disp_px);
+      a_disp =
+          std::clamp(config.adaptive_k * robust_sigma(scratch), config.a_disp_px, config.max_scale * config.a_disp_px);
     }
   }
   result.a_reproj_used_px = a_reproj;
@@ -189,9 +189,9 @@ void DepthConsistencyTest::run(const PinholeCamera& camera, double bf_px_m, cons
   // The motion: the prior's when enough tracks agree with it, else P3P RANSAC's; refined on its inliers.
   cv::Mat rvec, tvec;
   inliers_.clear();
-  result.from_prior = T_cur_prev_prior && config_.prior_min_inlier_fraction > 0 &&
-                      inliers_of_prior(object_, image_, camera, *T_cur_prev_prior, config_, result.used, rvec, tvec,
-                                       inliers_);
+  result.from_prior =
+      T_cur_prev_prior && config_.prior_min_inlier_fraction > 0 &&
+      inliers_of_prior(object_, image_, camera, *T_cur_prev_prior, config_, result.used, rvec, tvec, inliers_);
   if (!result.from_prior) {
     ransac_p3p(object_, image_, camera, config_.ransac_reprojection_px, config_.ransac_confidence,
                config_.ransac_iterations, rvec, tvec, inliers_);

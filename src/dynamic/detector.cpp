@@ -1,5 +1,5 @@
-#include "agvslam/core/clock.h"
 #include "agvslam/dynamic/detector.h"
+#include "agvslam/core/clock.h"
 
 #include <algorithm>
 #include <chrono>
@@ -68,7 +68,8 @@ DynamicDetector::DynamicDetector(const StereoCalibration& calibration, const Dyn
   config_.validate("DynamicDetectorConfig");
   stereo_config.validate("StereoConfig");
   if (config_.detector.use_depth_test && !(calibration_.bf() > 0)) {
-    throw InputError("StereoCalibration", "baseline_m", "expected a positive focal length and baseline for the depth test");
+    throw InputError("StereoCalibration", "baseline_m",
+                     "expected a positive focal length and baseline for the depth test");
   }
 }
 

@@ -150,8 +150,8 @@ bool side_costs(const cv::Mat& left, const cv::Mat& right, int roi_x, const Side
 
 }  // namespace
 
-EdgeRefineStats EdgeRefiner::refine(const cv::Mat& left, const cv::Mat& right, cv::Rect roi, const cv::Mat& disparity_px,
-                                    cv::Mat& outline) {
+EdgeRefineStats EdgeRefiner::refine(const cv::Mat& left, const cv::Mat& right, cv::Rect roi,
+                                    const cv::Mat& disparity_px, cv::Mat& outline) {
   EdgeRefineStats stats;
   const EdgeRefineConfig& c = config_;
   if (c.band_px <= 0 || outline.empty()) return stats;

@@ -54,7 +54,8 @@ void LkTracker::track(const std::vector<cv::Mat>& prev_pyramid, const std::vecto
   for (std::size_t i = 0; i < prev_pts.size(); ++i) {
     if (!status_[i] || !back_status_[i]) continue;
     const cv::Point2f& p = cur_pts[i];
-    if (p.x < 0 || p.y < 0 || p.x > static_cast<float>(size.width - 1) || p.y > static_cast<float>(size.height - 1)) continue;
+    if (p.x < 0 || p.y < 0 || p.x > static_cast<float>(size.width - 1) || p.y > static_cast<float>(size.height - 1))
+      continue;
     const cv::Point2f e = back_pts_[i] - prev_pts[i];
     if (e.dot(e) > max_fb2) continue;
     ok[i] = 1;
@@ -75,7 +76,9 @@ double robust_sigma(std::vector<double>& residuals) {
   return 1.4826 * *mid;
 }
 
-EpipolarTest::EpipolarTest(const EpipolarTestConfig& config) : config_(config) { config_.validate("EpipolarTestConfig"); }
+EpipolarTest::EpipolarTest(const EpipolarTestConfig& config) : config_(config) {
+  config_.validate("EpipolarTestConfig");
+}
 
 void EpipolarTest::run(const std::vector<cv::Point2f>& prev_pts, const std::vector<cv::Point2f>& cur_pts,
                        const std::vector<uint8_t>& usable, const std::vector<float>& disparity_px,
@@ -148,7 +151,8 @@ void EpipolarTest::run(const std::vector<cv::Point2f>& prev_pts, const std::vect
   for (int i : index_) scratch_.push_back(result.d_epi_px[static_cast<std::size_t>(i)]);
   result.robust_sigma_px = robust_sigma(scratch_);
   double a = config_.a_epi_px;
-  if (config_.adaptive) a = std::clamp(config_.adaptive_k * result.robust_sigma_px, config_.a_epi_px, config_.a_epi_max_px);
+  if (config_.adaptive)
+    a = std::clamp(config_.adaptive_k * result.robust_sigma_px, config_.a_epi_px, config_.a_epi_max_px);
   result.a_epi_used_px = a;
   for (int i : index_) {
     const std::size_t u = static_cast<std::size_t>(i);

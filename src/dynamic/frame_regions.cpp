@@ -28,7 +28,8 @@ bool FrameRegions::holds_object(int object_id) const {
 void FrameRegions::mark_near_moving(int first, int end, bool near_moving) {
   const std::size_t size = static_cast<std::size_t>(std::clamp(end, 1, 256));
   if (instance_near_moving_.size() < size) instance_near_moving_.resize(size, 0);
-  for (int k = first; k < end && k < 256; ++k) instance_near_moving_[static_cast<std::size_t>(k)] |= near_moving ? 1 : 0;
+  for (int k = first; k < end && k < 256; ++k)
+    instance_near_moving_[static_cast<std::size_t>(k)] |= near_moving ? 1 : 0;
 }
 
 bool FrameRegions::merge_stacked(RoiSegmentation& seg, const cv::Rect& rect, bool near_moving,

@@ -24,7 +24,11 @@ int most_counted(const std::vector<int>& counts, int& best_count) {
 
 LeftBand::LeftBand(const BandSegmenterConfig& band, const BandCarryOptions& carry, int min_region_pixels,
                    const StereoCalibration& calibration)
-    : band_config_(band), carry_(carry), min_region_pixels_(min_region_pixels), calibration_(calibration), band_(band) {}
+    : band_config_(band),
+      carry_(carry),
+      min_region_pixels_(min_region_pixels),
+      calibration_(calibration),
+      band_(band) {}
 
 void LeftBand::add_driving_seeds(const StereoFrame& frame, const cv::Mat& prev_left, const cv::Mat& prev_right,
                                  PointTracks& tracks, DynamicPoints& dynamic, DetectorResult& result) {
@@ -132,11 +136,13 @@ int LeftBand::joined_instance(const BandRegion& region, const cv::Mat& instances
   const int reach = band_config_.merge_distance_px;
   // The object of the mask it touches most (within merge_distance_px) ...
   const cv::Rect around = cv::Rect(region.rect.x - reach, region.rect.y - reach, region.rect.width + 2 * reach,
-                                   region.rect.height + 2 * reach) & image;
+                                   region.rect.height + 2 * reach) &
+                          image;
   cv::Mat reach_mask = cv::Mat::zeros(around.size(), CV_8UC1);
   region.mask.copyTo(reach_mask(region.rect - around.tl()));
   if (reach > 0) {
-    cv::dilate(reach_mask, reach_mask, cv::getStructuringElement(cv::MORPH_RECT, cv::Size(2 * reach + 1, 2 * reach + 1)));
+    cv::dilate(reach_mask, reach_mask,
+               cv::getStructuringElement(cv::MORPH_RECT, cv::Size(2 * reach + 1, 2 * reach + 1)));
   }
   overlap_count_.assign(256, 0);
   for (int y = 0; y < around.height; ++y) {
@@ -151,7 +157,8 @@ int LeftBand::joined_instance(const BandRegion& region, const cv::Mat& instances
   if (instance != 0 || band_config_.stack_gap_px <= 0) return instance;
   // ... or the one it is stacked on (above or below within stack_gap_px, over at least half of its columns).
   const int gap = band_config_.stack_gap_px;
-  const cv::Rect window = cv::Rect(region.rect.x, region.rect.y - gap, region.rect.width, region.rect.height + 2 * gap) & image;
+  const cv::Rect window =
+      cv::Rect(region.rect.x, region.rect.y - gap, region.rect.width, region.rect.height + 2 * gap) & image;
   overlap_count_.assign(256, 0);
   column_seen_.assign(256, -1);
   for (int x = window.x; x < window.br().x; ++x) {
@@ -197,8 +204,8 @@ cv::Rect LeftBand::paint_region(const BandRegion& region, int instance, bool alo
   return x1 < 0 ? cv::Rect() : cv::Rect(x0, y0, x1 - x0 + 1, y1 - y0 + 1);
 }
 
-void LeftBand::segment(const StereoFrame& frame, const cv::Mat& prev_left, PointTracks& tracks,
-                       FrameRegions& regions, DetectorResult& result) {
+void LeftBand::segment(const StereoFrame& frame, const cv::Mat& prev_left, PointTracks& tracks, FrameRegions& regions,
+                       DetectorResult& result) {
   band_prev_.clear();
   band_cur_.clear();
   for (const TrackedPoint& p : result.points) {
@@ -214,7 +221,8 @@ void LeftBand::segment(const StereoFrame& frame, const cv::Mat& prev_left, Point
   band_order_.resize(result.band.regions.size());
   for (std::size_t i = 0; i < band_order_.size(); ++i) band_order_[i] = static_cast<int>(i);
   std::sort(band_order_.begin(), band_order_.end(), [&](int a, int b) {
-    return result.band.regions[static_cast<std::size_t>(a)].pixels > result.band.regions[static_cast<std::size_t>(b)].pixels;
+    return result.band.regions[static_cast<std::size_t>(a)].pixels >
+           result.band.regions[static_cast<std::size_t>(b)].pixels;
   });
   cv::Mat& inst = result.mask.instances;
   for (int index : band_order_) {

@@ -40,8 +40,10 @@ void TrackHistory::retain(const std::vector<uint8_t>& keep) {
   for (std::size_t i = 0; i < size(); ++i) {
     if (!keep[i]) continue;
     if (out != i) {
-      std::copy_n(px_.begin() + static_cast<std::ptrdiff_t>(i * depth), depth, px_.begin() + static_cast<std::ptrdiff_t>(out * depth));
-      std::copy_n(d_.begin() + static_cast<std::ptrdiff_t>(i * depth), depth, d_.begin() + static_cast<std::ptrdiff_t>(out * depth));
+      std::copy_n(px_.begin() + static_cast<std::ptrdiff_t>(i * depth), depth,
+                  px_.begin() + static_cast<std::ptrdiff_t>(out * depth));
+      std::copy_n(d_.begin() + static_cast<std::ptrdiff_t>(i * depth), depth,
+                  d_.begin() + static_cast<std::ptrdiff_t>(out * depth));
       age_[out] = age_[i];
       run_[out] = run_[i];
       strict_run_[out] = strict_run_[i];
@@ -133,15 +135,17 @@ double offset_across_edge(const cv::Mat& image, const cv::Point2f& p, int half, 
   if (!(l_max > 0) || l_min >= ratio * l_max) return -1;
   // Eigenvector of l_max.
   Eigen::Vector2d v = std::abs(gxy) > 1e-12 ? Eigen::Vector2d(l_max - gyy, gxy)
-                                             : (gxx >= gyy ? Eigen::Vector2d(1, 0) : Eigen::Vector2d(0, 1));
+                                            : (gxx >= gyy ? Eigen::Vector2d(1, 0) : Eigen::Vector2d(0, 1));
   v.normalize();
   Eigen::Vector2d predicted;
   double depth_m = 0;
-  if (!DepthConsistencyTest::predict(camera, bf_px_m, T_cur_ref, ref_px, ref_disparity_px, predicted, depth_m)) return -1;
+  if (!DepthConsistencyTest::predict(camera, bf_px_m, T_cur_ref, ref_px, ref_disparity_px, predicted, depth_m))
+    return -1;
   return std::abs((predicted - Eigen::Vector2d(p.x, p.y)).dot(v));
 }
 
-MultiFrameTest::MultiFrameTest(const MultiFrameTestConfig& config) : config_(config), test_(inner_test_config(config)) {}
+MultiFrameTest::MultiFrameTest(const MultiFrameTestConfig& config)
+    : config_(config), test_(inner_test_config(config)) {}
 
 void MultiFrameTest::reset() {
   for (Frame& f : frames_) spare_.push_back(std::move(f.left));
@@ -183,8 +187,10 @@ int MultiFrameTest::choose_reference(const TrackHistory& history, const std::vec
     cv::Point2f p;
     float d = 0;
     for (std::size_t i = 0; i < n; ++i) {
-      count += usable[i] && held_steps(history, i) >= k && history.observation(i, k, p, d) &&
-                       d >= config_.min_disparity_px ? 1 : 0;
+      count +=
+          usable[i] && held_steps(history, i) >= k && history.observation(i, k, p, d) && d >= config_.min_disparity_px
+              ? 1
+              : 0;
     }
     return count;
   };
@@ -217,11 +223,12 @@ void MultiFrameTest::verify_flagged(const PinholeCamera& camera, double bf_px_m,
   result.flagged = static_cast<int>(cand_index_.size());
   if (cand_index_.empty()) return;
   const cv::Size win(tracking.window_px, tracking.window_px);
-  const cv::TermCriteria crit(cv::TermCriteria::COUNT | cv::TermCriteria::EPS, tracking.max_iterations, tracking.epsilon);
+  const cv::TermCriteria crit(cv::TermCriteria::COUNT | cv::TermCriteria::EPS, tracking.max_iterations,
+                              tracking.epsilon);
   const cv::Mat& ref_left = result.reference_left;
   cv::buildOpticalFlowPyramid(ref_left, ref_pyramid_, win, config_.verify_levels, false);
-  cv::calcOpticalFlowPyrLK(cur_pyramid, ref_pyramid_, cand_cur_, cand_ref_, status_, errors_, win, config_.verify_levels,
-                           crit, cv::OPTFLOW_USE_INITIAL_FLOW, tracking.min_eigen_threshold);
+  cv::calcOpticalFlowPyrLK(cur_pyramid, ref_pyramid_, cand_cur_, cand_ref_, status_, errors_, win,
+                           config_.verify_levels, crit, cv::OPTFLOW_USE_INITIAL_FLOW, tracking.min_eigen_threshold);
   cand_back_ = cand_cur_;
   cv::calcOpticalFlowPyrLK(ref_pyramid_, cur_pyramid, cand_ref_, cand_back_, back_status_, errors_, win,
                            config_.verify_levels, crit, cv::OPTFLOW_USE_INITIAL_FLOW, tracking.min_eigen_threshold);
@@ -232,8 +239,8 @@ void MultiFrameTest::verify_flagged(const PinholeCamera& camera, double bf_px_m,
     result.test.dynamic[i] = 0;
     const cv::Point2f found = cand_ref_[k];
     const cv::Point2f fb = cand_back_[k] - cand_cur_[k];
-    if (!status_[k] || !back_status_[k] || fb.dot(fb) > fb2 || !(found.x >= 0 && found.y >= 0 && found.x < size.width &&
-                                                                   found.y < size.height)) {
+    if (!status_[k] || !back_status_[k] || fb.dot(fb) > fb2 ||
+        !(found.x >= 0 && found.y >= 0 && found.x < size.width && found.y < size.height)) {
       result.test.reprojection_px[i] = -1;  // not verifiable: neither dynamic nor static
       result.test.disparity_residual_px[i] = -1;
       continue;
@@ -308,7 +315,8 @@ void MultiFrameTest::run(const PinholeCamera& camera, double bf_px_m, const Trac
   both_.assign(n, 0);
   for (std::size_t i = 0; i < n; ++i) {
     if (!usable[i] || held_steps(history, i) < chosen) continue;
-    if (!history.observation(i, chosen, ref_px_[i], ref_d_[i]) || !history.observation(i, 0, cur_px_[i], cur_d_[i])) continue;
+    if (!history.observation(i, chosen, ref_px_[i], ref_d_[i]) || !history.observation(i, 0, cur_px_[i], cur_d_[i]))
+      continue;
     both_[i] = 1;
     result.candidates += ref_d_[i] >= config_.min_disparity_px ? 1 : 0;
   }

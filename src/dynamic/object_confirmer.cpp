@@ -76,7 +76,8 @@ int ObjectConfirmer::confirm(DynamicMask& mask, int dilation_px, const std::vect
   cv::Rect area;
   for (const cv::Rect& r : mask.regions) area |= r;
   area = cv::Rect(area.x - dilation_px, area.y - dilation_px, area.width + 2 * dilation_px,
-                  area.height + 2 * dilation_px) & cv::Rect(0, 0, inst.cols, inst.rows);
+                  area.height + 2 * dilation_px) &
+         cv::Rect(0, 0, inst.cols, inst.rows);
   const int max_instance = mask.regions.empty() ? 0 : measure_objects(inst, area);
   if (mask.regions.empty()) object_boxes_.assign(1, cv::Rect());
   int unconfirmed = 0;

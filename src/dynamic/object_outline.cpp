@@ -97,7 +97,9 @@ void ObjectOutliner::flood(const cv::Mat& disparity_px) {
     };
     if (px > 0) visit(px - 1, py, p - 1, drow[px - 1]);
     if (px + 1 < w) visit(px + 1, py, p + 1, drow[px + 1]);
-    if (py > 0) visit(px, py - 1, p - static_cast<std::size_t>(w), drow[static_cast<std::ptrdiff_t>(px) - static_cast<std::ptrdiff_t>(row_stride)]);
+    if (py > 0)
+      visit(px, py - 1, p - static_cast<std::size_t>(w),
+            drow[static_cast<std::ptrdiff_t>(px) - static_cast<std::ptrdiff_t>(row_stride)]);
     if (py + 1 < h) visit(px, py + 1, p + static_cast<std::size_t>(w), drow[static_cast<std::size_t>(px) + row_stride]);
   }
 }
@@ -111,7 +113,8 @@ void ObjectOutliner::fill_enclosed(const cv::Mat& disparity_px, cv::Mat& mask) {
   const cv::Rect area = cv::Rect(box.x - 1, box.y - 1, box.width + 2, box.height + 2) & cv::Rect(0, 0, w, h);
   cv::bitwise_not(mask(area), holes_);
   const int count =
-      area.empty() ? 0 : cv::connectedComponentsWithStats(holes_, hole_labels_, hole_stats_, hole_centroids_, 4, CV_32S);
+      area.empty() ? 0
+                   : cv::connectedComponentsWithStats(holes_, hole_labels_, hole_stats_, hole_centroids_, 4, CV_32S);
   if (count <= 1) return;
   const int aw = area.width, ah = area.height;
   invalid_count_.assign(static_cast<std::size_t>(count), 0);

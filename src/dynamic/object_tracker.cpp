@@ -13,7 +13,8 @@ double median_of(std::vector<float>& v) { return median_in_place(v, -1.0f); }
 
 template <class Entries>
 auto find_object(Entries& entries, int id) {
-  const auto it = std::lower_bound(entries.begin(), entries.end(), id, [](const auto& e, int key) { return e.first < key; });
+  const auto it =
+      std::lower_bound(entries.begin(), entries.end(), id, [](const auto& e, int key) { return e.first < key; });
   return it != entries.end() && it->first == id ? it : entries.end();
 }
 }  // namespace
@@ -29,7 +30,8 @@ int cut_to_moved_pixels(cv::Mat& outline, cv::Point outline_origin, const cv::Ma
     last_pixels(cv::Rect(moved.tl() + outline_origin - shift_px - last_origin, moved.size())).copyTo(allowed(moved));
   }
   cv::Mat grown;
-  cv::dilate(allowed, grown, cv::getStructuringElement(cv::MORPH_RECT, cv::Size(2 * grow_px.width + 1, 2 * grow_px.height + 1)));
+  cv::dilate(allowed, grown,
+             cv::getStructuringElement(cv::MORPH_RECT, cv::Size(2 * grow_px.width + 1, 2 * grow_px.height + 1)));
   cv::bitwise_and(outline, grown, outline);
   return cv::countNonZero(outline);
 }
@@ -70,8 +72,8 @@ int ObjectTracker::group_min_points(int grouping_min_points) const {
   return enabled() ? std::min(grouping_min_points, options_.continue_min_points) : grouping_min_points;
 }
 
-void ObjectTracker::assign_groups(const DynamicPoints& dynamic, int grouping_min_points, std::vector<DynamicGroup>& groups,
-                                  std::vector<int>& group_object) const {
+void ObjectTracker::assign_groups(const DynamicPoints& dynamic, int grouping_min_points,
+                                  std::vector<DynamicGroup>& groups, std::vector<int>& group_object) const {
   const bool objects = enabled();
   const auto object_of = [&](int member) {
     const int idx = dynamic.index[static_cast<std::size_t>(member)];
@@ -98,7 +100,8 @@ void ObjectTracker::assign_groups(const DynamicPoints& dynamic, int grouping_min
     if (votes < options_.continue_min_points) object = -1;
     // Groups are largest first: a smaller group continuing an object that a larger one continues already is
     // a part of it (its flood reaches the same connected pixels), not a second object.
-    if (object >= 0 && small && std::find(group_object.begin(), group_object.end(), object) != group_object.end()) continue;
+    if (object >= 0 && small && std::find(group_object.begin(), group_object.end(), object) != group_object.end())
+      continue;
     group_object.push_back(object);
     kept.push_back(std::move(g));
   }
@@ -189,7 +192,8 @@ void ObjectTracker::cut_growth(const DetectorResult& result, RoiSegmentation& se
     if (prev_instance_object_[i] == seg.object_id) lut_.at<uint8_t>(static_cast<int>(i)) = 255;
   }
   cv::LUT(prev_instances_(last_rect), lut_, last_pixels_);
-  seg.outline_stats.object_pixels = cut_to_moved_pixels(seg.outline, seg.roi.tl(), last_pixels_, last_rect.tl(), shift, grow);
+  seg.outline_stats.object_pixels =
+      cut_to_moved_pixels(seg.outline, seg.roi.tl(), last_pixels_, last_rect.tl(), shift, grow);
 }
 
 int ObjectTracker::claim_id(int continued_id, const FrameRegions& regions) {
@@ -202,7 +206,8 @@ void ObjectTracker::collect_next_objects(const DetectorResult& result, const std
   own_.clear();
   for (const RoiSegmentation& seg : result.rois) {
     if (seg.outline_verdict != OutlineVerdict::kKept || seg.object_id < 0) continue;
-    auto it = std::find_if(next_objects_.begin(), next_objects_.end(), [&](const auto& e) { return e.first == seg.object_id; });
+    auto it = std::find_if(next_objects_.begin(), next_objects_.end(),
+                           [&](const auto& e) { return e.first == seg.object_id; });
     if (it == next_objects_.end()) {
       ObjectTrack ob;
       ob.rect = seg.region.rectangle;
@@ -285,7 +290,8 @@ void ObjectTracker::assign_tracks(const std::vector<cv::Point2f>& tracks, const 
     const cv::Point q(cvRound(tracks[i].x), cvRound(tracks[i].y));
     if (q.x < 0 || q.y < 0 || q.x >= inst.cols || q.y >= inst.rows) continue;
     const int k = inst.at<uint8_t>(q);
-    if (k > 0 && static_cast<std::size_t>(k) < instance_object.size()) track_object_[i] = instance_object[static_cast<std::size_t>(k)];
+    if (k > 0 && static_cast<std::size_t>(k) < instance_object.size())
+      track_object_[i] = instance_object[static_cast<std::size_t>(k)];
   }
 }
 

@@ -1,5 +1,5 @@
-#include "agvslam/core/clock.h"
 #include "agvslam/dynamic/point_tracks.h"
+#include "agvslam/core/clock.h"
 
 #include <algorithm>
 #include <chrono>
@@ -248,7 +248,8 @@ TrackedPoint PointTracks::test_new_point(const DetectorResult& result, const cv:
   p.tracked = true;
   p.densified = true;
   p.age = 1;
-  p.dynamic_epipolar = epipolar_.test_track(result.epipolar, p.prev_px, p.cur_px, p.cur_disparity_px, &p.d_epi_px, &p.t_epi_px);
+  p.dynamic_epipolar =
+      epipolar_.test_track(result.epipolar, p.prev_px, p.cur_px, p.cur_disparity_px, &p.d_epi_px, &p.t_epi_px);
   if (config_.use_depth_test && result.depth.valid) {
     DepthConsistencyTest::residuals(calibration_.left, calibration_.bf(), result.depth.T_cur_prev, p.prev_px,
                                     p.prev_disparity_px, p.cur_px, p.cur_disparity_px, p.reprojection_px,

@@ -35,8 +35,8 @@ void split(const Node& parent, const std::vector<Corner>& candidates, std::vecto
 
 }  // namespace
 
-std::vector<Corner> distribute_quadtree(const std::vector<Corner>& candidates, const cv::Rect2f& area,
-                                        int target_count, std::vector<cv::Rect2f>* node_rects) {
+std::vector<Corner> distribute_quadtree(const std::vector<Corner>& candidates, const cv::Rect2f& area, int target_count,
+                                        std::vector<cv::Rect2f>* node_rects) {
   std::vector<Corner> result;
   if (node_rects) node_rects->clear();
   if (candidates.empty() || target_count <= 0 || area.width <= 0 || area.height <= 0) return result;
@@ -45,7 +45,8 @@ std::vector<Corner> distribute_quadtree(const std::vector<Corner>& candidates, c
   const int initial = std::max(1, static_cast<int>(std::lround(area.width / area.height)));
   const float w = area.width / static_cast<float>(initial);
   std::vector<Node> nodes(static_cast<std::size_t>(initial));
-  for (int i = 0; i < initial; ++i) nodes[static_cast<std::size_t>(i)].rect = {area.x + w * static_cast<float>(i), area.y, w, area.height};
+  for (int i = 0; i < initial; ++i)
+    nodes[static_cast<std::size_t>(i)].rect = {area.x + w * static_cast<float>(i), area.y, w, area.height};
   for (std::size_t i = 0; i < candidates.size(); ++i) {
     const cv::Point2f& p = candidates[i].pt;
     const int k = std::clamp(static_cast<int>((p.x - area.x) / w), 0, initial - 1);
@@ -92,7 +93,8 @@ std::vector<Corner> distribute_quadtree(const std::vector<Corner>& candidates, c
   for (const Node& n : nodes) {
     int best = n.members.front();
     for (int i : n.members) {
-      if (candidates[static_cast<std::size_t>(i)].response > candidates[static_cast<std::size_t>(best)].response) best = i;
+      if (candidates[static_cast<std::size_t>(i)].response > candidates[static_cast<std::size_t>(best)].response)
+        best = i;
     }
     winners.emplace_back(candidates[static_cast<std::size_t>(best)], n.rect);
   }
@@ -107,7 +109,9 @@ std::vector<Corner> distribute_quadtree(const std::vector<Corner>& candidates, c
   return result;
 }
 
-QuadtreeFast::QuadtreeFast(const QuadtreeFastConfig& config) : config_(config) { config_.validate("QuadtreeFastConfig"); }
+QuadtreeFast::QuadtreeFast(const QuadtreeFastConfig& config) : config_(config) {
+  config_.validate("QuadtreeFastConfig");
+}
 
 void QuadtreeFast::detect(const cv::Mat& grey, std::vector<Corner>& corners, QuadtreeStats* stats, bool collect_nodes) {
   CV_Assert(grey.type() == CV_8UC1);
@@ -120,17 +124,17 @@ void QuadtreeFast::detect(const cv::Mat& grey, std::vector<Corner>& corners, Qua
   // corners that pass the normal threshold are kept, or all those at the fallback threshold where none does. This
   // equals running FAST per cell with the two thresholds (up to non-maximum suppression between a strong and a weak
   // corner). single_pass and two_pass find the same candidates; which is cheaper depends on the texture.
-  const cv::Rect with_ring = cv::Rect(area.x - 3, area.y - 3, area.width + 6, area.height + 6) &
-                             cv::Rect(0, 0, grey.cols, grey.rows);
+  const cv::Rect with_ring =
+      cv::Rect(area.x - 3, area.y - 3, area.width + 6, area.height + 6) & cv::Rect(0, 0, grey.cols, grey.rows);
   const int cs = config_.cell_size_px;
   cells_x_ = (area.width + cs - 1) / cs;
   cells_y_ = (area.height + cs - 1) / cs;
   cell_best_.assign(static_cast<std::size_t>(cells_x_ * cells_y_), -1.0f);
   constexpr double kTwoPassMaxWeakFraction = 0.4;
-  const bool two = config_.min_threshold < config_.threshold &&
-                   (extraction_ == Extraction::kTwoPass ||
-                    (extraction_ == Extraction::kAuto && last_weak_fraction_ >= 0 &&
-                     last_weak_fraction_ < kTwoPassMaxWeakFraction));
+  const bool two =
+      config_.min_threshold < config_.threshold &&
+      (extraction_ == Extraction::kTwoPass ||
+       (extraction_ == Extraction::kAuto && last_weak_fraction_ >= 0 && last_weak_fraction_ < kTwoPassMaxWeakFraction));
   if (two) {
     two_pass(grey, area, with_ring);
   } else {
@@ -173,11 +177,10 @@ void QuadtreeFast::single_pass(const cv::Mat& grey, const cv::Rect& area, const 
   candidates_.clear();
   fast_into_candidates(grey, with_ring, config_.min_threshold, area, area);
   const float strong = static_cast<float>(config_.threshold);
-  candidates_.erase(std::remove_if(candidates_.begin(), candidates_.end(),
-                                   [&](const Corner& c) {
-                                     return c.response < strong && cell_best_[cell_of(c.pt, area)] >= strong;
-                                   }),
-                    candidates_.end());
+  candidates_.erase(
+      std::remove_if(candidates_.begin(), candidates_.end(),
+                     [&](const Corner& c) { return c.response < strong && cell_best_[cell_of(c.pt, area)] >= strong; }),
+      candidates_.end());
 }
 
 void QuadtreeFast::two_pass(const cv::Mat& grey, const cv::Rect& area, const cv::Rect& with_ring) {
@@ -205,9 +208,8 @@ void QuadtreeFast::two_pass(const cv::Mat& grey, const cv::Rect& area, const cv:
     }
   }
   // FAST's order: row by row, left to right (the quadtree breaks ties between equal responses by this order).
-  std::sort(candidates_.begin(), candidates_.end(), [](const Corner& a, const Corner& c) {
-    return a.pt.y < c.pt.y || (a.pt.y == c.pt.y && a.pt.x < c.pt.x);
-  });
+  std::sort(candidates_.begin(), candidates_.end(),
+            [](const Corner& a, const Corner& c) { return a.pt.y < c.pt.y || (a.pt.y == c.pt.y && a.pt.x < c.pt.x); });
 }
 
 }  // namespace agvslam::dynamic

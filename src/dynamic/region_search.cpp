@@ -35,7 +35,8 @@ bool is_ground_like(const DisparityPlane& plane, const DisparityPlane& ground, d
                     double tolerance_rel, double slope_tolerance) {
   if (!plane.valid || !ground.valid) return false;
   const double d_ground = ground.disparity_at(x, y);
-  if (std::abs(plane.disparity_at(x, y) - d_ground) > tolerance_px + tolerance_rel * std::max(0.0, d_ground)) return false;
+  if (std::abs(plane.disparity_at(x, y) - d_ground) > tolerance_px + tolerance_rel * std::max(0.0, d_ground))
+    return false;
   return std::abs(plane.b - ground.b) <= slope_tolerance * std::abs(ground.b);
 }
 
@@ -44,7 +45,8 @@ DisparityPlane fit_ground_plane(const std::vector<cv::Point2f>& points_px, const
   CV_Assert(points_px.size() == disparity_px.size());
   std::vector<cv::Point3f> samples;
   for (std::size_t i = 0; i < points_px.size(); ++i) {
-    if (disparity_px[i] > 0 && points_px[i].y > horizon_y) samples.emplace_back(points_px[i].x, points_px[i].y, disparity_px[i]);
+    if (disparity_px[i] > 0 && points_px[i].y > horizon_y)
+      samples.emplace_back(points_px[i].x, points_px[i].y, disparity_px[i]);
   }
   DisparityPlane ground;
   if (static_cast<int>(samples.size()) < min_inliers) return ground;
@@ -132,7 +134,8 @@ struct Starts {
 
 // Static veto: superpixels holding a static point whose disparity agrees with their plane.
 void veto_static_superpixels(const cv::Mat& labels, cv::Point origin, const SuperpixelGraph& graph,
-                             const std::vector<DisparityPlane>& planes, const std::vector<cv::Point2f>& static_points_px,
+                             const std::vector<DisparityPlane>& planes,
+                             const std::vector<cv::Point2f>& static_points_px,
                              const std::vector<float>& static_disparity_px, const RegionSearchConfig& config,
                              std::vector<char>& vetoed, DynamicRegion& region) {
   for (std::size_t i = 0; i < static_points_px.size(); ++i) {
@@ -190,9 +193,9 @@ void veto_background_superpixels(const std::vector<char>& moves_with_background,
   }
 }
 
-DisparityBand make_band(const RegionSearchConfig& config, const Starts& starts, const std::vector<DisparityPlane>& planes,
-                        cv::Point origin, const std::vector<char>& vetoed, const DisparityPlane* ground,
-                        DynamicRegion& region) {
+DisparityBand make_band(const RegionSearchConfig& config, const Starts& starts,
+                        const std::vector<DisparityPlane>& planes, cv::Point origin, const std::vector<char>& vetoed,
+                        const DisparityPlane* ground, DynamicRegion& region) {
   DisparityBand band;
   band.enabled = config.disparity_band && starts.d_max >= starts.d_min;
   band.planes = &planes;
@@ -216,7 +219,8 @@ DisparityBand make_band(const RegionSearchConfig& config, const Starts& starts, 
 // Inside superpixel k: the point's pixel (ROI coordinates) if it belongs to it, else its nearest pixel of k within
 // radius_px.
 cv::Point start_pixel(const cv::Mat& labels, cv::Point origin, const cv::Point2f& point_px, int k, int radius_px) {
-  cv::Point start(static_cast<int>(std::lround(point_px.x)) - origin.x, static_cast<int>(std::lround(point_px.y)) - origin.y);
+  cv::Point start(static_cast<int>(std::lround(point_px.x)) - origin.x,
+                  static_cast<int>(std::lround(point_px.y)) - origin.y);
   start.x = std::clamp(start.x, 0, labels.cols - 1);
   start.y = std::clamp(start.y, 0, labels.rows - 1);
   if (labels.at<int32_t>(start) == k) return start;
@@ -260,14 +264,15 @@ void search_from_starts(const cv::Mat& labels, cv::Point origin, const Superpixe
       region.stop_points.push_back(s + origin);
     }
   }
-  if (region.started_points > 0) region.rectangle = cv::Rect(cv::Point(x0, y0) + origin, cv::Point(x1 + 1, y1 + 1) + origin);
+  if (region.started_points > 0)
+    region.rectangle = cv::Rect(cv::Point(x0, y0) + origin, cv::Point(x1 + 1, y1 + 1) + origin);
 }
 
 // Local band: a plane must also agree with the nearest started point of the group at c (a group that spans two
 // people at different depths has a wide band, which the background between them would pass).
-bool agrees_with_nearest_start(const DisparityPlane& plane, const cv::Point2d& c, const std::vector<cv::Point2f>& points_px,
-                               const std::vector<float>& disparity_px, const Starts& starts,
-                               const RegionSearchConfig& config) {
+bool agrees_with_nearest_start(const DisparityPlane& plane, const cv::Point2d& c,
+                               const std::vector<cv::Point2f>& points_px, const std::vector<float>& disparity_px,
+                               const Starts& starts, const RegionSearchConfig& config) {
   double best_d2 = 1e30, d_near = 0;
   for (std::size_t i = 0; i < points_px.size(); ++i) {
     if (starts.label[i] < 0) continue;
@@ -307,8 +312,9 @@ std::vector<int> flood_superpixels(const SuperpixelGraph& graph, const std::vect
       if (!rect.contains(c)) continue;
       const DisparityPlane& plane = planes[static_cast<std::size_t>(m)];
       if (checks_planes) {
-        const int state = band_state(band, m, cv::Point(static_cast<int>(std::lround(c.x)) - origin.x,
-                                                        static_cast<int>(std::lround(c.y)) - origin.y));
+        const int state = band_state(
+            band, m,
+            cv::Point(static_cast<int>(std::lround(c.x)) - origin.x, static_cast<int>(std::lround(c.y)) - origin.y));
         if (state == 1) continue;
       }
       if (config.local_band && band.enabled && plane.valid &&
@@ -332,8 +338,8 @@ void add_enclosed_unknown(const cv::Mat& labels, cv::Point origin, const Superpi
                           const std::vector<int>& unknown, DynamicRegion& region) {
   std::vector<char> member(static_cast<std::size_t>(graph.count()), 0);
   for (int k : region.superpixels) member[static_cast<std::size_t>(k)] = 1;
-  const cv::Rect rect_local = cv::Rect(region.rectangle.tl() - origin, region.rectangle.size()) &
-                              cv::Rect(0, 0, labels.cols, labels.rows);
+  const cv::Rect rect_local =
+      cv::Rect(region.rectangle.tl() - origin, region.rectangle.size()) & cv::Rect(0, 0, labels.cols, labels.rows);
   for (int m : unknown) {
     const cv::Point2d c = graph.region(m).centroid();
     const cv::Point centre(std::clamp(static_cast<int>(std::lround(c.x)) - origin.x, 0, labels.cols - 1),
@@ -364,7 +370,8 @@ DynamicRegion find_dynamic_region(const cv::Mat& labels, cv::Point origin, const
   DynamicRegion region;
   std::vector<char> vetoed(static_cast<std::size_t>(graph.count()), 0);
   if (config.static_veto) {
-    veto_static_superpixels(labels, origin, graph, planes, static_points_px, static_disparity_px, config, vetoed, region);
+    veto_static_superpixels(labels, origin, graph, planes, static_points_px, static_disparity_px, config, vetoed,
+                            region);
   }
   const Starts starts = choose_starts(labels, origin, planes, points_px, disparity_px, config, ground, vetoed);
   if (moves_with_background != nullptr && static_cast<int>(moves_with_background->size()) == graph.count()) {

@@ -41,7 +41,8 @@ std::vector<DynamicGroup> group_dynamic_points(const std::vector<cv::Point2f>& p
   }
   std::vector<std::vector<int>> by_root(static_cast<std::size_t>(n));
   for (int i = 0; i < n; ++i) {
-    if (disparity_px[static_cast<std::size_t>(i)] > 0) by_root[static_cast<std::size_t>(find_root(parent, i))].push_back(i);
+    if (disparity_px[static_cast<std::size_t>(i)] > 0)
+      by_root[static_cast<std::size_t>(find_root(parent, i))].push_back(i);
   }
   std::vector<DynamicGroup> groups;
   const cv::Rect image(cv::Point(0, 0), image_size);
@@ -59,14 +60,17 @@ std::vector<DynamicGroup> group_dynamic_points(const std::vector<cv::Point2f>& p
     g.mean_disparity_px = sum_d / static_cast<double>(g.members.size());
     g.bounds = cv::Rect(cv::Point(static_cast<int>(std::floor(x0)), static_cast<int>(std::floor(y0))),
                         cv::Point(static_cast<int>(std::floor(x1)) + 1, static_cast<int>(std::floor(y1)) + 1));
-    const int margin = config.margin_px + static_cast<int>(std::lround(config.margin_disparity_factor * g.mean_disparity_px));
-    g.roi = cv::Rect(g.bounds.x - margin, g.bounds.y - margin, g.bounds.width + 2 * margin,
-                     g.bounds.height + 2 * margin) & image;
+    const int margin =
+        config.margin_px + static_cast<int>(std::lround(config.margin_disparity_factor * g.mean_disparity_px));
+    g.roi =
+        cv::Rect(g.bounds.x - margin, g.bounds.y - margin, g.bounds.width + 2 * margin, g.bounds.height + 2 * margin) &
+        image;
   };
   std::vector<DynamicGroup> candidates;
   const std::size_t min_merge = config.merge_overlapping ? 2 : static_cast<std::size_t>(config.min_points);
   for (auto& members : by_root) {
-    if (members.size() < std::max<std::size_t>(1, std::min(min_merge, static_cast<std::size_t>(config.min_points)))) continue;
+    if (members.size() < std::max<std::size_t>(1, std::min(min_merge, static_cast<std::size_t>(config.min_points))))
+      continue;
     DynamicGroup g;
     g.members = std::move(members);
     finish(g);
@@ -92,7 +96,8 @@ std::vector<DynamicGroup> group_dynamic_points(const std::vector<cv::Point2f>& p
           const int gap_x = std::max(ra.x, rb.x) - std::min(ra.br().x, rb.br().x);
           const bool side_by_side = baseline_m > 0 && config.merge_side_gap_m > 0 && gap_y < 0 &&
                                     gap_x <= config.merge_side_gap_m * d / baseline_m;
-          if ((ra & rb).empty() && !(columns_overlap && gap_y <= config.a_s_px + config.b_s * d) && !side_by_side) continue;
+          if ((ra & rb).empty() && !(columns_overlap && gap_y <= config.a_s_px + config.b_s * d) && !side_by_side)
+            continue;
           candidates[a].members.insert(candidates[a].members.end(), candidates[b].members.begin(),
                                        candidates[b].members.end());
           finish(candidates[a]);

@@ -1,5 +1,5 @@
-#include "agvslam/core/clock.h"
 #include "agvslam/dynamic/roi_outliner.h"
+#include "agvslam/core/clock.h"
 
 #include <algorithm>
 #include <chrono>
@@ -58,8 +58,8 @@ void RoiOutliner::place_roi(const DynamicGroup& group, const DisparityPlane& gro
     // ... and up to the top of an object of extend_to_height_m standing there (h * d / B px above the floor).
     if (options_.extend_to_height_m > 0 && y_floor > roi.y) {
       const double baseline_m = calibration_.bf() / calibration_.left.fx;
-      const int top = std::max(
-          0, static_cast<int>(std::floor(y_floor - options_.extend_to_height_m * group.mean_disparity_px / baseline_m)));
+      const int top = std::max(0, static_cast<int>(std::floor(y_floor - options_.extend_to_height_m *
+                                                                            group.mean_disparity_px / baseline_m)));
       if (top < roi.y) {
         roi.height += roi.y - top;
         roi.y = top;
@@ -148,9 +148,9 @@ void RoiOutliner::collect_static_seeds(const DetectorResult& result, const cv::R
 }
 
 void RoiOutliner::outline_roi(const DetectorResult& result, RoiSegmentation& seg) {
-  seg.outline_stats = outliner_.outline(seg.disparity_px, seg.roi.tl(), group_pts_, group_disp_, static_pts_,
-                                        static_disp_, result.ground_plane.valid ? &result.ground_plane : nullptr,
-                                        calibration_.bf(), seg.outline);
+  seg.outline_stats =
+      outliner_.outline(seg.disparity_px, seg.roi.tl(), group_pts_, group_disp_, static_pts_, static_disp_,
+                        result.ground_plane.valid ? &result.ground_plane : nullptr, calibration_.bf(), seg.outline);
 }
 
 bool RoiOutliner::sides_to_widen(const StereoFrame& frame, const DetectorResult& result, const RoiSegmentation& seg,
@@ -172,7 +172,8 @@ bool RoiOutliner::sides_to_widen(const StereoFrame& frame, const DetectorResult&
   if (guard <= 0) return true;
   int static_left = 0, static_right = 0;
   for (const TrackedPoint& p : result.points) {
-    if (!p.tracked || p.dynamic || p.reprojection_px < 0 || !inside_outline(seg.outline, seg.roi.tl(), p.cur_px)) continue;
+    if (!p.tracked || p.dynamic || p.reprojection_px < 0 || !inside_outline(seg.outline, seg.roi.tl(), p.cur_px))
+      continue;
     const int x = cvRound(p.cur_px.x) - seg.roi.x;
     static_left += x < guard ? 1 : 0;
     static_right += x >= w - guard ? 1 : 0;
@@ -223,15 +224,18 @@ void RoiOutliner::reshape(const StereoFrame& frame, RoiSegmentation& seg) {
   const double d_med = seg.outline_stats.median_disparity_px;
   if (oc.close_far_m > 0 && d_med > 0 && d_med <= oc.close_max_disparity_px) {
     // close_far_m at depth bf / d spans close_far_m * fx * d / bf = close_far_m * d / B px.
-    const int k = std::max(3, 2 * static_cast<int>(std::lround(0.5 * oc.close_far_m * d_med / calibration_.baseline_m)) + 1);
-    cv::morphologyEx(seg.outline, reshaped_outline_, cv::MORPH_CLOSE, cv::getStructuringElement(cv::MORPH_ELLIPSE, cv::Size(k, k)),
-                     cv::Point(-1, -1), 1, cv::BORDER_CONSTANT, cv::Scalar(0));
+    const int k =
+        std::max(3, 2 * static_cast<int>(std::lround(0.5 * oc.close_far_m * d_med / calibration_.baseline_m)) + 1);
+    cv::morphologyEx(seg.outline, reshaped_outline_, cv::MORPH_CLOSE,
+                     cv::getStructuringElement(cv::MORPH_ELLIPSE, cv::Size(k, k)), cv::Point(-1, -1), 1,
+                     cv::BORDER_CONSTANT, cv::Scalar(0));
     std::swap(seg.outline, reshaped_outline_);
     reshaped = true;
   }
   if (oc.left_band_touch_px >= 0 && d_med > 0 && seg.roi.x < d_med) {
     // Rows whose outline starts within left_band_touch_px of the unmatched band x < d_med: filled to the border.
-    const int limit = std::min(static_cast<int>(std::ceil(d_med)) - seg.roi.x + oc.left_band_touch_px, seg.outline.cols - 1);
+    const int limit =
+        std::min(static_cast<int>(std::ceil(d_med)) - seg.roi.x + oc.left_band_touch_px, seg.outline.cols - 1);
     for (int y = 0; y < seg.outline.rows; ++y) {
       uint8_t* row = seg.outline.ptr<uint8_t>(y);
       int x0 = 0;
@@ -269,13 +273,15 @@ OutlineVerdict RoiOutliner::judge(const DetectorResult& result, const ObjectTrac
                                                static_cast<int>(inside_offsets_.size()) >= oc.aggregate_min_tracks));
   // ... unless they move together (outline.aggregate_*): most of them off the multi-frame reference, or their median
   // offset against the frame's static tracks' (taken once per frame and only when an outline needs it).
-  bool moves_together = mostly_static && tracks_move_together_multiframe(st.multiframe_tested_inside,
-                                                                         st.multiframe_dynamic_inside, st.median_offset_px, oc);
+  bool moves_together =
+      mostly_static && tracks_move_together_multiframe(st.multiframe_tested_inside, st.multiframe_dynamic_inside,
+                                                       st.median_offset_px, oc);
   if (mostly_static && !moves_together && oc.aggregate_ratio > 0) {
     if (static_offset_median_px_ < 0) {
       static_offsets_.clear();
       for (const TrackedPoint& p : result.points) {
-        if (p.tracked && !p.dynamic && p.reprojection_px >= 0) static_offsets_.push_back(static_cast<float>(p.reprojection_px));
+        if (p.tracked && !p.dynamic && p.reprojection_px >= 0)
+          static_offsets_.push_back(static_cast<float>(p.reprojection_px));
       }
       static_offset_median_px_ = static_offsets_.empty() ? 0.0 : median_of(static_offsets_);
     }
@@ -295,13 +301,15 @@ OutlineVerdict RoiOutliner::judge(const DetectorResult& result, const ObjectTrac
 
 void RoiOutliner::carve(const StereoFrame& frame, const cv::Mat& prev_left, const DetectorResult& result,
                         RoiSegmentation& seg, OutlineTimes& times) {
-  if (context_.static_carve.min_tracks > 0 && !seg.coasted && seg.outline_stats.object_pixels != 0 && !group_pts_.empty()) {
+  if (context_.static_carve.min_tracks > 0 && !seg.coasted && seg.outline_stats.object_pixels != 0 &&
+      !group_pts_.empty()) {
     const int kept = carve_static_tracks(context_.static_carve, result.points, group_pts_, seg.roi.tl(), seg.outline,
                                          carve_static_px_);
     if (kept >= 0) seg.outline_stats.object_pixels = kept;
   }
   seg.motion_carve = MotionCarveStats{};
-  if (!context_.motion_carve.enabled || !result.depth.valid || prev_left.empty() || seg.outline_stats.object_pixels == 0) {
+  if (!context_.motion_carve.enabled || !result.depth.valid || prev_left.empty() ||
+      seg.outline_stats.object_pixels == 0) {
     return;
   }
   // The object's image motion and its offset from the ego-motion: the medians over its points.
@@ -318,9 +326,9 @@ void RoiOutliner::carve(const StereoFrame& frame, const cv::Mat& prev_left, cons
   if (motion_dx_.empty() || carve_offsets_.empty()) return;
   const auto t0 = Clock::now();
   const cv::Point2f motion(static_cast<float>(median_of(motion_dx_)), static_cast<float>(median_of(motion_dy_)));
-  seg.motion_carve = carve_by_motion(frame.left, prev_left, calibration_.left, calibration_.bf(), result.depth.T_cur_prev,
-                                     motion, median_of(carve_offsets_), group_pts_, seg.disparity_px, seg.roi.tl(),
-                                     context_.motion_carve, seg.outline);
+  seg.motion_carve = carve_by_motion(frame.left, prev_left, calibration_.left, calibration_.bf(),
+                                     result.depth.T_cur_prev, motion, median_of(carve_offsets_), group_pts_,
+                                     seg.disparity_px, seg.roi.tl(), context_.motion_carve, seg.outline);
   if (seg.motion_carve.pixels_removed > 0) seg.outline_stats.object_pixels = cv::countNonZero(seg.outline);
   times.carve_ms += ms_since(t0);
 }
@@ -329,20 +337,20 @@ void RoiOutliner::check_photometric(const StereoFrame& frame, const cv::Mat& pre
                                     RoiSegmentation& seg) const {
   const PhotometricCheckConfig& pc = context_.photometric;
   if (!pc.enabled || !result.depth.valid || prev_left.empty()) return;
-  seg.outline_motion = region_motion(frame.left, prev_left, calibration_.left, calibration_.bf(), result.depth.T_cur_prev,
-                                     seg.outline, seg.disparity_px, seg.roi.tl(), pc, pc.max_motion_px);
+  seg.outline_motion =
+      region_motion(frame.left, prev_left, calibration_.left, calibration_.bf(), result.depth.T_cur_prev, seg.outline,
+                    seg.disparity_px, seg.roi.tl(), pc, pc.max_motion_px);
   bool moves_with_background = seg.outline_motion.apparent_motion_px >= 0 && seg.outline_motion.moves_with_background;
   // A coasted outline has no dynamic point of this frame behind it: it must show its motion frame to frame (a
   // person who has just stopped still differs from the multi-frame reference).
   if (seg.coasted) moves_with_background = !(seg.outline_motion.apparent_motion_px >= 0) || moves_with_background;
   if (moves_with_background && !seg.coasted && result.multiframe.valid &&
       seg.outline_stats.median_disparity_px >= pc.multiframe_min_disparity_px) {
-    seg.outline_motion_multiframe =
-        region_motion(frame.left, result.multiframe.reference_left, calibration_.left, calibration_.bf(),
-                      result.multiframe.T_cur_ref, seg.outline, seg.disparity_px, seg.roi.tl(), pc,
-                      pc.multiframe_max_motion_px);
-    moves_with_background = seg.outline_motion_multiframe.apparent_motion_px >= 0 &&
-                            seg.outline_motion_multiframe.moves_with_background;
+    seg.outline_motion_multiframe = region_motion(frame.left, result.multiframe.reference_left, calibration_.left,
+                                                  calibration_.bf(), result.multiframe.T_cur_ref, seg.outline,
+                                                  seg.disparity_px, seg.roi.tl(), pc, pc.multiframe_max_motion_px);
+    moves_with_background =
+        seg.outline_motion_multiframe.apparent_motion_px >= 0 && seg.outline_motion_multiframe.moves_with_background;
   }
   if (moves_with_background) seg.outline_verdict = OutlineVerdict::kMovesWithBackground;
 }
@@ -371,8 +379,8 @@ void RoiOutliner::outline_by_disparity(const StereoFrame& frame, const cv::Mat& 
   collect_static_seeds(result, seg.roi);
   outline_roi(result, seg);
   // An outline cut by the ROI's left or right side: widen the ROI there, match the new strip, outline again.
-  for (int round = 0; round < options_.extend_max_rounds && seg.outline_stats.object_pixels > 0 &&
-                      !context_.full_frame_disparity;
+  for (int round = 0;
+       round < options_.extend_max_rounds && seg.outline_stats.object_pixels > 0 && !context_.full_frame_disparity;
        ++round) {
     bool left = false, right = false;
     if (!sides_to_widen(frame, result, seg, left, right)) break;
@@ -441,7 +449,8 @@ void RoiOutliner::outline_by_superpixels(const StereoFrame& frame, const cv::Mat
     check_superpixel_motion(frame.left, prev_left, calibration_.left, calibration_.bf(), result.depth.T_cur_prev,
                             seg.labels, seg.roi.tl(), seg.planes, context_.photometric, seg.motion);
     background_flags_.assign(seg.motion.size(), 0);
-    for (std::size_t k = 0; k < seg.motion.size(); ++k) background_flags_[k] = seg.motion[k].moves_with_background ? 1 : 0;
+    for (std::size_t k = 0; k < seg.motion.size(); ++k)
+      background_flags_[k] = seg.motion[k].moves_with_background ? 1 : 0;
     moves_with_background = &background_flags_;
   } else {
     seg.motion.clear();

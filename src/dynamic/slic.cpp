@@ -122,15 +122,18 @@ void Slic::find_cell_candidates(const Grid& g) {
   window_.resize(static_cast<std::size_t>(g.K));
   for (int k = 0; k < g.K; ++k) {
     const Centre& c = centres_[static_cast<std::size_t>(k)];
-    window_[static_cast<std::size_t>(k)] = {static_cast<int>(std::floor(c.x)) - g.win, static_cast<int>(std::ceil(c.x)) + g.win,
-                                            static_cast<int>(std::floor(c.y)) - g.win, static_cast<int>(std::ceil(c.y)) + g.win};
+    window_[static_cast<std::size_t>(k)] = {
+        static_cast<int>(std::floor(c.x)) - g.win, static_cast<int>(std::ceil(c.x)) + g.win,
+        static_cast<int>(std::floor(c.y)) - g.win, static_cast<int>(std::ceil(c.y)) + g.win};
   }
   cell_candidates_.resize(static_cast<std::size_t>(g.K) * 9);
   cell_count_.assign(static_cast<std::size_t>(g.K), 0);
   for (int cj = 0; cj < g.ny; ++cj) {
-    const int cy0 = static_cast<int>(std::ceil(cj * g.sy - 0.5)), cy1 = static_cast<int>(std::floor((cj + 1) * g.sy - 0.5));
+    const int cy0 = static_cast<int>(std::ceil(cj * g.sy - 0.5)),
+              cy1 = static_cast<int>(std::floor((cj + 1) * g.sy - 0.5));
     for (int ci = 0; ci < g.nx; ++ci) {
-      const int cx0 = static_cast<int>(std::ceil(ci * g.sx - 0.5)), cx1 = static_cast<int>(std::floor((ci + 1) * g.sx - 0.5));
+      const int cx0 = static_cast<int>(std::ceil(ci * g.sx - 0.5)),
+                cx1 = static_cast<int>(std::floor((ci + 1) * g.sx - 0.5));
       const int cell = cj * g.nx + ci;
       int n_cell = 0;
       for (int j = std::max(0, cj - 1); j <= std::min(g.ny - 1, cj + 1); ++j) {

@@ -15,7 +15,8 @@ float squared_distance(cv::Point2f a, cv::Point2f b) {
 }
 
 // True when image point p is nearer to one of static_px than to every point of object_px.
-bool nearer_static(cv::Point2f p, const std::vector<cv::Point2f>& object_px, const std::vector<cv::Point2f>& static_px) {
+bool nearer_static(cv::Point2f p, const std::vector<cv::Point2f>& object_px,
+                   const std::vector<cv::Point2f>& static_px) {
   float nearest_static = std::numeric_limits<float>::max();
   for (const cv::Point2f& q : static_px) nearest_static = std::min(nearest_static, squared_distance(q, p));
   for (const cv::Point2f& q : object_px) {
@@ -48,13 +49,15 @@ enum : uint8_t { kEmpty = 0, kObject = 1, kStatic = 2 };
 // Each 4x4 block of `outline` holding outline pixels: kObject or kStatic by the distance transforms from the blocks
 // holding each set's points (O(blocks), whatever the number of points); kEmpty otherwise.
 std::vector<uint8_t> classify_blocks(const cv::Mat& outline, cv::Point outline_origin,
-                                     const std::vector<cv::Point2f>& object_px, const std::vector<cv::Point2f>& static_px,
-                                     int gw, int gh) {
+                                     const std::vector<cv::Point2f>& object_px,
+                                     const std::vector<cv::Point2f>& static_px, int gw, int gh) {
   cv::Mat static_seeds(gh, gw, CV_8UC1, cv::Scalar(255)), object_seeds(gh, gw, CV_8UC1, cv::Scalar(255));
   const auto mark = [&](const std::vector<cv::Point2f>& points, cv::Mat& seeds) {
     for (const cv::Point2f& q : points) {
-      const int gx = std::clamp(static_cast<int>(std::floor((q.x - static_cast<float>(outline_origin.x)) / kBlock)), 0, gw - 1);
-      const int gy = std::clamp(static_cast<int>(std::floor((q.y - static_cast<float>(outline_origin.y)) / kBlock)), 0, gh - 1);
+      const int gx =
+          std::clamp(static_cast<int>(std::floor((q.x - static_cast<float>(outline_origin.x)) / kBlock)), 0, gw - 1);
+      const int gy =
+          std::clamp(static_cast<int>(std::floor((q.y - static_cast<float>(outline_origin.y)) / kBlock)), 0, gh - 1);
       seeds.at<uint8_t>(gy, gx) = 0;
     }
   };
@@ -68,7 +71,8 @@ std::vector<uint8_t> classify_blocks(const cv::Mat& outline, cv::Point outline_o
     const float* ds = static_distance.ptr<float>(by);
     const float* dobj = object_distance.ptr<float>(by);
     for (int bx = 0; bx < gw; ++bx) {
-      const cv::Rect r = cv::Rect(bx * kBlock, by * kBlock, kBlock, kBlock) & cv::Rect(0, 0, outline.cols, outline.rows);
+      const cv::Rect r =
+          cv::Rect(bx * kBlock, by * kBlock, kBlock, kBlock) & cv::Rect(0, 0, outline.cols, outline.rows);
       bool any = false;
       for (int y = r.y; y < r.br().y && !any; ++y) {
         const uint8_t* row = outline.ptr<uint8_t>(y);

@@ -15,9 +15,12 @@ AlignMode parse_align_mode(const std::string& value, const std::string& option_n
 
 std::string to_string(AlignMode mode) {
   switch (mode) {
-    case AlignMode::kNone: return "none";
-    case AlignMode::kSE3: return "se3";
-    case AlignMode::kSim3: return "sim3";
+    case AlignMode::kNone:
+      return "none";
+    case AlignMode::kSE3:
+      return "se3";
+    case AlignMode::kSim3:
+      return "sim3";
   }
   return "?";
 }

@@ -27,7 +27,8 @@ FrameDetectionScore score_labelled(const cv::Mat& det_labels, int n_labels, cons
 void check_gt_instances(const cv::Mat& gt_instances, const cv::Mat& gt_mask, const char* function) {
   if (gt_instances.empty()) return;
   if (gt_instances.type() != CV_8UC1 || gt_instances.size() != gt_mask.size()) {
-    throw std::invalid_argument(std::string(function) + ": expected CV_8UC1 ground-truth instances of the mask's size " +
+    throw std::invalid_argument(std::string(function) +
+                                ": expected CV_8UC1 ground-truth instances of the mask's size " +
                                 std::to_string(gt_mask.cols) + "x" + std::to_string(gt_mask.rows) + ", got " +
                                 std::to_string(gt_instances.cols) + "x" + std::to_string(gt_instances.rows));
   }
@@ -51,14 +52,14 @@ FrameDetectionScore score_detections(const cv::Mat& detected_mask, const cv::Mat
 
 FrameDetectionScore score_detection_instances(const cv::Mat& detection_labels, const cv::Mat& gt_mask,
                                               const std::vector<GroundTruthObject>& objects,
-                                              const DetectionScoringConfig& config,
-                                              const cv::Mat& gt_instances) {
+                                              const DetectionScoringConfig& config, const cv::Mat& gt_instances) {
   if ((detection_labels.type() != CV_8UC1 && detection_labels.type() != CV_32SC1) || gt_mask.type() != CV_8UC1 ||
       detection_labels.size() != gt_mask.size()) {
-    throw std::invalid_argument("score_detection_instances: expected CV_8UC1/CV_32SC1 labels and a CV_8UC1 mask of one "
-                                "size, got " + std::to_string(detection_labels.cols) + "x" +
-                                std::to_string(detection_labels.rows) + " and " + std::to_string(gt_mask.cols) + "x" +
-                                std::to_string(gt_mask.rows));
+    throw std::invalid_argument(
+        "score_detection_instances: expected CV_8UC1/CV_32SC1 labels and a CV_8UC1 mask of one "
+        "size, got " +
+        std::to_string(detection_labels.cols) + "x" + std::to_string(detection_labels.rows) + " and " +
+        std::to_string(gt_mask.cols) + "x" + std::to_string(gt_mask.rows));
   }
   check_gt_instances(gt_instances, gt_mask, "score_detection_instances");
   cv::Mat labels;
@@ -112,8 +113,9 @@ FrameDetectionScore score_labelled(const cv::Mat& det_labels, int n_labels, cons
     cv::Mat gt_stats, gt_centroids;
     const int n = cv::connectedComponentsWithStats(gt_mask, gt_labels, gt_stats, gt_centroids, 8, CV_32S);
     for (int k = 1; k < n; ++k) {
-      gt.push_back({k, cv::Rect(gt_stats.at<int>(k, cv::CC_STAT_LEFT), gt_stats.at<int>(k, cv::CC_STAT_TOP),
-                                gt_stats.at<int>(k, cv::CC_STAT_WIDTH), gt_stats.at<int>(k, cv::CC_STAT_HEIGHT)),
+      gt.push_back({k,
+                    cv::Rect(gt_stats.at<int>(k, cv::CC_STAT_LEFT), gt_stats.at<int>(k, cv::CC_STAT_TOP),
+                             gt_stats.at<int>(k, cv::CC_STAT_WIDTH), gt_stats.at<int>(k, cv::CC_STAT_HEIGHT)),
                     0, false});
     }
   } else {
@@ -152,7 +154,8 @@ FrameDetectionScore score_labelled(const cv::Mat& det_labels, int n_labels, cons
       if (iou >= config.min_iou) candidates.emplace_back(iou, g, k);
     }
   }
-  std::sort(candidates.begin(), candidates.end(), [](const auto& a, const auto& b) { return std::get<0>(a) > std::get<0>(b); });
+  std::sort(candidates.begin(), candidates.end(),
+            [](const auto& a, const auto& b) { return std::get<0>(a) > std::get<0>(b); });
   std::vector<bool> gt_matched(gt.size(), false);
   for (const auto& [iou, g, k] : candidates) {
     DetectedObject& d = score.detections[k];

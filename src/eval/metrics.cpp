@@ -95,7 +95,8 @@ std::optional<KittiResult> compute_kitti_relative(const PosePairs& pairs, double
     seg.length_m = len;
     double seg_t = 0, seg_r = 0;
     for (std::size_t first = 0; first < n; first += static_cast<std::size_t>(std::max(1, step_frames))) {
-      const auto it = std::lower_bound(dist.begin() + static_cast<std::ptrdiff_t>(first), dist.end(), dist[first] + len);
+      const auto it =
+          std::lower_bound(dist.begin() + static_cast<std::ptrdiff_t>(first), dist.end(), dist[first] + len);
       if (it == dist.end()) break;
       const std::size_t last = static_cast<std::size_t>(it - dist.begin());
       const SE3d d_gt = relative(pairs.T_w_c_gt[first], pairs.T_w_c_gt[last], 1.0);

@@ -25,13 +25,14 @@ int for_each_object_pixel(const cv::Mat& instances, const cv::Mat& disparity_px,
 }  // namespace
 
 ObjectImageMotion ground_truth_image_motion(const cv::Mat& instances_then, const cv::Mat& disparity_then_px,
-                                            const cv::Mat& instances_now, const cv::Mat& disparity_now_px, int object_id,
-                                            const PinholeCamera& camera, double bf_px_m, const SE3d& T_now_then,
-                                            const ObjectMotionConfig& config) {
+                                            const cv::Mat& instances_now, const cv::Mat& disparity_now_px,
+                                            int object_id, const PinholeCamera& camera, double bf_px_m,
+                                            const SE3d& T_now_then, const ObjectMotionConfig& config) {
   if (instances_then.type() != CV_8UC1 || instances_now.type() != CV_8UC1 || disparity_then_px.type() != CV_32FC1 ||
       disparity_now_px.type() != CV_32FC1 || instances_then.size() != disparity_then_px.size() ||
       instances_now.size() != disparity_now_px.size()) {
-    throw std::invalid_argument("ground_truth_image_motion: expected CV_8UC1 instances and CV_32FC1 disparities of one size");
+    throw std::invalid_argument(
+        "ground_truth_image_motion: expected CV_8UC1 instances and CV_32FC1 disparities of one size");
   }
   ObjectImageMotion m;
   if (!(bf_px_m > 0) || !camera.valid()) return m;

@@ -99,8 +99,9 @@ OdometryCheckResult check_against_odometry(const Trajectory& trajectory, BodyAxe
     if (est.t_ns[i] >= odometry.t_ns.front() && est.t_ns[i] <= odometry.t_ns.back()) frames.push_back(i);
   }
   if (frames.size() < 2) {
-    throw InputError(source, "", "expected odometry covering the trajectory's time stamps (they share " +
-                                     std::to_string(frames.size()) + " poses)");
+    throw InputError(source, "",
+                     "expected odometry covering the trajectory's time stamps (they share " +
+                         std::to_string(frames.size()) + " poses)");
   }
   OdometryCheckResult r;
   r.frames_compared = frames.size();
@@ -117,8 +118,9 @@ OdometryCheckResult check_against_odometry(const Trajectory& trajectory, BodyAxe
   r.odometry_distance_m = odo_d[last] - odo_d[0];
   r.distance_ratio = r.odometry_distance_m > 1e-9 ? r.trajectory_distance_m / r.odometry_distance_m
                                                   : std::numeric_limits<double>::quiet_NaN();
-  r.distance_within_tolerance =
-      std::isnan(r.distance_ratio) ? r.trajectory_distance_m < 0.05 : std::abs(r.distance_ratio - 1) <= config.distance_tolerance;
+  r.distance_within_tolerance = std::isnan(r.distance_ratio)
+                                    ? r.trajectory_distance_m < 0.05
+                                    : std::abs(r.distance_ratio - 1) <= config.distance_tolerance;
   r.trajectory_heading_change_deg = (est_h(last) - est_h(0)) * kRadToDeg;
   r.odometry_heading_change_deg = (odo_h[last] - odo_h[0]) * kRadToDeg;
   r.heading_difference_deg = r.trajectory_heading_change_deg - r.odometry_heading_change_deg;

@@ -105,7 +105,7 @@ cv::Mat plot_top_view(const std::vector<Eigen::Vector3d>& p_gt, const std::vecto
     poly.reserve(pts.size());
     for (const auto& p : pts) poly.push_back(to_px(p[axes[0]], p[axes[1]]));
     cv::polylines(img, poly, false, colour, thickness, cv::LINE_AA);
-    cv::circle(img, poly.front(), 6, colour, 2, cv::LINE_AA);                                   // start
+    cv::circle(img, poly.front(), 6, colour, 2, cv::LINE_AA);                                     // start
     cv::rectangle(img, poly.back() - cv::Point(5, 5), poly.back() + cv::Point(5, 5), colour, 2);  // end
   };
   draw_path(p_gt, kGtColour, 2);
@@ -144,7 +144,9 @@ void save_top_view(const std::string& path, const std::vector<Eigen::Vector3d>& 
   } catch (const cv::Exception& e) {
     throw InputError(path, "plot", std::string("could not write the PNG: ") + e.what());
   }
-  if (!ok) throw InputError(path, "plot", "could not write the PNG (is the folder there and writable, and does the name end in .png?)");
+  if (!ok)
+    throw InputError(path, "plot",
+                     "could not write the PNG (is the folder there and writable, and does the name end in .png?)");
 }
 
 }  // namespace agvslam::eval

@@ -90,8 +90,7 @@ __attribute__((target("avx2"))) void strength_avx2(const uint8_t* row, int strid
       dark[k] = _mm256_subs_epu8(v, c);
       bright[k] = _mm256_subs_epu8(c, v);
     }
-    const __m256i s =
-        _mm256_max_epu8(arc_max_avx2<__m256i, Avx2Ops>(dark), arc_max_avx2<__m256i, Avx2Ops>(bright));
+    const __m256i s = _mm256_max_epu8(arc_max_avx2<__m256i, Avx2Ops>(dark), arc_max_avx2<__m256i, Avx2Ops>(bright));
     _mm256_storeu_si256(reinterpret_cast<__m256i*>(out + x), s);
   }
 }
@@ -144,7 +143,9 @@ int local_maxima_row(const uint8_t* row, int step, int x0, int x1, int threshold
   // Unsigned a > b as signed compares after flipping the top bit.
   const __m128i flip = _mm_set1_epi8(static_cast<char>(0x80));
   const __m128i th = _mm_xor_si128(_mm_set1_epi8(static_cast<char>(threshold)), flip);
-  auto load = [&](const uint8_t* p) { return _mm_xor_si128(_mm_loadu_si128(reinterpret_cast<const __m128i*>(p)), flip); };
+  auto load = [&](const uint8_t* p) {
+    return _mm_xor_si128(_mm_loadu_si128(reinterpret_cast<const __m128i*>(p)), flip);
+  };
   for (; x + 16 <= x1; x += 16) {
     const __m128i v = load(row + x);
     __m128i m = _mm_cmpgt_epi8(v, th);

@@ -46,8 +46,8 @@ void axis_coefficients(int src_len, int dst_len, std::vector<int>& ofs, std::vec
 
 #ifdef AGVSLAM_RESIZE_X86
 __attribute__((target("ssse3"))) void horizontal_ssse3(const uint8_t* src, const int* block_base,
-                                                        const uint8_t* shuffles, const uint16_t* c0,
-                                                        const uint16_t* c1, int blocks, uint16_t* out) {
+                                                       const uint8_t* shuffles, const uint16_t* c0, const uint16_t* c1,
+                                                       int blocks, uint16_t* out) {
   for (int b = 0; b < blocks; ++b) {
     const __m128i s = _mm_loadu_si128(reinterpret_cast<const __m128i*>(src + block_base[b]));
     const __m128i p0 = _mm_shuffle_epi8(s, _mm_loadu_si128(reinterpret_cast<const __m128i*>(shuffles + 32 * b)));
@@ -66,7 +66,8 @@ void vertical(const uint16_t* h0, const uint16_t* h1, uint16_t m0, uint16_t m1, 
 #if defined(__SSE2__)
   // Signed trick (as OpenCV): (h - 2^15) fits int16; sum (h_i - 2^15) m_i = sum h_i m_i - 2^15 * 256.
   const __m128i bias16 = _mm_set1_epi16(static_cast<short>(0x8000));
-  const __m128i weights = _mm_set1_epi32(static_cast<int>(static_cast<uint32_t>(m0) | (static_cast<uint32_t>(m1) << 16)));
+  const __m128i weights =
+      _mm_set1_epi32(static_cast<int>(static_cast<uint32_t>(m0) | (static_cast<uint32_t>(m1) << 16)));
   const __m128i add_back = _mm_set1_epi32((1 << 23) + (1 << 15));
   for (; x + 8 <= width; x += 8) {
     const __m128i a = _mm_xor_si128(_mm_loadu_si128(reinterpret_cast<const __m128i*>(h0 + x)), bias16);

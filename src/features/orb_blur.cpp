@@ -78,7 +78,8 @@ bool OrbBlur::blur(const cv::Mat& src, cv::Mat& dst) {
   const int step = static_cast<int>(src.step);
   auto filtered = [&](int y) { return rows_.data() + static_cast<std::size_t>((y + 7) % 7) * w; };
   // Rows -3 .. 2 first, then one new row per output row.
-  for (int y = -3; y < 3; ++y) row_pass(src.ptr<uint8_t>(0) + y * step - 3, width, kernel_, convert_.data(), filtered(y));
+  for (int y = -3; y < 3; ++y)
+    row_pass(src.ptr<uint8_t>(0) + y * step - 3, width, kernel_, convert_.data(), filtered(y));
   const float* r[7];
   for (int y = 0; y < height; ++y) {
     row_pass(src.ptr<uint8_t>(0) + (y + 3) * step - 3, width, kernel_, convert_.data(), filtered(y + 3));

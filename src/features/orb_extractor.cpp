@@ -1,5 +1,5 @@
-#include "agvslam/core/clock.h"
 #include "agvslam/features/orb_extractor.h"
+#include "agvslam/core/clock.h"
 
 #include <algorithm>
 #include <chrono>
@@ -22,7 +22,8 @@ constexpr int kFastBorder = kOrbEdgeThreshold - 3;
 
 // The scale of `level` exactly as OpenCV's ORB computes it (cv::ORB stores its float scale factor as a double).
 float layer_scale(double scale_factor, int level) {
-  return static_cast<float>(std::pow(static_cast<double>(static_cast<float>(scale_factor)), static_cast<double>(level)));
+  return static_cast<float>(
+      std::pow(static_cast<double>(static_cast<float>(scale_factor)), static_cast<double>(level)));
 }
 
 // Rows of `m` for a CV_8UC1 N x cols matrix, reusing its allocation when nobody else holds it (no allocation per
@@ -122,7 +123,8 @@ void OrbExtractor::build_bordered_pyramid(const cv::Mat& image) {
     if (level == 0) {
       image.copyTo(roi);
     } else {
-      resizers_[static_cast<std::size_t>(level)].resize(pyramid_[static_cast<std::size_t>(level) - 1], roi);  // == cv::resize INTER_LINEAR_EXACT
+      resizers_[static_cast<std::size_t>(level)].resize(pyramid_[static_cast<std::size_t>(level) - 1],
+                                                        roi);  // == cv::resize INTER_LINEAR_EXACT
     }
     cv::copyMakeBorder(roi, ext, b, b, b, b, cv::BORDER_REFLECT_101 | cv::BORDER_ISOLATED);
     pyramid_[static_cast<std::size_t>(level)] = roi;

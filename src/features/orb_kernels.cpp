@@ -107,7 +107,8 @@ void ic_moments(const uint8_t* center, int step, const int* umax, int& m_01, int
   __m128i r0[4];
   load_row(center, r0);
   for (int k = 0; k < 4; ++k) {
-    acc10 = _mm_add_epi32(acc10, _mm_madd_epi16(r0[k], _mm_load_si128(reinterpret_cast<const __m128i*>(w.u[0] + 8 * k))));
+    acc10 =
+        _mm_add_epi32(acc10, _mm_madd_epi16(r0[k], _mm_load_si128(reinterpret_cast<const __m128i*>(w.u[0] + 8 * k))));
   }
   for (int v = 1; v <= kHalfPatch; ++v) {
     __m128i plus[4], minus[4];

@@ -63,8 +63,8 @@ void QuadtreeDistributor::split(int node_index) {
   }
 }
 
-void QuadtreeDistributor::distribute(const std::vector<QuadtreeCandidate>& candidates, int area_width,
-                                     int area_height, int target_count, std::vector<int>& kept) {
+void QuadtreeDistributor::distribute(const std::vector<QuadtreeCandidate>& candidates, int area_width, int area_height,
+                                     int target_count, std::vector<int>& kept) {
   kept.clear();
   nodes_.clear();
   node_rects_.clear();

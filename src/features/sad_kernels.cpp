@@ -19,7 +19,8 @@ void sad_costs_scalar(const uint8_t* const* left_rows, const uint8_t* const* rig
     for (int r = 0; r < rows; ++r) {
       const uint8_t* l = left_rows[r];
       const uint8_t* rr = right_rows[r] + k;
-      for (int c = 0; c < cols; ++c) sum += static_cast<uint32_t>(std::abs(static_cast<int>(l[c]) - static_cast<int>(rr[c])));
+      for (int c = 0; c < cols; ++c)
+        sum += static_cast<uint32_t>(std::abs(static_cast<int>(l[c]) - static_cast<int>(rr[c])));
     }
     costs[k] = static_cast<uint16_t>(sum);
   }
@@ -33,7 +34,7 @@ namespace {
 // 8 (s / 2) and use off = 4 (s % 2).
 template <int Blocks>
 __attribute__((target("sse4.1"))) void sad_sse41(const uint8_t* const* left_rows, const uint8_t* const* right_rows,
-                                                   int rows, int n, uint16_t* costs) {
+                                                 int rows, int n, uint16_t* costs) {
   for (int k = 0; k < n; k += 8) {
     __m128i acc = _mm_setzero_si128();
     for (int r = 0; r < rows; ++r) {
@@ -56,7 +57,7 @@ __attribute__((target("sse4.1"))) void sad_sse41(const uint8_t* const* left_rows
 // further: qwords (0, 1 | 1, 2) of a 32-byte load).
 template <int Blocks>
 __attribute__((target("avx2"))) void sad_avx2(const uint8_t* const* left_rows, const uint8_t* const* right_rows,
-                                               int rows, int n, uint16_t* costs) {
+                                              int rows, int n, uint16_t* costs) {
   for (int k = 0; k < n; k += 16) {
     __m256i acc = _mm256_setzero_si256();
     for (int r = 0; r < rows; ++r) {
@@ -66,8 +67,7 @@ __attribute__((target("avx2"))) void sad_avx2(const uint8_t* const* left_rows, c
       acc = _mm256_add_epi16(acc, _mm256_mpsadbw_epu8(a0, l, 0));
       if (Blocks > 1) acc = _mm256_add_epi16(acc, _mm256_mpsadbw_epu8(a0, l, 5 | (5 << 3)));
       if (Blocks > 2) {
-        const __m256i a1 =
-            _mm256_permute4x64_epi64(_mm256_loadu_si256(reinterpret_cast<const __m256i*>(rr + 8)), 0x94);
+        const __m256i a1 = _mm256_permute4x64_epi64(_mm256_loadu_si256(reinterpret_cast<const __m256i*>(rr + 8)), 0x94);
         acc = _mm256_add_epi16(acc, _mm256_mpsadbw_epu8(a1, l, 2 | (2 << 3)));
         if (Blocks > 3) acc = _mm256_add_epi16(acc, _mm256_mpsadbw_epu8(a1, l, 7 | (7 << 3)));
       }
@@ -77,22 +77,38 @@ __attribute__((target("avx2"))) void sad_avx2(const uint8_t* const* left_rows, c
 }
 
 __attribute__((target("sse4.1"))) void sse41_entry(const uint8_t* const* left_rows, const uint8_t* const* right_rows,
-                                                    int rows, int blocks, int n, uint16_t* costs) {
+                                                   int rows, int blocks, int n, uint16_t* costs) {
   switch (blocks) {
-    case 1: sad_sse41<1>(left_rows, right_rows, rows, n, costs); break;
-    case 2: sad_sse41<2>(left_rows, right_rows, rows, n, costs); break;
-    case 3: sad_sse41<3>(left_rows, right_rows, rows, n, costs); break;
-    default: sad_sse41<4>(left_rows, right_rows, rows, n, costs); break;
+    case 1:
+      sad_sse41<1>(left_rows, right_rows, rows, n, costs);
+      break;
+    case 2:
+      sad_sse41<2>(left_rows, right_rows, rows, n, costs);
+      break;
+    case 3:
+      sad_sse41<3>(left_rows, right_rows, rows, n, costs);
+      break;
+    default:
+      sad_sse41<4>(left_rows, right_rows, rows, n, costs);
+      break;
   }
 }
 
 __attribute__((target("avx2"))) void avx2_entry(const uint8_t* const* left_rows, const uint8_t* const* right_rows,
-                                                 int rows, int blocks, int n, uint16_t* costs) {
+                                                int rows, int blocks, int n, uint16_t* costs) {
   switch (blocks) {
-    case 1: sad_avx2<1>(left_rows, right_rows, rows, n, costs); break;
-    case 2: sad_avx2<2>(left_rows, right_rows, rows, n, costs); break;
-    case 3: sad_avx2<3>(left_rows, right_rows, rows, n, costs); break;
-    default: sad_avx2<4>(left_rows, right_rows, rows, n, costs); break;
+    case 1:
+      sad_avx2<1>(left_rows, right_rows, rows, n, costs);
+      break;
+    case 2:
+      sad_avx2<2>(left_rows, right_rows, rows, n, costs);
+      break;
+    case 3:
+      sad_avx2<3>(left_rows, right_rows, rows, n, costs);
+      break;
+    default:
+      sad_avx2<4>(left_rows, right_rows, rows, n, costs);
+      break;
   }
 }
 

@@ -1,5 +1,5 @@
-#include "agvslam/core/clock.h"
 #include "agvslam/features/stereo_matcher.h"
+#include "agvslam/core/clock.h"
 
 #include <algorithm>
 #include <chrono>

@@ -4,9 +4,9 @@
 
 #include <cctype>
 #include <cmath>
-#include <limits>
 #include <cstdio>
 #include <filesystem>
+#include <limits>
 #include <opencv2/calib3d.hpp>
 #include <opencv2/core/persistence.hpp>
 #include <opencv2/imgproc.hpp>
@@ -85,8 +85,7 @@ KittiProjections parse_kitti_projections(const std::string& path) {
     if (!target) continue;  // P2, P3, Tr, ...: not needed for the grey pair
     if (!target->empty()) throw InputError(path, where, "expected one " + label + " line, found a second one");
     if (tokens.size() != 12) {
-      throw InputError(path, where,
-                       "expected 12 numbers " + context + ", found " + std::to_string(tokens.size()));
+      throw InputError(path, where, "expected 12 numbers " + context + ", found " + std::to_string(tokens.size()));
     }
     *target = detail::parse_numbers(tokens, path, where, label);
     detail::require_finite(target->data(), target->size(), path, where, label);
@@ -153,9 +152,9 @@ bool yaml_scalar_to_double(const std::string& scalar, double& value) {
 double yaml_number(const YAML::Node& node, const std::string& path, const std::string& field_name) {
   double value = 0;
   if (!node.IsScalar() || !yaml_scalar_to_double(node.Scalar(), value)) {
-    throw InputError(path, field_where(field_name, node),
-                     "expected a number, found '" + (node.IsScalar() ? node.Scalar() : std::string("a list or map")) +
-                         "'");
+    throw InputError(
+        path, field_where(field_name, node),
+        "expected a number, found '" + (node.IsScalar() ? node.Scalar() : std::string("a list or map")) + "'");
   }
   detail::require_finite(&value, 1, path, field_where(field_name, node), "value");
   return value;
@@ -204,9 +203,9 @@ PinholeCamera pinhole_from(const std::vector<double>& intrinsics, const std::vec
   cam.cx = intrinsics[2];
   cam.cy = intrinsics[3];
   if (!(cam.fx > 0) || !(cam.fy > 0)) {
-    throw InputError(path, intrinsics_where,
-                     "expected positive focal lengths, found fu = " + format_number(cam.fx) +
-                         ", fv = " + format_number(cam.fy));
+    throw InputError(
+        path, intrinsics_where,
+        "expected positive focal lengths, found fu = " + format_number(cam.fx) + ", fv = " + format_number(cam.fy));
   }
   if (!(resolution[0] >= 1 && resolution[1] >= 1 && resolution[0] < 1e6 && resolution[1] < 1e6) ||
       resolution[0] != std::floor(resolution[0]) || resolution[1] != std::floor(resolution[1])) {
@@ -231,18 +230,16 @@ void require_pinhole_radtan(const std::string& model, const std::string& distort
 RawCamera kalibr_camera(const YAML::Node& root, const std::string& name, const std::string& path) {
   const YAML::Node cam = require_field(root, name, path, name);
   RawCamera raw;
-  const std::string model = yaml_string(require_field(cam, "camera_model", path, name + ".camera_model"), path,
-                                        name + ".camera_model");
+  const std::string model =
+      yaml_string(require_field(cam, "camera_model", path, name + ".camera_model"), path, name + ".camera_model");
   const YAML::Node distortion_model_node = cam["distortion_model"];
-  const std::string distortion_model =
-      distortion_model_node.IsDefined() && !distortion_model_node.IsNull()
-          ? yaml_string(distortion_model_node, path, name + ".distortion_model")
-          : std::string("none");
+  const std::string distortion_model = distortion_model_node.IsDefined() && !distortion_model_node.IsNull()
+                                           ? yaml_string(distortion_model_node, path, name + ".distortion_model")
+                                           : std::string("none");
   require_pinhole_radtan(model, distortion_model, path, name + ".camera_model", name + ".distortion_model");
   const YAML::Node intrinsics_node = require_field(cam, "intrinsics", path, name + ".intrinsics");
   const YAML::Node resolution_node = require_field(cam, "resolution", path, name + ".resolution");
-  const auto intrinsics =
-      yaml_numbers(intrinsics_node, path, name + ".intrinsics", 4, "4 numbers [fu, fv, pu, pv]");
+  const auto intrinsics = yaml_numbers(intrinsics_node, path, name + ".intrinsics", 4, "4 numbers [fu, fv, pu, pv]");
   const auto resolution = yaml_numbers(resolution_node, path, name + ".resolution", 2, "2 numbers [width, height]");
   raw.pinhole = pinhole_from(intrinsics, resolution, path, field_where(name + ".intrinsics", intrinsics_node),
                              field_where(name + ".resolution", resolution_node));
@@ -434,8 +431,8 @@ StereoCalibration load_orbslam_yaml(const std::string& path) {
   calib.left.width = size_field("width");
   calib.left.height = size_field("height");
   if (!(calib.left.fx > 0)) {
-    throw InputError(path, "field '" + prefix + "fx'", "expected a positive focal length, found " +
-                                                           format_number(calib.left.fx));
+    throw InputError(path, "field '" + prefix + "fx'",
+                     "expected a positive focal length, found " + format_number(calib.left.fx));
   }
   calib.baseline_m = bf / calib.left.fx;
   if (!(calib.baseline_m > 0)) {
@@ -500,7 +497,8 @@ EurocCameraSensor load_euroc_sensor(const std::string& path) {
   const YAML::Node root = load_yaml(path);
   if (!root.IsMap()) throw InputError(path, "", "expected a YAML map (EuRoC sensor.yaml)");
   EurocCameraSensor sensor;
-  const std::string model = yaml_string(require_field(root, "camera_model", path, "camera_model"), path, "camera_model");
+  const std::string model =
+      yaml_string(require_field(root, "camera_model", path, "camera_model"), path, "camera_model");
   const std::string distortion_model =
       yaml_string(require_field(root, "distortion_model", path, "distortion_model"), path, "distortion_model");
   require_pinhole_radtan(model, distortion_model, path, "camera_model", "distortion_model");

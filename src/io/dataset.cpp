@@ -19,7 +19,7 @@ using detail::LineReader;
 
 namespace {
 
-constexpr int64_t kEurocPairToleranceNs = 1'000'000;  // left/right stamps closer than 1 ms are one pair
+constexpr int64_t kEurocPairToleranceNs = 1'000'000;    // left/right stamps closer than 1 ms are one pair
 constexpr int64_t kGroundTruthToleranceNs = 5'000'000;  // a frame gets ground truth within 5 ms
 constexpr std::size_t kMaxWarningsPerKind = 5;
 
@@ -62,7 +62,8 @@ std::vector<std::string> list_png_names(const fs::path& folder) {
   for (const auto& entry : fs::directory_iterator(folder, ec)) {
     if (!entry.is_regular_file(ec)) continue;
     std::string ext = entry.path().extension().string();
-    std::transform(ext.begin(), ext.end(), ext.begin(), [](unsigned char c) { return static_cast<char>(std::tolower(c)); });
+    std::transform(ext.begin(), ext.end(), ext.begin(),
+                   [](unsigned char c) { return static_cast<char>(std::tolower(c)); });
     if (ext == ".png") names.push_back(entry.path().filename().string());
   }
   if (ec) throw InputError(folder.string(), "", "cannot list the folder (" + ec.message() + ")");
@@ -78,8 +79,9 @@ cv::Mat read_grey(const std::string& path, const cv::Size& expected_size) {
     throw InputError(path, "", is_file(path) ? "expected a readable image" : "file not found");
   }
   if (!expected_size.empty() && image.size() != expected_size) {
-    throw InputError(path, "image size",
-                     "expected " + size_text(expected_size) + " like the first frame, found " + size_text(image.size()));
+    throw InputError(
+        path, "image size",
+        "expected " + size_text(expected_size) + " like the first frame, found " + size_text(image.size()));
   }
   return image;
 }
@@ -103,8 +105,7 @@ struct CsvImage {
 };
 
 // mav0/camN/data.csv: "#timestamp [ns],filename". Rows whose image is missing are dropped (counted in *missing).
-std::vector<CsvImage> read_euroc_image_csv(const fs::path& cam_dir, std::size_t& missing,
-                                           std::size_t& warnings_left) {
+std::vector<CsvImage> read_euroc_image_csv(const fs::path& cam_dir, std::size_t& missing, std::size_t& warnings_left) {
   const std::string csv_path = (cam_dir / "data.csv").string();
   LineReader reader(csv_path, detail::read_text_file(csv_path));
   std::vector<CsvImage> images;
@@ -113,9 +114,9 @@ std::vector<CsvImage> read_euroc_image_csv(const fs::path& cam_dir, std::size_t&
     if (detail::is_blank_or_comment(line)) continue;
     const auto fields = detail::split_csv(line);
     if (fields.size() != 2 || fields[1].empty()) {
-      throw InputError(csv_path, reader.where(),
-                       "expected 2 comma-separated fields 'timestamp [ns],filename', found " +
-                           std::to_string(fields.size()));
+      throw InputError(
+          csv_path, reader.where(),
+          "expected 2 comma-separated fields 'timestamp [ns],filename', found " + std::to_string(fields.size()));
     }
     CsvImage image;
     if (!detail::parse_ns(fields[0], image.t_ns)) {
@@ -133,8 +134,7 @@ std::vector<CsvImage> read_euroc_image_csv(const fs::path& cam_dir, std::size_t&
     }
     images.push_back(std::move(image));
   }
-  std::stable_sort(images.begin(), images.end(),
-                   [](const CsvImage& a, const CsvImage& b) { return a.t_ns < b.t_ns; });
+  std::stable_sort(images.begin(), images.end(), [](const CsvImage& a, const CsvImage& b) { return a.t_ns < b.t_ns; });
   return images;
 }
 
@@ -166,21 +166,21 @@ KittiDataset::KittiDataset(const std::string& root, const std::string& calib_ove
   if (left_names_.empty()) throw InputError(left_dir_, "", "expected .png images, found none");
   if (left_names_.size() != right_names_.size()) {
     throw InputError(right_dir_, "image count",
-                     "expected " + std::to_string(left_names_.size()) + " .png images like " + left_name +
-                         "/, found " + std::to_string(right_names_.size()));
+                     "expected " + std::to_string(left_names_.size()) + " .png images like " + left_name + "/, found " +
+                         std::to_string(right_names_.size()));
   }
   for (std::size_t i = 0; i < left_names_.size(); ++i) {
     if (left_names_[i] != right_names_[i]) {
-      spdlog::warn("{}: frame {}: left image {} is paired with right image {} (names differ)", root, i,
-                   left_names_[i], right_names_[i]);
+      spdlog::warn("{}: frame {}: left image {} is paired with right image {} (names differ)", root, i, left_names_[i],
+                   right_names_[i]);
       break;
     }
   }
   image_size_ = read_grey(left_path(0), {}).size();
 
   const std::string calib_path = calib_override.empty() ? (base / "calib.txt").string() : calib_override;
-  calib_ = calib_override.empty() ? load_kitti_calib(calib_path, image_size_)
-                                  : load_calibration(calib_path, image_size_);
+  calib_ =
+      calib_override.empty() ? load_kitti_calib(calib_path, image_size_) : load_calibration(calib_path, image_size_);
   if (!calib_.needs_rectification && calib_.left.size() != image_size_) {
     throw InputError(calib_path, "image size",
                      "expected the calibration's size " + size_text(calib_.left.size()) + " to match the images (" +
@@ -210,9 +210,7 @@ KittiDataset::KittiDataset(const std::string& root, const std::string& calib_ove
   }
 }
 
-std::string KittiDataset::left_path(std::size_t i) const {
-  return (fs::path(left_dir_) / left_names_.at(i)).string();
-}
+std::string KittiDataset::left_path(std::size_t i) const { return (fs::path(left_dir_) / left_names_.at(i)).string(); }
 
 std::string KittiDataset::right_path(std::size_t i) const {
   return (fs::path(right_dir_) / right_names_.at(i)).string();
@@ -289,7 +287,8 @@ EurocDataset::EurocDataset(const std::string& root, const std::string& calib_ove
   if (!is_folder(mav0)) throw InputError(root, "layout", "expected an EuRoC ASL folder with mav0/");
   const fs::path cam0_dir = mav0 / "cam0", cam1_dir = mav0 / "cam1";
   for (const fs::path& dir : {cam0_dir, cam1_dir}) {
-    if (!is_folder(dir)) throw InputError(dir.string(), "", "folder not found (EuRoC layout needs mav0/cam0 and mav0/cam1)");
+    if (!is_folder(dir))
+      throw InputError(dir.string(), "", "folder not found (EuRoC layout needs mav0/cam0 and mav0/cam1)");
   }
 
   // Pair left and right images by time stamp.
@@ -396,8 +395,7 @@ std::optional<Trajectory> EurocDataset::ground_truth() const {
     } else if (prev && next && t - prev->t_ns <= kGroundTruthToleranceNs && next->t_ns - t <= kGroundTruthToleranceNs) {
       const double alpha = static_cast<double>(t - prev->t_ns) / static_cast<double>(next->t_ns - prev->t_ns);
       T_w_B = interpolate(prev->T_w_c, next->T_w_c, alpha);
-    } else if (prev && t - prev->t_ns <= kGroundTruthToleranceNs &&
-               (!next || t - prev->t_ns <= next->t_ns - t)) {
+    } else if (prev && t - prev->t_ns <= kGroundTruthToleranceNs && (!next || t - prev->t_ns <= next->t_ns - t)) {
       T_w_B = prev->T_w_c;
     } else if (next && next->t_ns - t <= kGroundTruthToleranceNs) {
       T_w_B = next->T_w_c;
@@ -448,13 +446,15 @@ void parse_frame_range(const std::string& text, std::size_t size, const std::str
     } catch (const std::exception&) {
       used = 0;
     }
-    if (used != s.size() || v < 0) throw InputError(source, field, "expected non-negative integers in A:B, got '" + text + "'");
+    if (used != s.size() || v < 0)
+      throw InputError(source, field, "expected non-negative integers in A:B, got '" + text + "'");
     value = static_cast<std::size_t>(v);
   };
   parse(text.substr(0, colon), first);
   parse(text.substr(colon + 1), last);
   if (first >= size) {
-    throw InputError(source, field, "expected a range inside the sequence's " + std::to_string(size) + " frames, got '" + text + "'");
+    throw InputError(source, field,
+                     "expected a range inside the sequence's " + std::to_string(size) + " frames, got '" + text + "'");
   }
   last = std::min(last, size - 1);
   if (last < first) throw InputError(source, field, "expected A <= B, got '" + text + "'");

@@ -24,26 +24,29 @@ std::vector<OdometryRate> read_odometry_csv(const std::string& path) {
     }
     first_data_line = false;
     if (fields.size() != 3) {
-      throw InputError(path, lines.where(),
-                       "expected 3 comma-separated fields (t_s, speed_mps, yaw_rate_radps), found " +
-                           std::to_string(fields.size()));
+      throw InputError(
+          path, lines.where(),
+          "expected 3 comma-separated fields (t_s, speed_mps, yaw_rate_radps), found " + std::to_string(fields.size()));
     }
     OdometryRate s;
     if (!detail::parse_seconds_to_ns(fields[0], s.t_ns)) {
-      throw InputError(path, lines.where(), "expected a time in seconds as field 1, found '" + std::string(fields[0]) + "'");
+      throw InputError(path, lines.where(),
+                       "expected a time in seconds as field 1, found '" + std::string(fields[0]) + "'");
     }
-    const std::vector<double> v = detail::parse_numbers({fields[1], fields[2]}, path, lines.where(), "speed and yaw rate");
+    const std::vector<double> v =
+        detail::parse_numbers({fields[1], fields[2]}, path, lines.where(), "speed and yaw rate");
     detail::require_finite(v.data(), v.size(), path, lines.where(), "speed and yaw rate");
     s.speed_mps = v[0];
     s.yaw_rate_radps = v[1];
     if (!samples.empty() && s.t_ns <= samples.back().t_ns) {
-      throw InputError(path, lines.where(), "expected time stamps that increase (" +
-                                                detail::format_ns_as_seconds(s.t_ns) + " s after " +
-                                                detail::format_ns_as_seconds(samples.back().t_ns) + " s)");
+      throw InputError(path, lines.where(),
+                       "expected time stamps that increase (" + detail::format_ns_as_seconds(s.t_ns) + " s after " +
+                           detail::format_ns_as_seconds(samples.back().t_ns) + " s)");
     }
     samples.push_back(s);
   }
-  if (samples.size() < 2) throw InputError(path, "", "expected at least 2 odometry samples, found " + std::to_string(samples.size()));
+  if (samples.size() < 2)
+    throw InputError(path, "", "expected at least 2 odometry samples, found " + std::to_string(samples.size()));
   return samples;
 }
 

@@ -136,8 +136,7 @@ Trajectory read_euroc_csv(const std::string& path) {
     detail::require_finite(v.data(), v.size(), path, where, "pose");
     StampedPose pose;
     if (!detail::parse_ns(fields[0], pose.t_ns)) {
-      throw InputError(path, where,
-                       "expected a time stamp in nanoseconds, found '" + std::string(fields[0]) + "'");
+      throw InputError(path, where, "expected a time stamp in nanoseconds, found '" + std::string(fields[0]) + "'");
     }
     const Eigen::Quaterniond q = detail::checked_quaternion(v[4], v[5], v[6], v[7], path, where);
     pose.T_w_c = make_se3(q, Eigen::Vector3d(v[1], v[2], v[3]));
@@ -176,14 +175,13 @@ std::vector<int64_t> read_kitti_times(const std::string& path) {
     }
     double value = 0;
     if (!detail::parse_double(tokens[0], value)) {
-      throw InputError(path, reader.where(),
-                       "expected a time in seconds, found '" + std::string(tokens[0]) + "'");
+      throw InputError(path, reader.where(), "expected a time in seconds, found '" + std::string(tokens[0]) + "'");
     }
     detail::require_finite(&value, 1, path, reader.where(), "time stamp");
     int64_t t_ns = 0;
     if (!detail::parse_seconds_to_ns(tokens[0], t_ns)) {
-      throw InputError(path, reader.where(), "expected a time in seconds within +-292 years, found '" +
-                                                 std::string(tokens[0]) + "'");
+      throw InputError(path, reader.where(),
+                       "expected a time in seconds within +-292 years, found '" + std::string(tokens[0]) + "'");
     }
     times_ns.push_back(t_ns);
   }
@@ -243,7 +241,8 @@ void write_trajectory(const std::string& path, const Trajectory& trajectory, Tra
       write_kitti_poses(path, trajectory);
       return;
     case TrajectoryFormat::kEuroc: {
-      std::string out = "#timestamp [ns],p_RS_R_x [m],p_RS_R_y [m],p_RS_R_z [m],q_RS_w [],q_RS_x [],q_RS_y [],q_RS_z []\n";
+      std::string out =
+          "#timestamp [ns],p_RS_R_x [m],p_RS_R_y [m],p_RS_R_z [m],q_RS_w [],q_RS_x [],q_RS_y [],q_RS_z []\n";
       char buf[320];
       for (const StampedPose& pose : trajectory) {
         Eigen::Quaterniond q(pose.T_w_c.linear());

@@ -15,8 +15,8 @@ inline int hamming256(const uint8_t* a, const uint8_t* b) {
   uint64_t x[4], y[4];
   std::memcpy(x, a, 32);
   std::memcpy(y, b, 32);
-  return __builtin_popcountll(x[0] ^ y[0]) + __builtin_popcountll(x[1] ^ y[1]) +
-         __builtin_popcountll(x[2] ^ y[2]) + __builtin_popcountll(x[3] ^ y[3]);
+  return __builtin_popcountll(x[0] ^ y[0]) + __builtin_popcountll(x[1] ^ y[1]) + __builtin_popcountll(x[2] ^ y[2]) +
+         __builtin_popcountll(x[3] ^ y[3]);
 }
 
 struct HammingKernels {
@@ -26,8 +26,8 @@ struct HammingKernels {
   void (*assign)(const uint8_t* data, const uint32_t* members, std::size_t count, const uint8_t* centres, int k,
                  uint8_t* out_assignment);
   // min_dist[i] = min(min_dist[i], distance(data[members[i]], centre)).
-  void (*update_min_distance)(const uint8_t* data, const uint32_t* members, std::size_t count,
-                              const uint8_t* centre, uint32_t* min_dist);
+  void (*update_min_distance)(const uint8_t* data, const uint32_t* members, std::size_t count, const uint8_t* centre,
+                              uint32_t* min_dist);
   bool uses_popcnt_instruction;
 };
 

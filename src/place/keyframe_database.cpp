@@ -137,12 +137,13 @@ void KeyframeDatabase::query(const BowVector& bow, const QueryOptions& options, 
             out.end());
   uint32_t max_common = 0;
   for (const Candidate& c : out) max_common = std::max(max_common, c.common_words);
-  const auto min_common = std::max<uint32_t>(
-      options.min_common_words,
-      static_cast<uint32_t>(std::ceil(double(options.min_common_words_ratio) * max_common - 1e-4)));
-  out.erase(std::remove_if(out.begin(), out.end(),
-                           [&](const Candidate& c) { return c.common_words < min_common || c.score < options.min_score; }),
-            out.end());
+  const auto min_common =
+      std::max<uint32_t>(options.min_common_words,
+                         static_cast<uint32_t>(std::ceil(double(options.min_common_words_ratio) * max_common - 1e-4)));
+  out.erase(
+      std::remove_if(out.begin(), out.end(),
+                     [&](const Candidate& c) { return c.common_words < min_common || c.score < options.min_score; }),
+      out.end());
   std::sort(out.begin(), out.end(), [](const Candidate& a, const Candidate& b) {
     return a.score != b.score ? a.score > b.score : a.id < b.id;
   });

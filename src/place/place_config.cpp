@@ -8,12 +8,13 @@ namespace agvslam::place {
 namespace {
 
 const params::Table<PlaceConfig>& place_params() {
-  static const params::Table<PlaceConfig> table("vocabulary", {
-      {"file", &PlaceConfig::vocabulary_file, params::Text::non_empty(),
-       "the vocabulary file, relative to the params file's folder"},
-      {"direct_index_level", &PlaceConfig::direct_index_level, params::Range::closed(1, 8), "",
-       "a depth of the vocabulary tree, which has at most 8 levels"},
-  });
+  static const params::Table<PlaceConfig> table(
+      "vocabulary", {
+                        {"file", &PlaceConfig::vocabulary_file, params::Text::non_empty(),
+                         "the vocabulary file, relative to the params file's folder"},
+                        {"direct_index_level", &PlaceConfig::direct_index_level, params::Range::closed(1, 8), "",
+                         "a depth of the vocabulary tree, which has at most 8 levels"},
+                    });
   return table;
 }
 

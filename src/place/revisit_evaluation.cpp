@@ -102,8 +102,8 @@ RevisitEvaluation evaluate_loop_revisits(const std::vector<PlaceSample>& sequenc
     if (!top.empty()) {
       q.match = long(top[0].id);
       q.score = top[0].score;
-      q.correct = is_revisit(sequence[i].T_w_c, sequence[top[0].id].T_w_c, criteria, &q.match_distance_m,
-                             &q.match_angle_deg);
+      q.correct =
+          is_revisit(sequence[i].T_w_c, sequence[top[0].id].T_w_c, criteria, &q.match_distance_m, &q.match_angle_deg);
     }
     e.positives += q.positive;
     e.queries.push_back(q);
@@ -129,8 +129,7 @@ RevisitEvaluation evaluate_relocalisation(const std::vector<PlaceSample>& map, c
     if (!top.empty()) {
       q.match = long(top[0].id);
       q.score = top[0].score;
-      q.correct = is_revisit(queries[i].T_w_c, map[top[0].id].T_w_c, criteria, &q.match_distance_m,
-                             &q.match_angle_deg);
+      q.correct = is_revisit(queries[i].T_w_c, map[top[0].id].T_w_c, criteria, &q.match_distance_m, &q.match_angle_deg);
     }
     e.positives += q.positive;
     e.queries.push_back(q);

@@ -43,18 +43,21 @@ namespace {
 const params::Table<VocabularyTrainingConfig>& training_params() {
   using params::Range;
   static const params::Table<VocabularyTrainingConfig> table =
-      params::Table<VocabularyTrainingConfig>("vocabulary_training", {
-          {"branching", &VocabularyTrainingConfig::branching, Range::closed(2, 64), "children per node"},
-          {"levels", &VocabularyTrainingConfig::levels, Range::closed(1, 8), "", "the file format's limit"},
-          {"max_iterations", &VocabularyTrainingConfig::max_iterations, Range::closed(1, 1000), "per node"},
-          {"seed", &VocabularyTrainingConfig::seed},
-          {"threads", &VocabularyTrainingConfig::threads, Range::closed(1, 256)},
-      })
-          .check("levels",
-                 [](const VocabularyTrainingConfig& c) {
-                   return std::pow(double(c.branching), double(c.levels)) <= 4.0e9;
-                 },
-                 "branching^levels <= 4e9 words (word ids are 32-bit)")
+      params::Table<VocabularyTrainingConfig>(
+          "vocabulary_training",
+          {
+              {"branching", &VocabularyTrainingConfig::branching, Range::closed(2, 64), "children per node"},
+              {"levels", &VocabularyTrainingConfig::levels, Range::closed(1, 8), "", "the file format's limit"},
+              {"max_iterations", &VocabularyTrainingConfig::max_iterations, Range::closed(1, 1000), "per node"},
+              {"seed", &VocabularyTrainingConfig::seed},
+              {"threads", &VocabularyTrainingConfig::threads, Range::closed(1, 256)},
+          })
+          .check(
+              "levels",
+              [](const VocabularyTrainingConfig& c) {
+                return std::pow(double(c.branching), double(c.levels)) <= 4.0e9;
+              },
+              "branching^levels <= 4e9 words (word ids are 32-bit)")
           .summary([](const VocabularyTrainingConfig&) {
             return std::string("hierarchical k-medians, k-means++ seeding, Hamming, TF-IDF");
           });
@@ -76,10 +79,10 @@ std::string Vocabulary::identity_hex() const {
 }
 
 std::string Vocabulary::describe() const {
-  return "vocabulary: k=" + std::to_string(branching_) + " L=" + std::to_string(levels_) + " words=" +
-         std::to_string(word_count()) + " nodes=" + std::to_string(node_count()) + " identity=" + identity_hex() +
-         " trained on " + std::to_string(training_descriptors_) + " ORB descriptors of " +
-         std::to_string(training_images_) + " images";
+  return "vocabulary: k=" + std::to_string(branching_) + " L=" + std::to_string(levels_) +
+         " words=" + std::to_string(word_count()) + " nodes=" + std::to_string(node_count()) +
+         " identity=" + identity_hex() + " trained on " + std::to_string(training_descriptors_) +
+         " ORB descriptors of " + std::to_string(training_images_) + " images";
 }
 
 void Vocabulary::finish_tree() {
@@ -88,7 +91,8 @@ void Vocabulary::finish_tree() {
   for (std::size_t w = 0; w < word_node_.size(); ++w) node_word_[word_node_[w]] = static_cast<uint32_t>(w);
   node_depth_.assign(n, 0);
   for (std::size_t i = 0; i < n; ++i)
-    for (int c = 0; c < child_count_[i]; ++c) node_depth_[first_child_[i] + c] = static_cast<uint8_t>(node_depth_[i] + 1);
+    for (int c = 0; c < child_count_[i]; ++c)
+      node_depth_[first_child_[i] + c] = static_cast<uint8_t>(node_depth_[i] + 1);
 
   detail::Fnv1a64 h;
   h.update_value(static_cast<uint32_t>(DescriptorType::kOrb256));
@@ -113,9 +117,9 @@ NodeId Vocabulary::descend(const uint8_t* descriptor, int level, NodeId* node_at
   int depth = 0;
   while (child_count_[node] != 0) {
     const NodeId first = first_child_[node];
-    node = first + static_cast<NodeId>(
-                       nearest(descriptor, node_descriptors_.data() + std::size_t(first) * kDescriptorBytes,
-                               child_count_[node]));
+    node =
+        first + static_cast<NodeId>(nearest(
+                    descriptor, node_descriptors_.data() + std::size_t(first) * kDescriptorBytes, child_count_[node]));
     if (++depth == level && node_at_level) *node_at_level = node;
   }
   if (node_at_level && depth < level) *node_at_level = node;

@@ -128,18 +128,20 @@ Vocabulary Vocabulary::deserialize(const void* data, std::size_t size, const std
     throw InputError(source, "version",
                      "expected format version " + std::to_string(kVersion) + ", found " + std::to_string(h.version));
   if (h.header_bytes != kHeaderBytes)
-    throw InputError(source, "header_bytes", "expected " + std::to_string(kHeaderBytes) + ", found " +
-                                                 std::to_string(h.header_bytes));
+    throw InputError(source, "header_bytes",
+                     "expected " + std::to_string(kHeaderBytes) + ", found " + std::to_string(h.header_bytes));
   if (h.descriptor_type != static_cast<uint32_t>(DescriptorType::kOrb256) || h.descriptor_bytes != kDescriptorBytes)
     throw InputError(source, "descriptor_type",
                      "expected type 1 (256-bit ORB, 32 bytes), found type " + std::to_string(h.descriptor_type) +
                          " of " + std::to_string(h.descriptor_bytes) + " bytes");
   if (h.weighting != 1 || h.scoring != 1)
-    throw InputError(source, "weighting", "expected TF-IDF weighting (1) and L1 scoring (1), found " +
-                                              std::to_string(h.weighting) + " and " + std::to_string(h.scoring));
+    throw InputError(source, "weighting",
+                     "expected TF-IDF weighting (1) and L1 scoring (1), found " + std::to_string(h.weighting) +
+                         " and " + std::to_string(h.scoring));
   if (h.branching < 2 || h.branching > 255 || h.levels < 1 || h.levels > 8)
-    throw InputError(source, "branching", "expected k in 2..255 and L in 1..8, found k=" +
-                                              std::to_string(h.branching) + " L=" + std::to_string(h.levels));
+    throw InputError(source, "branching",
+                     "expected k in 2..255 and L in 1..8, found k=" + std::to_string(h.branching) +
+                         " L=" + std::to_string(h.levels));
   if (h.node_count < 1 || h.node_count > kMaxNodes || h.word_count > h.node_count ||
       h.description_bytes > kMaxDescriptionBytes)
     throw InputError(source, "node_count",
@@ -148,9 +150,9 @@ Vocabulary Vocabulary::deserialize(const void* data, std::size_t size, const std
                          std::to_string(h.description_bytes) + " description bytes");
   const Layout l = layout_of(h.node_count, h.word_count, h.description_bytes);
   if (h.file_bytes != l.file_bytes)
-    throw InputError(source, "file_bytes", "expected " + std::to_string(l.file_bytes) +
-                                               " bytes for the recorded counts, header says " +
-                                               std::to_string(h.file_bytes));
+    throw InputError(source, "file_bytes",
+                     "expected " + std::to_string(l.file_bytes) + " bytes for the recorded counts, header says " +
+                         std::to_string(h.file_bytes));
   if (size != l.file_bytes)
     throw InputError(source, "size",
                      "expected " + std::to_string(l.file_bytes) + " bytes as recorded in the header, found " +
@@ -193,8 +195,8 @@ Vocabulary Vocabulary::deserialize(const void* data, std::size_t size, const std
     if (c > h.branching || v.first_child_[i] != expected_child || expected_child <= i || expected_child + c > nodes ||
         depth[i] + 1u > h.levels)
       throw InputError(source, "nodes[" + std::to_string(i) + "]",
-                       "expected up to k consecutive children in breadth-first order within " +
-                           std::to_string(nodes) + " nodes and depth <= L");
+                       "expected up to k consecutive children in breadth-first order within " + std::to_string(nodes) +
+                           " nodes and depth <= L");
     for (unsigned j = 0; j < c; ++j) depth[expected_child + j] = static_cast<uint8_t>(depth[i] + 1);
     expected_child += c;
   }
@@ -219,7 +221,8 @@ Vocabulary Vocabulary::load(const std::string& path) {
   if (size < 0) throw InputError(path, "", "cannot read its size: expected a regular vocabulary file");
   std::string bytes(static_cast<std::size_t>(size), '\0');
   in.seekg(0);
-  if (!in.read(bytes.data(), size)) throw InputError(path, "", "read failed: expected " + std::to_string(size) + " bytes");
+  if (!in.read(bytes.data(), size))
+    throw InputError(path, "", "read failed: expected " + std::to_string(size) + " bytes");
   return deserialize(bytes.data(), bytes.size(), path);
 }
 

@@ -269,8 +269,8 @@ Vocabulary VocabularyBuilder::build(const DescriptorSet& set, const VocabularyTr
     for_each_index(current.size() == 1 ? 1 : config.threads, current.size(), [&](std::size_t oi, int) {
       const std::size_t i = order[oi];
       uint64_t seed_state = config.seed ^ (uint64_t(current[i].node) * 0xD1B54A32D192ED03ULL);
-      results[i] = cluster_node(data, current[i].members, k, config.max_iterations, splitmix64(seed_state),
-                                inner_threads);
+      results[i] =
+          cluster_node(data, current[i].members, k, config.max_iterations, splitmix64(seed_state), inner_threads);
       std::vector<uint32_t>().swap(current[i].members);
     });
     std::vector<Pending> next;
@@ -321,7 +321,8 @@ Vocabulary VocabularyBuilder::build(const DescriptorSet& set, const VocabularyTr
   const auto t0 = std::chrono::steady_clock::now();
   const std::size_t words = v.word_count();
   // One table pair per worker that can run (a worker takes whole images, so its counts add up).
-  const int threads = static_cast<int>(std::clamp<std::size_t>(set.image_count(), 1, std::size_t(std::max(1, config.threads))));
+  const int threads =
+      static_cast<int>(std::clamp<std::size_t>(set.image_count(), 1, std::size_t(std::max(1, config.threads))));
   std::vector<std::vector<uint32_t>> df(static_cast<std::size_t>(threads), std::vector<uint32_t>(words, 0));
   std::vector<std::vector<uint32_t>> last(static_cast<std::size_t>(threads), std::vector<uint32_t>(words, UINT32_MAX));
   for_blocks(threads, set.image_count(), [&](std::size_t b, std::size_t e, int t) {

@@ -4,12 +4,18 @@ namespace agvslam::semantic {
 
 const char* to_string(SegmentReason reason) {
   switch (reason) {
-    case SegmentReason::kNone: return "none";
-    case SegmentReason::kFirstFrame: return "first frame";
-    case SegmentReason::kRelocalised: return "relocalised";
-    case SegmentReason::kFewDynamicPoints: return "few dynamic points";
-    case SegmentReason::kEveryNFrames: return "every N frames";
-    case SegmentReason::kNewKeyframe: return "new keyframe";
+    case SegmentReason::kNone:
+      return "none";
+    case SegmentReason::kFirstFrame:
+      return "first frame";
+    case SegmentReason::kRelocalised:
+      return "relocalised";
+    case SegmentReason::kFewDynamicPoints:
+      return "few dynamic points";
+    case SegmentReason::kEveryNFrames:
+      return "every N frames";
+    case SegmentReason::kNewKeyframe:
+      return "new keyframe";
   }
   return "?";
 }
@@ -21,8 +27,7 @@ SegmentReason KeyframeSelector::next(const FrameCues& cues) {
   } else if (cues.relocalised) {
     reason = SegmentReason::kRelocalised;
   } else if (config_.min_dynamic_points > 0 && cues.previous_dynamic_points >= 0 &&
-             cues.previous_dynamic_points < config_.min_dynamic_points &&
-             frames_since_segmented_ + 1 >= 2) {
+             cues.previous_dynamic_points < config_.min_dynamic_points && frames_since_segmented_ + 1 >= 2) {
     // At most every other frame: a scene with no movers at all would otherwise be segmented on every frame.
     reason = SegmentReason::kFewDynamicPoints;
   } else if (frames_since_segmented_ + 1 >= config_.every_n_frames) {

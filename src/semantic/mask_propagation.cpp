@@ -69,7 +69,8 @@ std::vector<cv::Mat> lk_pyramid(const cv::Mat& grey, const PropagationConfig& co
 void carry_objects(const std::vector<cv::Mat>& from, const std::vector<cv::Mat>& to, const PropagationConfig& config,
                    std::vector<SemanticObject>& objects) {
   std::vector<cv::Point2f> before;
-  for (const SemanticObject& object : objects) before.insert(before.end(), object.corners.begin(), object.corners.end());
+  for (const SemanticObject& object : objects)
+    before.insert(before.end(), object.corners.begin(), object.corners.end());
   std::vector<cv::Point2f> after, back;
   std::vector<uint8_t> ok, ok_back;
   std::vector<float> err;

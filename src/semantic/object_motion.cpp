@@ -96,9 +96,9 @@ std::vector<MotionVote> ObjectMotionTest::update(const std::vector<dynamic::Trac
       v.vote = v.moving_points >= config_.moving_fraction * v.tested_points ? 1.0 : 0.0;
     } else if (object.flow_known) {
       const cv::Moments m = cv::moments(object.mask, true);
-      const cv::Point2f centre = m.m00 > 0 ? cv::Point2f(static_cast<float>(m.m10 / m.m00),
-                                                         static_cast<float>(m.m01 / m.m00))
-                                           : cv::Point2f(0, 0);
+      const cv::Point2f centre = m.m00 > 0
+                                     ? cv::Point2f(static_cast<float>(m.m10 / m.m00), static_cast<float>(m.m01 / m.m00))
+                                     : cv::Point2f(0, 0);
       // Its depth: its own points', else the floor's below the middle of its box (where it stands).
       double disparity = median_of(disparities[k]);
       if (disparity <= 0 && ground && ground->valid) {

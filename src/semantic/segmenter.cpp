@@ -52,8 +52,8 @@ Segmenter::Segmenter(const ModelConfig& config) : config_(config), net_(std::mak
   net_->net.setPreferableBackend(cv::dnn::DNN_BACKEND_OPENCV);
   net_->net.setPreferableTarget(cv::dnn::DNN_TARGET_CPU);
 
-  const std::string input = std::to_string(config_.input_channels) + "x" + std::to_string(config_.input_height) +
-                            "x" + std::to_string(config_.input_width);
+  const std::string input = std::to_string(config_.input_channels) + "x" + std::to_string(config_.input_height) + "x" +
+                            std::to_string(config_.input_width);
   cv::Mat out;
   try {
     out = scores(cv::Mat(config_.input_height, config_.input_width, CV_8UC1, cv::Scalar(0)));
@@ -68,9 +68,10 @@ Segmenter::Segmenter(const ModelConfig& config) : config_(config), net_(std::mak
   class_count_ = out.size[1];
   for (int id : config_.movable_ids()) {
     if (id >= class_count_) {
-      throw InputError(path, "model output",
-                       "expected class scores for every movable class (model.movable_classes: " +
-                           config_.movable_classes + "), the network gives " + std::to_string(class_count_) + " classes");
+      throw InputError(
+          path, "model output",
+          "expected class scores for every movable class (model.movable_classes: " + config_.movable_classes +
+              "), the network gives " + std::to_string(class_count_) + " classes");
     }
   }
 }

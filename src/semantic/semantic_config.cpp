@@ -36,23 +36,25 @@ bool parse_ids(const std::string& text, std::vector<int>& ids) {
 
 const params::Table<ModelConfig>& model_params() {
   static const params::Table<ModelConfig> table =
-      params::Table<ModelConfig>("model", {
-          {"path", &ModelConfig::path, Text::non_empty()},
-          {"input_width", &ModelConfig::input_width, Range::closed(1, 4096), "px"},
-          {"input_height", &ModelConfig::input_height, Range::closed(1, 4096), "px"},
-          {"input_channels", &ModelConfig::input_channels, Range::value(1) | Range::value(3), "",
-           "1: grey, 3: grey as B, G, R"},
-          {"mean", &ModelConfig::mean, Range::closed(-255, 255), "grey levels"},
-          {"scale", &ModelConfig::scale, Range::above(0)},
-          {"movable_classes", &ModelConfig::movable_classes, Text::non_empty(),
-           "class ids in [0, 255] separated by spaces"},
-      })
-          .check("movable_classes",
-                 [](const ModelConfig& m) {
-                   std::vector<int> ids;
-                   return parse_ids(m.movable_classes, ids);
-                 },
-                 "1 to 32 class ids in [0, 255] separated by spaces, e.g. '5 6 7'");
+      params::Table<ModelConfig>("model",
+                                 {
+                                     {"path", &ModelConfig::path, Text::non_empty()},
+                                     {"input_width", &ModelConfig::input_width, Range::closed(1, 4096), "px"},
+                                     {"input_height", &ModelConfig::input_height, Range::closed(1, 4096), "px"},
+                                     {"input_channels", &ModelConfig::input_channels, Range::value(1) | Range::value(3),
+                                      "", "1: grey, 3: grey as B, G, R"},
+                                     {"mean", &ModelConfig::mean, Range::closed(-255, 255), "grey levels"},
+                                     {"scale", &ModelConfig::scale, Range::above(0)},
+                                     {"movable_classes", &ModelConfig::movable_classes, Text::non_empty(),
+                                      "class ids in [0, 255] separated by spaces"},
+                                 })
+          .check(
+              "movable_classes",
+              [](const ModelConfig& m) {
+                std::vector<int> ids;
+                return parse_ids(m.movable_classes, ids);
+              },
+              "1 to 32 class ids in [0, 255] separated by spaces, e.g. '5 6 7'");
   return table;
 }
 
@@ -84,18 +86,20 @@ const params::Table<PropagationConfig>& propagation_params() {
 
 const params::Table<MotionConfig>& motion_params() {
   static const params::Table<MotionConfig> table =
-      params::Table<MotionConfig>("motion", {
-          {"min_points", &MotionConfig::min_points, Range::at_least(1), "points"},
-          {"static_sigmas", &MotionConfig::static_sigmas, Range::above(0)},
-          {"min_offset_px", &MotionConfig::min_offset_px, Range::at_least(0), "px"},
-          {"moving_fraction", &MotionConfig::moving_fraction, Range::left_open(0, 1)},
-          {"far_min_offset_px", &MotionConfig::far_min_offset_px, Range::above(0), "px"},
-          {"decay", &MotionConfig::decay, Range::right_open(0, 1)},
-          {"enter_evidence", &MotionConfig::enter_evidence, Range::above(0)},
-          {"exit_evidence", &MotionConfig::exit_evidence, Range::at_least(0)},
-      })
-          .check("exit_evidence", [](const MotionConfig& m) { return m.exit_evidence < m.enter_evidence; },
-                 "less than enter_evidence (hysteresis)");
+      params::Table<MotionConfig>("motion",
+                                  {
+                                      {"min_points", &MotionConfig::min_points, Range::at_least(1), "points"},
+                                      {"static_sigmas", &MotionConfig::static_sigmas, Range::above(0)},
+                                      {"min_offset_px", &MotionConfig::min_offset_px, Range::at_least(0), "px"},
+                                      {"moving_fraction", &MotionConfig::moving_fraction, Range::left_open(0, 1)},
+                                      {"far_min_offset_px", &MotionConfig::far_min_offset_px, Range::above(0), "px"},
+                                      {"decay", &MotionConfig::decay, Range::right_open(0, 1)},
+                                      {"enter_evidence", &MotionConfig::enter_evidence, Range::above(0)},
+                                      {"exit_evidence", &MotionConfig::exit_evidence, Range::at_least(0)},
+                                  })
+          .check(
+              "exit_evidence", [](const MotionConfig& m) { return m.exit_evidence < m.enter_evidence; },
+              "less than enter_evidence (hysteresis)");
   return table;
 }
 
@@ -150,10 +154,9 @@ std::vector<std::string> SemanticConfig::describe() const {
 
 SemanticConfig load_semantic_config(const std::string& path) {
   SemanticConfig c;
-  params::read_sections(params::File(path),
-                        {model_params().reader(c.model), keyframe_params().reader(c.keyframes),
-                         propagation_params().reader(c.propagation), motion_params().reader(c.motion),
-                         fusion_params().reader(c.fusion)});
+  params::read_sections(params::File(path), {model_params().reader(c.model), keyframe_params().reader(c.keyframes),
+                                             propagation_params().reader(c.propagation),
+                                             motion_params().reader(c.motion), fusion_params().reader(c.fusion)});
   // A relative model path in the file is relative to the file (params/semantic.yaml -> params/models/...), so the
   // daemon and the tools find the model whatever their working directory.
   if (!c.model.path.empty() && std::filesystem::path(c.model.path).is_relative()) {

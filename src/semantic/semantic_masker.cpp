@@ -61,8 +61,8 @@ SemanticStats SemanticMasker::stats() const {
 void SemanticMasker::adopt(const Result& result) {
   const std::size_t age = frame_.frame_index - result.frame_index;
   // The frames processed after the segmented one, each with its pyramid (kept for max_late_frames frames).
-  auto next = std::find_if(pyramids_.begin(), pyramids_.end(),
-                           [&](const auto& p) { return p.first > result.frame_index; });
+  auto next =
+      std::find_if(pyramids_.begin(), pyramids_.end(), [&](const auto& p) { return p.first > result.frame_index; });
   if (result.frame_index > frame_.frame_index || age > static_cast<std::size_t>(config_.propagation.max_late_frames) ||
       (age > 0 && next == pyramids_.end())) {
     ++stats_.stale_results;
@@ -178,7 +178,9 @@ const SemanticFrame& SemanticMasker::process(std::size_t frame_index, const cv::
     case FusionMode::kUnion:
       frame_.fused_mask = has_geometry ? (geometry->mask.image | frame_.moving_mask) : frame_.moving_mask.clone();
       break;
-    case FusionMode::kSemantic: frame_.fused_mask = frame_.moving_mask.clone(); break;
+    case FusionMode::kSemantic:
+      frame_.fused_mask = frame_.moving_mask.clone();
+      break;
     case FusionMode::kGeometry:
       frame_.fused_mask = has_geometry ? geometry->mask.image.clone() : cv::Mat::zeros(grey.size(), CV_8UC1);
       break;

@@ -53,8 +53,8 @@ Segment segment(const Actor& a, std::size_t k) {
 long segment_index(const Actor& a, double t) {
   if (a.path.size() < 2 || t < a.path.front().t_s) return -1;
   if (t >= a.path.back().t_s) return static_cast<long>(a.path.size()) - 1;
-  const auto it = std::upper_bound(a.path.begin(), a.path.end(), t,
-                                   [](double tt, const Waypoint& w) { return tt < w.t_s; });
+  const auto it =
+      std::upper_bound(a.path.begin(), a.path.end(), t, [](double tt, const Waypoint& w) { return tt < w.t_s; });
   return static_cast<long>(it - a.path.begin()) - 1;
 }
 
@@ -72,20 +72,28 @@ double standing_yaw(const Actor& a, long k) {
 
 std::string to_string(ActorClass cls) {
   switch (cls) {
-    case ActorClass::kPerson: return "person";
-    case ActorClass::kForklift: return "forklift";
-    case ActorClass::kAgv: return "agv";
-    case ActorClass::kPallet: return "pallet";
+    case ActorClass::kPerson:
+      return "person";
+    case ActorClass::kForklift:
+      return "forklift";
+    case ActorClass::kAgv:
+      return "agv";
+    case ActorClass::kPallet:
+      return "pallet";
   }
   return "unknown";
 }
 
 double actor_radius_m(ActorClass cls) {
   switch (cls) {
-    case ActorClass::kPerson: return 0.35;
-    case ActorClass::kForklift: return 1.6;
-    case ActorClass::kAgv: return 0.75;
-    case ActorClass::kPallet: return 0.75;
+    case ActorClass::kPerson:
+      return 0.35;
+    case ActorClass::kForklift:
+      return 1.6;
+    case ActorClass::kAgv:
+      return 0.75;
+    case ActorClass::kPallet:
+      return 0.75;
   }
   return 1.0;
 }
@@ -296,7 +304,7 @@ struct PosingContext {
   }
 };
 
-constexpr float kForkTravelZ = 0.12f;    // forks' height above the floor while driving, m
+constexpr float kForkTravelZ = 0.12f;     // forks' height above the floor while driving, m
 constexpr float kPalletHeightM = 0.144f;  // a pallet's height, m
 
 // Goods of `load` standing on [x0, x1] x [y0, y1] at height z (object frame): one stretch-wrapped block, cartons
@@ -304,8 +312,11 @@ constexpr float kPalletHeightM = 0.144f;  // a pallet's height, m
 void add_goods(PosingContext& ctx, float x0, float x1, float y0, float y1, float z, const Load& load, uint32_t seed) {
   const float top = z + load.height_m;
   switch (load.kind) {
-    case Load::Kind::kNone: return;
-    case Load::Kind::kWrapped: ctx.box(x0, x1, y0, y1, z, top, Material::kWrappedLoad, 10); return;
+    case Load::Kind::kNone:
+      return;
+    case Load::Kind::kWrapped:
+      ctx.box(x0, x1, y0, y1, z, top, Material::kWrappedLoad, 10);
+      return;
     case Load::Kind::kCartons: {
       const int nx = (x1 - x0) > 0.9f ? 2 : 1, ny = (y1 - y0) > 0.6f ? 2 : 1;
       const float cx = (x1 - x0) / static_cast<float>(nx), cy = (y1 - y0) / static_cast<float>(ny);
@@ -318,9 +329,9 @@ void add_goods(PosingContext& ctx, float x0, float x1, float y0, float y1, float
             const uint32_t hc = hash32(seed, layer, static_cast<uint32_t>(i * ny + j + 1));
             const float inset = 0.008f + 0.02f * unit_from_hash(hc);
             const float shift = 0.02f * (unit_from_hash(hash32(hc)) - 0.5f);
-            ctx.box(x0 + cx * static_cast<float>(i) + inset + shift, x0 + cx * static_cast<float>(i + 1) - inset + shift,
-                    y0 + cy * static_cast<float>(j) + inset, y0 + cy * static_cast<float>(j + 1) - inset, zz,
-                    zz + h - 0.005f, Material::kCarton, part++);
+            ctx.box(x0 + cx * static_cast<float>(i) + inset + shift,
+                    x0 + cx * static_cast<float>(i + 1) - inset + shift, y0 + cy * static_cast<float>(j) + inset,
+                    y0 + cy * static_cast<float>(j + 1) - inset, zz, zz + h - 0.005f, Material::kCarton, part++);
           }
         zz += h;
       }
@@ -393,7 +404,8 @@ void pose_person(PosingContext& ctx, const PersonLook& look, const ActorState& s
       elbow = {shoulder.x + upper * std::sin(arm_angle), shoulder.y + sign_y * 0.02f * sc,
                shoulder.z - upper * std::cos(arm_angle)};
       const float fore_angle = arm_angle + 0.2f + 0.35f * amp * std::max(0.0f, std::sin(-ph));
-      hand = {elbow.x + fore * std::sin(fore_angle), elbow.y + sign_y * 0.01f * sc, elbow.z - fore * std::cos(fore_angle)};
+      hand = {elbow.x + fore * std::sin(fore_angle), elbow.y + sign_y * 0.01f * sc,
+              elbow.z - fore * std::cos(fore_angle)};
     }
     ctx.capsule(shoulder, elbow, 0.052f * sc, Material::kPersonShirt, 3);
     ctx.capsule(elbow, hand, 0.043f * sc, Material::kPersonShirt, 4);
@@ -410,8 +422,8 @@ void pose_person(PosingContext& ctx, const PersonLook& look, const ActorState& s
   // Torso (pelvis to shoulders), neck, head.
   ctx.box(-0.115f * deep, 0.115f * deep, -0.19f * wide, 0.19f * wide, hip_z - 0.06f * sc, shoulder_z + 0.02f * sc,
           Material::kPersonShirt, 0);
-  ctx.capsule({0.0f, 0.0f, shoulder_z}, {0.01f * sc, 0.0f, shoulder_z + 0.07f * sc}, 0.05f * sc,
-              Material::kPersonSkin, 2);
+  ctx.capsule({0.0f, 0.0f, shoulder_z}, {0.01f * sc, 0.0f, shoulder_z + 0.07f * sc}, 0.05f * sc, Material::kPersonSkin,
+              2);
   const float head_r = 0.105f * sc;
   ctx.sphere({0.015f * sc, 0.0f, h - head_r + bob}, head_r, Material::kPersonHead, 1);
 }
@@ -490,24 +502,25 @@ void pose_actor(const Actor& actor, const ActorState& st, DynamicObject& obj) {
   if (actor.cls == ActorClass::kPerson) {
     pose_person(ctx, actor.look, st);
   } else if (actor.cls == ActorClass::kForklift) {
-    ctx.box(-0.95f, 0.75f, -0.55f, 0.55f, 0.14f, 1.05f, Material::kVehicleBody, 0);      // chassis
-    ctx.box(-1.18f, -0.95f, -0.52f, 0.52f, 0.16f, 1.12f, Material::kVehicleMetal, 1);    // counterweight
-    ctx.box(0.35f, 0.75f, 0.42f, 0.6f, 0.0f, 0.44f, Material::kTyre, 2);                 // front tyres
+    ctx.box(-0.95f, 0.75f, -0.55f, 0.55f, 0.14f, 1.05f, Material::kVehicleBody, 0);    // chassis
+    ctx.box(-1.18f, -0.95f, -0.52f, 0.52f, 0.16f, 1.12f, Material::kVehicleMetal, 1);  // counterweight
+    ctx.box(0.35f, 0.75f, 0.42f, 0.6f, 0.0f, 0.44f, Material::kTyre, 2);               // front tyres
     ctx.box(0.35f, 0.75f, -0.6f, -0.42f, 0.0f, 0.44f, Material::kTyre, 2);
-    ctx.box(-0.9f, -0.55f, 0.4f, 0.56f, 0.0f, 0.36f, Material::kTyre, 2);                // rear tyres
+    ctx.box(-0.9f, -0.55f, 0.4f, 0.56f, 0.0f, 0.36f, Material::kTyre, 2);  // rear tyres
     ctx.box(-0.9f, -0.55f, -0.56f, -0.4f, 0.0f, 0.36f, Material::kTyre, 2);
     for (float px : {-0.62f, 0.42f})
-      for (float py : {-0.5f, 0.5f}) ctx.box(px - 0.03f, px + 0.03f, py - 0.03f, py + 0.03f, 1.05f, 2.12f, Material::kVehicleGuard, 3);
-    ctx.box(-0.66f, 0.46f, -0.54f, 0.54f, 2.1f, 2.16f, Material::kVehicleGuard, 3);      // roof
-    ctx.box(-0.55f, -0.15f, -0.26f, 0.26f, 1.05f, 1.38f, Material::kVehicleDark, 4);     // seat
+      for (float py : {-0.5f, 0.5f})
+        ctx.box(px - 0.03f, px + 0.03f, py - 0.03f, py + 0.03f, 1.05f, 2.12f, Material::kVehicleGuard, 3);
+    ctx.box(-0.66f, 0.46f, -0.54f, 0.54f, 2.1f, 2.16f, Material::kVehicleGuard, 3);   // roof
+    ctx.box(-0.55f, -0.15f, -0.26f, 0.26f, 1.05f, 1.38f, Material::kVehicleDark, 4);  // seat
     pose_driver(ctx, actor.look);
-    ctx.box(0.28f, 0.62f, -0.42f, 0.42f, 1.05f, 1.32f, Material::kVehicleBody, 5);       // dashboard
-    ctx.box(0.8f, 0.9f, 0.3f, 0.4f, 0.08f, 2.3f, Material::kVehicleMetal, 6);            // mast
+    ctx.box(0.28f, 0.62f, -0.42f, 0.42f, 1.05f, 1.32f, Material::kVehicleBody, 5);  // dashboard
+    ctx.box(0.8f, 0.9f, 0.3f, 0.4f, 0.08f, 2.3f, Material::kVehicleMetal, 6);       // mast
     ctx.box(0.8f, 0.9f, -0.4f, -0.3f, 0.08f, 2.3f, Material::kVehicleMetal, 6);
     ctx.box(0.8f, 0.9f, -0.4f, 0.4f, 2.2f, 2.3f, Material::kVehicleMetal, 6);
     const float fork_z = kForkTravelZ + static_cast<float>(st.lift_m);
     ctx.box(0.91f, 0.97f, -0.46f, 0.46f, fork_z, fork_z + 0.62f, Material::kVehicleDark, 7);  // carriage
-    ctx.box(0.97f, 2.1f, 0.2f, 0.32f, fork_z, fork_z + 0.05f, Material::kVehicleMetal, 8);   // forks
+    ctx.box(0.97f, 2.1f, 0.2f, 0.32f, fork_z, fork_z + 0.05f, Material::kVehicleMetal, 8);    // forks
     ctx.box(0.97f, 2.1f, -0.32f, -0.2f, fork_z, fork_z + 0.05f, Material::kVehicleMetal, 8);
     if (actor.vehicle.load.kind != Load::Kind::kNone) {  // a loaded pallet resting on the forks
       ctx.box(1.0f, 2.2f, -0.4f, 0.4f, fork_z + 0.05f, fork_z + 0.194f, Material::kPallet, 9);
@@ -519,13 +532,13 @@ void pose_actor(const Actor& actor, const ActorState& st, DynamicObject& obj) {
     add_goods(ctx, -0.58f, 0.58f, -0.38f, 0.38f, kPalletHeightM, actor.vehicle.load, actor.seed);
   } else if (actor.vehicle.tugger_carts > 0) {  // automated tugger; its carts are trailers
     ctx.box(-0.7f, 0.55f, -0.34f, 0.34f, 0.07f, 0.55f, Material::kVehicleBody, 0);
-    ctx.box(0.55f, 0.62f, -0.3f, 0.3f, 0.1f, 0.3f, Material::kVehicleDark, 4);    // bumper with the safety scanner
+    ctx.box(0.55f, 0.62f, -0.3f, 0.3f, 0.1f, 0.3f, Material::kVehicleDark, 4);  // bumper with the safety scanner
     for (float px : {-0.5f, 0.3f})
       for (float py : {-0.4f, 0.34f}) ctx.box(px - 0.1f, px + 0.1f, py, py + 0.06f, 0.0f, 0.2f, Material::kTyre, 2);
-    ctx.box(-0.65f, -0.35f, -0.2f, 0.2f, 0.55f, 1.2f, Material::kVehicleBody, 5);  // control tower
+    ctx.box(-0.65f, -0.35f, -0.2f, 0.2f, 0.55f, 1.2f, Material::kVehicleBody, 5);     // control tower
     ctx.box(-0.55f, -0.45f, -0.05f, 0.05f, 1.2f, 1.32f, Material::kVehicleGuard, 3);  // beacon
     ctx.box(-0.95f, -0.7f, -0.04f, 0.04f, 0.22f, 0.28f, Material::kVehicleMetal, 6);  // tow hitch
-  } else {  // AGV with a cart of crates
+  } else {                                                                            // AGV with a cart of crates
     ctx.box(-0.6f, 0.6f, -0.4f, 0.4f, 0.07f, 0.34f, Material::kVehicleBody, 0);
     ctx.box(-0.45f, -0.25f, 0.35f, 0.42f, 0.0f, 0.16f, Material::kTyre, 2);
     ctx.box(-0.45f, -0.25f, -0.42f, -0.35f, 0.0f, 0.16f, Material::kTyre, 2);
@@ -533,7 +546,8 @@ void pose_actor(const Actor& actor, const ActorState& st, DynamicObject& obj) {
     ctx.box(0.25f, 0.45f, -0.42f, -0.35f, 0.0f, 0.16f, Material::kTyre, 2);
     ctx.box(0.48f, 0.58f, -0.06f, 0.06f, 0.34f, 0.44f, Material::kVehicleDark, 4);  // lidar
     for (float px : {-0.52f, 0.36f})
-      for (float py : {-0.34f, 0.31f}) ctx.box(px, px + 0.03f, py, py + 0.03f, 0.34f, 1.35f, Material::kVehicleMetal, 6);
+      for (float py : {-0.34f, 0.31f})
+        ctx.box(px, px + 0.03f, py, py + 0.03f, 0.34f, 1.35f, Material::kVehicleMetal, 6);
     ctx.box(-0.54f, 0.41f, -0.36f, 0.36f, 0.34f, 0.38f, Material::kVehicleMetal, 6);
     ctx.box(-0.54f, 0.41f, -0.36f, 0.36f, 0.84f, 0.87f, Material::kVehicleMetal, 6);
     ctx.box(-0.5f, -0.06f, -0.32f, 0.3f, 0.38f, 0.72f, Material::kCrate, 9);

@@ -18,8 +18,10 @@ using Look = PersonLook;
 float pattern_coverage(const Look& look, float u, float v, float w, uint32_t seed) {
   const float period = look.pattern_period_m;
   switch (look.pattern) {
-    case Look::Pattern::kPlain: return 0.0f;
-    case Look::Pattern::kStripes: return stripe_coverage(v, period, 0.5f * period, w);
+    case Look::Pattern::kPlain:
+      return 0.0f;
+    case Look::Pattern::kStripes:
+      return stripe_coverage(v, period, 0.5f * period, w);
     case Look::Pattern::kChecks: {
       const float a = stripe_coverage(u, period, 0.5f * period, w), b = stripe_coverage(v, period, 0.5f * period, w);
       return a + b - 2.0f * a * b;
@@ -88,48 +90,61 @@ float top_on_torso(const Look& look, uint32_t seed, bool front, bool back, float
         if (box > 0) {
           float g = lerp(look.pattern_shade, ink, frame_coverage(across, height, u0, u1, v0, v1, 0.012f, w));
           g = lerp(g, ink, rect_coverage(across, height, u0 + 0.03f, u0 + 0.1f, v0 + 0.12f * V, v1 - 0.05f, w));
-          g = lerp(g, look.shirt_shade, rect_coverage(across, height, u0 + 0.05f, u0 + 0.08f, v0 + 0.2f * V, v1 - 0.09f, w));
-          g = lerp(g, ink, text_coverage(across, height, u0 + 0.12f, u1 - 0.02f, v0 + 0.03f, v1 - 0.04f, 0.028f, w, seed + 5U));
+          g = lerp(g, look.shirt_shade,
+                   rect_coverage(across, height, u0 + 0.05f, u0 + 0.08f, v0 + 0.2f * V, v1 - 0.09f, w));
+          g = lerp(g, ink,
+                   text_coverage(across, height, u0 + 0.12f, u1 - 0.02f, v0 + 0.03f, v1 - 0.04f, 0.028f, w, seed + 5U));
           c = lerp(c, g, box);
         }
       }
       break;
     case Look::Top::kLongSleeve:
       if (front && look.pockets) {
-        c = lerp(c, trim, interval_coverage(across, -0.009f, 0.009f, w) * interval_coverage(height, 0.0f, V - 0.02f, w));
+        c = lerp(c, trim,
+                 interval_coverage(across, -0.009f, 0.009f, w) * interval_coverage(height, 0.0f, V - 0.02f, w));
         // Buttons down the placket, a chest pocket with its flap.
-        const float b = stripe_coverage(height - 0.03f, 0.085f, 0.012f, w) * interval_coverage(across, -0.006f, 0.006f, w);
+        const float b =
+            stripe_coverage(height - 0.03f, 0.085f, 0.012f, w) * interval_coverage(across, -0.006f, 0.006f, w);
         c = lerp(c, ink, b);
         c = lerp(c, trim, frame_coverage(across, height, 0.04f, 0.13f, 0.6f * V, 0.78f * V, 0.006f, w));
-        c = lerp(c, trim, interval_coverage(height, 0.74f * V, 0.75f * V, w) * interval_coverage(across, 0.04f, 0.13f, w));
+        c = lerp(c, trim,
+                 interval_coverage(height, 0.74f * V, 0.75f * V, w) * interval_coverage(across, 0.04f, 0.13f, w));
       }
       if (front || back) c = lerp(c, trim, interval_coverage(height, V - 0.035f, V, w));  // collar
       break;
     case Look::Top::kJacket: {
       if (front) {
-        c = lerp(c, look.inner_shade, interval_coverage(across, -0.05f, 0.05f, w) * interval_coverage(height, 0.78f * V, V, w));
-        c = lerp(c, 0.55f, interval_coverage(across, -0.006f, 0.006f, w) * interval_coverage(height, 0.0f, 0.78f * V, w));
+        c = lerp(c, look.inner_shade,
+                 interval_coverage(across, -0.05f, 0.05f, w) * interval_coverage(height, 0.78f * V, V, w));
+        c = lerp(c, 0.55f,
+                 interval_coverage(across, -0.006f, 0.006f, w) * interval_coverage(height, 0.0f, 0.78f * V, w));
         if (look.pockets) {
           for (float side : {-1.0f, 1.0f}) {  // chest pockets with zips, hand pockets with flaps
             const float a0 = side > 0 ? 0.035f : -0.14f, a1 = a0 + 0.105f;
             c = lerp(c, trim, frame_coverage(across, height, a0, a1, 0.6f * V, 0.74f * V, 0.005f, w));
-            c = lerp(c, 0.6f, interval_coverage(height, 0.7f * V, 0.71f * V, w) * interval_coverage(across, a0 + 0.01f, a1 - 0.01f, w));
+            c = lerp(c, 0.6f,
+                     interval_coverage(height, 0.7f * V, 0.71f * V, w) *
+                         interval_coverage(across, a0 + 0.01f, a1 - 0.01f, w));
             c = lerp(c, trim, frame_coverage(across, height, a0, a1, 0.12f * V, 0.3f * V, 0.005f, w));
-            c = lerp(c, ink, rect_coverage(across, height, 0.5f * (a0 + a1) - 0.008f, 0.5f * (a0 + a1) + 0.008f, 0.25f * V, 0.27f * V, w));
+            c = lerp(c, ink,
+                     rect_coverage(across, height, 0.5f * (a0 + a1) - 0.008f, 0.5f * (a0 + a1) + 0.008f, 0.25f * V,
+                                   0.27f * V, w));
           }
         }
       }
       c = lerp(c, look.pattern_shade, interval_coverage(height, 0.86f * V, V, w));  // shoulder yoke
-      c = lerp(c, 0.92f, interval_coverage(height, 0.5f * V, 0.52f * V, w));       // reflective piping
+      c = lerp(c, 0.92f, interval_coverage(height, 0.5f * V, 0.52f * V, w));        // reflective piping
       break;
     }
     case Look::Top::kHoodie:
       if (front) {
         c = lerp(c, trim, frame_coverage(across, height, -0.13f, 0.13f, 0.08f * V, 0.35f * V, 0.007f, w));  // pocket
         for (float a : {-0.04f, 0.04f})  // drawstrings
-          c = lerp(c, ink, interval_coverage(across, a - 0.005f, a + 0.005f, w) * interval_coverage(height, 0.68f * V, V, w));
+          c = lerp(c, ink,
+                   interval_coverage(across, a - 0.005f, a + 0.005f, w) * interval_coverage(height, 0.68f * V, V, w));
       }
-      c = lerp(c, c * 0.8f, interval_coverage(height, 0.0f, 0.06f * V, w) * stripe_coverage(u, 0.012f, 0.006f, w));  // ribbing
+      c = lerp(c, c * 0.8f,
+               interval_coverage(height, 0.0f, 0.06f * V, w) * stripe_coverage(u, 0.012f, 0.006f, w));  // ribbing
       break;
     case Look::Top::kHiVisVest: {
       c = look.shirt_shade;  // the vest covers the shirt's pattern
@@ -137,7 +152,8 @@ float top_on_torso(const Look& look, uint32_t seed, bool front, bool back, float
       for (float band : {0.18f, 0.5f}) {  // reflective bands with dark edges
         const float v0 = band * V;
         c = lerp(c, 0.98f, interval_coverage(height, v0, v0 + 0.05f, w));
-        c = lerp(c, 0.3f, interval_coverage(height, v0 - 0.006f, v0, w) + interval_coverage(height, v0 + 0.05f, v0 + 0.056f, w));
+        c = lerp(c, 0.3f,
+                 interval_coverage(height, v0 - 0.006f, v0, w) + interval_coverage(height, v0 + 0.05f, v0 + 0.056f, w));
       }
       if (back) {
         c = lerp(c, 0.1f, text_coverage(across, height, -0.13f, 0.13f, 0.66f * V, 0.86f * V, 0.045f, w, seed + 7U));
@@ -164,7 +180,8 @@ float top_on_torso(const Look& look, uint32_t seed, bool front, bool back, float
   if ((look.prints & Look::kNameBadge) != 0 && front) {
     const float badge = rect_coverage(across, height, 0.04f, 0.13f, 0.82f * V, 0.86f * V, w);
     if (badge > 0) {
-      const float b = lerp(0.92f, 0.1f, text_coverage(across, height, 0.05f, 0.12f, 0.825f * V, 0.855f * V, 0.01f, w, seed + 13U));
+      const float b =
+          lerp(0.92f, 0.1f, text_coverage(across, height, 0.05f, 0.12f, 0.825f * V, 0.855f * V, 0.01f, w, seed + 13U));
       c = lerp(c, b, badge);
     }
   }
@@ -187,9 +204,10 @@ float trousers(const Look& look, int part, float along, float len, float around,
       c = lerp(c, std::min(0.9f, c + 0.25f), seam);  // stitched seams are lighter
       if (part == 5) {
         const float back = 2.0f * side;  // centre of the back
-        c = lerp(c, std::min(0.9f, c + 0.2f), frame_coverage(around, along, back - 0.08f, back - 0.01f, 0.05f, 0.18f, 0.004f, w));
-        c = lerp(c, std::min(0.9f, c + 0.2f), interval_coverage(along, 0.0f, 0.1f, w) *
-                                                  interval_coverage(around, 0.45f * side, 0.5f * side, w));
+        c = lerp(c, std::min(0.9f, c + 0.2f),
+                 frame_coverage(around, along, back - 0.08f, back - 0.01f, 0.05f, 0.18f, 0.004f, w));
+        c = lerp(c, std::min(0.9f, c + 0.2f),
+                 interval_coverage(along, 0.0f, 0.1f, w) * interval_coverage(around, 0.45f * side, 0.5f * side, w));
       }
       c += 0.06f * (1.0f - smoothstep(0.0f, 0.12f, std::fabs(part == 5 ? len - along : along)));  // worn knees
       break;
@@ -211,7 +229,8 @@ float trousers(const Look& look, int part, float along, float len, float around,
     case Look::Bottom::kHiVis:
       c = lerp(c, c * 0.75f, seam);
       if (part == 6)
-        for (float band : {0.3f, 0.48f}) c = lerp(c, 0.98f, interval_coverage(along, band * len, band * len + 0.05f, w));
+        for (float band : {0.3f, 0.48f})
+          c = lerp(c, 0.98f, interval_coverage(along, band * len, band * len + 0.05f, w));
       break;
   }
   if (part == 5) c = lerp(c, 0.08f, interval_coverage(along, 0.0f, 0.035f, w));  // belt
@@ -241,7 +260,8 @@ AGVSLAM_SIM_CLONES float person_albedo(const DynamicObject& obj, const DynamicPr
         if (forearm && axis_param > 0.8f) return look.skin_shade;
         if (look.top == Look::Top::kTshirt && (forearm || axis_param > 0.55f)) return look.skin_shade;
         const bool inner = look.top == Look::Top::kHiVisVest || look.top == Look::Top::kOveralls;
-        c = inner ? look.inner_shade : lerp(look.shirt_shade, look.pattern_shade, pattern_coverage(look, u, p.z, w, seed));
+        c = inner ? look.inner_shade
+                  : lerp(look.shirt_shade, look.pattern_shade, pattern_coverage(look, u, p.z, w, seed));
         if (forearm) c = lerp(c, c * 0.75f, smoothstep(0.72f, 0.74f, axis_param));  // cuff
       }
       if (look.folds) c *= fold_factor(u, p.z, w, seed);
@@ -271,8 +291,9 @@ AGVSLAM_SIM_CLONES float person_albedo(const DynamicObject& obj, const DynamicPr
         c = lerp(c, 0.6f, interval_coverage(d.z, -0.15f * r, -0.05f * r, w));
       } else {
         // Hair: top and back of the head.
-        const float hair = std::max(smoothstep(0.15f * r - w, 0.15f * r + w, d.z),
-                                    smoothstep(-0.2f * r - w, -0.2f * r + w, -d.x) * smoothstep(-0.6f * r - w, -0.6f * r + w, d.z));
+        const float hair =
+            std::max(smoothstep(0.15f * r - w, 0.15f * r + w, d.z),
+                     smoothstep(-0.2f * r - w, -0.2f * r + w, -d.x) * smoothstep(-0.6f * r - w, -0.6f * r + w, d.z));
         c = lerp(c, look.hair_shade, hair);
       }
       if (d.x > 0.5f * r) {  // eyes and mouth

@@ -19,10 +19,12 @@ float label(float base, const FaceSample& f, float u0, float v0, float lw, float
   const float cov = rect_coverage(f.u, f.v, u0, u0 + lw, v0, v0 + lh, w);
   if (cov <= 0) return base;
   float c = 0.9f;
-  c = lerp(c, 0.08f, text_coverage(f.u, f.v, u0 + lw * 0.08f, u0 + lw * 0.92f, v0 + lh * 0.5f, v0 + lh * 0.92f,
-                                   lh * 0.14f, w, seed));
-  c = lerp(c, 0.06f, barcode_coverage(f.u, f.v, u0 + lw * 0.1f, u0 + lw * 0.9f, v0 + lh * 0.1f, v0 + lh * 0.42f,
-                                      lw * 0.022f, w, seed + 1U));
+  c = lerp(
+      c, 0.08f,
+      text_coverage(f.u, f.v, u0 + lw * 0.08f, u0 + lw * 0.92f, v0 + lh * 0.5f, v0 + lh * 0.92f, lh * 0.14f, w, seed));
+  c = lerp(c, 0.06f,
+           barcode_coverage(f.u, f.v, u0 + lw * 0.1f, u0 + lw * 0.9f, v0 + lh * 0.1f, v0 + lh * 0.42f, lw * 0.022f, w,
+                            seed + 1U));
   return lerp(base, c, cov);
 }
 
@@ -51,8 +53,8 @@ AGVSLAM_SIM_INLINE float carton(const FaceSample& f) {
   // Tape running down the end faces.
   const bool end_face = (f.face / 2 == 0) == long_x;
   if (end_face)
-    c = lerp(c, tape_tone, rect_coverage(f.u, f.v, 0.5f * f.su - 0.5f * tape_w, 0.5f * f.su + 0.5f * tape_w,
-                                         f.sv - 0.07f, f.sv, w));
+    c = lerp(c, tape_tone,
+             rect_coverage(f.u, f.v, 0.5f * f.su - 0.5f * tape_w, 0.5f * f.su + 0.5f * tape_w, f.sv - 0.07f, f.sv, w));
   const uint32_t h = hash32(f.seed, 5U);
   // Printed marks: a logo frame, arrows, handling symbols.
   if ((h & 3U) != 0 && f.su > 0.2f && f.sv > 0.15f) {
@@ -62,8 +64,9 @@ AGVSLAM_SIM_INLINE float carton(const FaceSample& f) {
     c = lerp(c, 0.1f, frame_coverage(f.u, f.v, u0, u0 + s, v0, v0 + s, s * 0.12f, w));
     c = lerp(c, 0.12f, rect_coverage(f.u, f.v, u0 + s * 0.3f, u0 + s * 0.7f, v0 + s * 0.3f, v0 + s * 0.7f, w));
     if ((h & 4U) != 0)
-      c = lerp(c, 0.1f, text_coverage(f.u, f.v, u0 + s * 1.2f, std::min(f.su - 0.03f, u0 + s * 3.5f), v0,
-                                      v0 + s * 0.8f, s * 0.22f, w, h));
+      c = lerp(c, 0.1f,
+               text_coverage(f.u, f.v, u0 + s * 1.2f, std::min(f.su - 0.03f, u0 + s * 3.5f), v0, v0 + s * 0.8f,
+                             s * 0.22f, w, h));
   }
   // Shipping label.
   if ((h & 24U) != 0 && f.su > 0.16f && f.sv > 0.12f) {
@@ -96,7 +99,8 @@ float pallet_top(float u, float v, float su, float sv, float w, uint32_t seed) {
   const float along = along_u ? u : v;
   const float board = 0.145f;
   const int32_t k = floor_to_int(across / board);
-  float c = 0.6f + 0.12f * (unit_from_hash(hash32(static_cast<uint32_t>(k), seed)) - 0.5f) * detail_visibility(board, w);
+  float c =
+      0.6f + 0.12f * (unit_from_hash(hash32(static_cast<uint32_t>(k), seed)) - 0.5f) * detail_visibility(board, w);
   c += 0.12f * fractal_noise(along * 0.2f, across * 3.0f, 0.04f, 3, 0.6f, w, seed + 3U);
   c = lerp(c, 0.08f, stripe_coverage(across - board + 0.035f, board, 0.035f, w));
   return c;
@@ -130,15 +134,17 @@ AGVSLAM_SIM_INLINE float crate(const FaceSample& f) {
   float c = kTones[hash32(box_seed, 31U) % 5U];
   c += 0.06f * fractal_noise(f.u, f.v, 0.2f, 3, 0.6f, w, f.seed);
   if (vertical_face(f)) {
-    c = lerp(c, c * 0.55f, stripe_coverage(f.u - 0.02f, 0.07f, 0.018f, w) *
-                               interval_coverage(f.v, 0.03f, f.sv - 0.05f, w));
+    c = lerp(c, c * 0.55f,
+             stripe_coverage(f.u - 0.02f, 0.07f, 0.018f, w) * interval_coverage(f.v, 0.03f, f.sv - 0.05f, w));
     c = lerp(c, c + 0.12f, interval_coverage(f.v, f.sv - 0.035f, f.sv, w));
-    c = lerp(c, 0.04f, rect_coverage(f.u, f.v, 0.5f * f.su - 0.06f, 0.5f * f.su + 0.06f, f.sv - 0.09f, f.sv - 0.05f, w));
+    c = lerp(c, 0.04f,
+             rect_coverage(f.u, f.v, 0.5f * f.su - 0.06f, 0.5f * f.su + 0.06f, f.sv - 0.09f, f.sv - 0.05f, w));
     c = lerp(c, 0.88f, rect_coverage(f.u, f.v, 0.03f, 0.11f, 0.05f, 0.1f, w));
   } else if (top_face(f)) {
     const float inside = rect_coverage(f.u, f.v, 0.025f, f.su - 0.025f, 0.025f, f.sv - 0.025f, w);
     c = lerp(c, c * 0.3f, inside);
-    c = lerp(c, c + 0.1f, inside * std::max(stripe_coverage(f.u, 0.05f, 0.008f, w), stripe_coverage(f.v, 0.05f, 0.008f, w)));
+    c = lerp(c, c + 0.1f,
+             inside * std::max(stripe_coverage(f.u, 0.05f, 0.008f, w), stripe_coverage(f.v, 0.05f, 0.008f, w)));
   }
   return c;
 }
@@ -148,8 +154,8 @@ float upright(uint8_t variant, const FaceSample& f) {
   float c = 0.56f + 0.07f * fractal_noise(f.u, f.v, 0.2f, 3, 0.6f, w, f.seed);
   if (vertical_face(f)) {
     // Punched slots every 50 mm.
-    const float slots = stripe_coverage(f.v, 0.05f, 0.024f, w) *
-                        interval_coverage(f.u, 0.5f * f.su - 0.009f, 0.5f * f.su + 0.009f, w);
+    const float slots =
+        stripe_coverage(f.v, 0.05f, 0.024f, w) * interval_coverage(f.u, 0.5f * f.su - 0.009f, 0.5f * f.su + 0.009f, w);
     c = lerp(c, 0.07f, slots);
     if (variant == 1 && f.v < 0.6f) {
       const float stripes = stripe_coverage(f.u + f.v, 0.1f, 0.05f, w * 1.41f);
@@ -207,8 +213,8 @@ float vehicle_body(const FaceSample& f, float tone, bool agv) {
            interval_coverage(f.v, 0.0f, band_h, w));
   c = lerp(c, 0.15f, stripe_coverage(f.u, 0.6f, 0.008f, w) * interval_coverage(f.v, band_h, f.sv, w));
   if (f.su > 0.5f && f.sv > 0.3f) {
-    c = lerp(c, 0.08f, text_coverage(f.u, f.v, 0.12f, std::min(f.su - 0.1f, 0.9f), f.sv * 0.45f, f.sv * 0.8f,
-                                     0.06f, w, f.seed));
+    c = lerp(c, 0.08f,
+             text_coverage(f.u, f.v, 0.12f, std::min(f.su - 0.1f, 0.9f), f.sv * 0.45f, f.sv * 0.8f, 0.06f, w, f.seed));
     c = lerp(c, 0.95f, rect_coverage(f.u, f.v, f.su - 0.3f, f.su - 0.12f, f.sv * 0.5f, f.sv * 0.75f, w));
   }
   return c;
@@ -219,7 +225,8 @@ float vehicle_body(const FaceSample& f, float tone, bool agv) {
 AGVSLAM_SIM_CLONES float box_albedo(Material material, uint8_t variant, const FaceSample& f) {
   const float w = f.footprint_m;
   switch (material) {
-    case Material::kCarton: return carton(f);
+    case Material::kCarton:
+      return carton(f);
     case Material::kPallet:
       if (top_face(f)) return pallet_top(f.u, f.v, f.su, f.sv, w, f.seed & ~7U);
       if (vertical_face(f)) return pallet_side(f.u, f.v, f.su, w, f.seed);
@@ -234,26 +241,39 @@ AGVSLAM_SIM_CLONES float box_albedo(Material material, uint8_t variant, const Fa
       const float shift = 0.03f * (unit_from_hash(layer_seed) - 0.5f);
       return pallet_side(f.u + shift, vl, f.su, w, layer_seed);
     }
-    case Material::kWrappedLoad: return wrapped_load(f);
-    case Material::kCrate: return crate(f);
-    case Material::kRackUpright: return upright(variant, f);
-    case Material::kRackBeam: return beam(f);
-    case Material::kRackBrace: return 0.5f + 0.06f * fractal_noise(f.u, f.v, 0.3f, 2, 0.6f, w, f.seed);
-    case Material::kShelfDeck: return deck(f);
-    case Material::kPillar: return pillar(f);
-    case Material::kDockLeveller: return 0.4f;
-    case Material::kVehicleBody: return vehicle_body(f, 0.72f, false);
-    case Material::kVehicleDark: return 0.1f + 0.05f * fractal_noise(f.u, f.v, 0.2f, 2, 0.6f, w, f.seed);
+    case Material::kWrappedLoad:
+      return wrapped_load(f);
+    case Material::kCrate:
+      return crate(f);
+    case Material::kRackUpright:
+      return upright(variant, f);
+    case Material::kRackBeam:
+      return beam(f);
+    case Material::kRackBrace:
+      return 0.5f + 0.06f * fractal_noise(f.u, f.v, 0.3f, 2, 0.6f, w, f.seed);
+    case Material::kShelfDeck:
+      return deck(f);
+    case Material::kPillar:
+      return pillar(f);
+    case Material::kDockLeveller:
+      return 0.4f;
+    case Material::kVehicleBody:
+      return vehicle_body(f, 0.72f, false);
+    case Material::kVehicleDark:
+      return 0.1f + 0.05f * fractal_noise(f.u, f.v, 0.2f, 2, 0.6f, w, f.seed);
     case Material::kVehicleMetal:
       return 0.34f + 0.1f * fractal_noise(f.u * 0.3f, f.v * 3.0f, 0.2f, 3, 0.6f, w, f.seed);
-    case Material::kVehicleGuard: return 0.12f + 0.04f * fractal_noise(f.u, f.v, 0.2f, 3, 0.6f, w, f.seed);
-    case Material::kTyre: return 0.07f + 0.03f * fractal_noise(f.u, f.v, 0.05f, 3, 0.6f, w, f.seed);
-    default: return 0.5f;
+    case Material::kVehicleGuard:
+      return 0.12f + 0.04f * fractal_noise(f.u, f.v, 0.2f, 3, 0.6f, w, f.seed);
+    case Material::kTyre:
+      return 0.07f + 0.03f * fractal_noise(f.u, f.v, 0.05f, 3, 0.6f, w, f.seed);
+    default:
+      return 0.5f;
   }
 }
 
-AGVSLAM_SIM_CLONES float actor_albedo(const DynamicObject& obj, const DynamicPrimitive& prim, const V3& p, const V3& n, float axis_param,
-                   float w) {
+AGVSLAM_SIM_CLONES float actor_albedo(const DynamicObject& obj, const DynamicPrimitive& prim, const V3& p, const V3& n,
+                                      float axis_param, float w) {
   const bool person_part = prim.material == Material::kPersonShirt || prim.material == Material::kPersonTrousers ||
                            prim.material == Material::kPersonSkin || prim.material == Material::kPersonHead;
   if (person_part || (obj.cls == ActorClass::kPerson && prim.material == Material::kTyre))
@@ -268,20 +288,32 @@ AGVSLAM_SIM_CLONES float actor_albedo(const DynamicObject& obj, const DynamicPri
   f.footprint_m = w;
   const float ax = std::fabs(n.x), ay = std::fabs(n.y), az = std::fabs(n.z);
   int axis = 2;
-  if (ax >= ay && ax >= az) axis = 0;
-  else if (ay >= az) axis = 1;
+  if (ax >= ay && ax >= az)
+    axis = 0;
+  else if (ay >= az)
+    axis = 1;
   const bool positive = n[axis] > 0;
   f.face = axis * 2 + (positive ? 1 : 0);
   if (axis == 2) {
-    f.u = q.x; f.v = q.y; f.su = size.x; f.sv = size.y;
+    f.u = q.x;
+    f.v = q.y;
+    f.su = size.x;
+    f.sv = size.y;
   } else if (axis == 0) {
-    f.u = q.y; f.v = q.z; f.su = size.y; f.sv = size.z;
+    f.u = q.y;
+    f.v = q.z;
+    f.su = size.y;
+    f.sv = size.z;
   } else {
-    f.u = q.x; f.v = q.z; f.su = size.x; f.sv = size.z;
+    f.u = q.x;
+    f.v = q.z;
+    f.su = size.x;
+    f.sv = size.z;
   }
   f.seed = hash32(obj.seed + prim.part * 131U, static_cast<uint32_t>(f.face)) & ~7U;
   f.seed |= static_cast<uint32_t>(f.face);
-  if (prim.material == Material::kVehicleBody) return vehicle_body(f, obj.vehicle.body_shade, obj.cls == ActorClass::kAgv);
+  if (prim.material == Material::kVehicleBody)
+    return vehicle_body(f, obj.vehicle.body_shade, obj.cls == ActorClass::kAgv);
   return box_albedo(prim.material, 0, f);
 }
 

@@ -42,7 +42,9 @@ AGVSLAM_SIM_CLONES void filter_row(PngFilter filter, const uint8_t* cur, const u
   out[0] = static_cast<uint8_t>(filter);
   uint8_t* o = out + 1;
   switch (filter) {
-    case PngFilter::kNone: std::memcpy(o, cur, n); break;
+    case PngFilter::kNone:
+      std::memcpy(o, cur, n);
+      break;
     case PngFilter::kSub:
       for (std::size_t i = 0; i < bpp && i < n; ++i) o[i] = cur[i];
       for (std::size_t i = bpp; i < n; ++i) o[i] = static_cast<uint8_t>(cur[i] - cur[i - bpp]);
@@ -60,8 +62,8 @@ AGVSLAM_SIM_CLONES void filter_row(PngFilter filter, const uint8_t* cur, const u
       for (std::size_t i = 0; i < bpp && i < n; ++i) o[i] = static_cast<uint8_t>(cur[i] - prev[i]);
       for (std::size_t i = bpp; i < n; ++i) {
         const int a = cur[i - bpp], b = prev[i], c = prev[i - bpp];
-        const int pa = b > c ? b - c : c - b;              // |p - a|
-        const int pb = a > c ? a - c : c - a;              // |p - b|
+        const int pa = b > c ? b - c : c - b;                          // |p - a|
+        const int pb = a > c ? a - c : c - a;                          // |p - b|
         const int pc = a + b > 2 * c ? a + b - 2 * c : 2 * c - a - b;  // |p - c|
         const int pred = (pa <= pb && pa <= pc) ? a : (pb <= pc ? b : c);
         o[i] = static_cast<uint8_t>(cur[i] - pred);
@@ -131,8 +133,8 @@ const std::vector<uint8_t>& PngWriter::encode(const cv::Mat& image, PngFilter fi
   const std::size_t bound = libdeflate_zlib_compress_bound(compressor_->c, filtered_.size());
   at = begin_chunk(buffer_, "IDAT", 0);
   buffer_.resize(at + 8 + bound);
-  const std::size_t compressed = libdeflate_zlib_compress(compressor_->c, filtered_.data(), filtered_.size(),
-                                                          buffer_.data() + at + 8, bound);
+  const std::size_t compressed =
+      libdeflate_zlib_compress(compressor_->c, filtered_.data(), filtered_.size(), buffer_.data() + at + 8, bound);
   if (compressed == 0 || compressed > 0x7fffffffU)
     throw std::runtime_error(what + ": PNG encoding failed (deflate output does not fit)");
   buffer_.resize(at + 8 + compressed);

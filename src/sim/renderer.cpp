@@ -26,12 +26,18 @@ void for_each_row(int rows, int threads, const F& f) {
 
 int32_t surface_key(const RayHit& hit) {
   switch (hit.kind) {
-    case RayHit::Kind::kNone: return 0;
-    case RayHit::Kind::kFloor: return 1;
-    case RayHit::Kind::kCeiling: return 2;
-    case RayHit::Kind::kWall: return 3 + hit.face;
-    case RayHit::Kind::kBox: return 16 + hit.index * 8 + hit.face;
-    case RayHit::Kind::kDynamic: return static_cast<int32_t>(0x40000000 + hit.object * 65536 + hit.index * 8);
+    case RayHit::Kind::kNone:
+      return 0;
+    case RayHit::Kind::kFloor:
+      return 1;
+    case RayHit::Kind::kCeiling:
+      return 2;
+    case RayHit::Kind::kWall:
+      return 3 + hit.face;
+    case RayHit::Kind::kBox:
+      return 16 + hit.index * 8 + hit.face;
+    case RayHit::Kind::kDynamic:
+      return static_cast<int32_t>(0x40000000 + hit.object * 65536 + hit.index * 8);
   }
   return 0;
 }
@@ -41,10 +47,14 @@ SemanticClass hit_class(const RayHit& hit, const std::vector<StaticBox>& boxes,
                         const std::vector<DynamicObject>& objects) {
   switch (hit.kind) {
     case RayHit::Kind::kNone:
-    case RayHit::Kind::kCeiling: return SemanticClass::kBackground;
-    case RayHit::Kind::kFloor: return SemanticClass::kFloor;
-    case RayHit::Kind::kWall: return SemanticClass::kWall;
-    case RayHit::Kind::kBox: return static_box_class(boxes[static_cast<std::size_t>(hit.index)].material);
+    case RayHit::Kind::kCeiling:
+      return SemanticClass::kBackground;
+    case RayHit::Kind::kFloor:
+      return SemanticClass::kFloor;
+    case RayHit::Kind::kWall:
+      return SemanticClass::kWall;
+    case RayHit::Kind::kBox:
+      return static_box_class(boxes[static_cast<std::size_t>(hit.index)].material);
     case RayHit::Kind::kDynamic: {
       const DynamicObject& obj = objects[static_cast<std::size_t>(hit.object)];
       return actor_part_class(obj.cls, obj.primitives[static_cast<std::size_t>(hit.index)].material);
@@ -133,10 +143,9 @@ void set_hall_hit(int plane, float t, RayHit& hit) {
     uint8_t wall;  // 0 south (y = 0), 1 east (x = width), 2 north (y = depth), 3 west (x = 0)
     V3 normal;
   };
-  static constexpr Plane kPlanes[6] = {
-      {RayHit::Kind::kWall, 1, {-1, 0, 0}},    {RayHit::Kind::kWall, 3, {1, 0, 0}},
-      {RayHit::Kind::kWall, 2, {0, -1, 0}},    {RayHit::Kind::kWall, 0, {0, 1, 0}},
-      {RayHit::Kind::kCeiling, 0, {0, 0, -1}}, {RayHit::Kind::kFloor, 0, {0, 0, 1}}};
+  static constexpr Plane kPlanes[6] = {{RayHit::Kind::kWall, 1, {-1, 0, 0}},    {RayHit::Kind::kWall, 3, {1, 0, 0}},
+                                       {RayHit::Kind::kWall, 2, {0, -1, 0}},    {RayHit::Kind::kWall, 0, {0, 1, 0}},
+                                       {RayHit::Kind::kCeiling, 0, {0, 0, -1}}, {RayHit::Kind::kFloor, 0, {0, 0, 1}}};
   const Plane& p = kPlanes[plane];
   hit.t = t;
   hit.kind = t < kInfinity ? p.kind : RayHit::Kind::kNone;
@@ -195,7 +204,9 @@ void row_footprint_light_haze(int width, const V3 col_x, const V3 row_dir, const
 
 // Surface ids in the texture cache.
 constexpr std::size_t kFloorSurface = 0, kCeilingSurface = 1, kFirstWallSurface = 2, kFirstBoxSurface = 6;
-std::size_t box_surface(std::size_t box, int face) { return kFirstBoxSurface + box * 6 + static_cast<std::size_t>(face); }
+std::size_t box_surface(std::size_t box, int face) {
+  return kFirstBoxSurface + box * 6 + static_cast<std::size_t>(face);
+}
 
 }  // namespace
 
@@ -427,9 +438,12 @@ void Renderer::project_box_faces(const CameraIntrinsics& cam, const Eigen::Isome
     if (z_max <= z_near) continue;  // entirely behind the camera
     for (int axis = 0; axis < 3; ++axis) {
       int side;  // 0: the face at lo[axis] (normal -axis), 1: at hi[axis]
-      if (o[axis] < lo[axis]) side = 0;
-      else if (o[axis] > hi[axis]) side = 1;
-      else continue;  // not facing the camera
+      if (o[axis] < lo[axis])
+        side = 0;
+      else if (o[axis] > hi[axis])
+        side = 1;
+      else
+        continue;  // not facing the camera
       // The face's 4 corners, in order around it.
       const int a1 = (axis + 1) % 3, a2 = (axis + 2) % 3;
       const int bit_axis = 1 << axis, bit1 = 1 << a1, bit2 = 1 << a2;
@@ -516,8 +530,9 @@ void Renderer::rasterize_boxes(const CameraIntrinsics& cam, const std::vector<Bo
   });
 }
 
-AGVSLAM_SIM_CLONES void Renderer::rasterize_row(int width, const std::vector<BoxFace>& faces, const std::vector<uint32_t>& bucket, int v,
-                             float* zrow, int32_t* krow) {
+AGVSLAM_SIM_CLONES void Renderer::rasterize_row(int width, const std::vector<BoxFace>& faces,
+                                                const std::vector<uint32_t>& bucket, int v, float* zrow,
+                                                int32_t* krow) {
   for (uint32_t fi : bucket) {
     const BoxFace& f = faces[fi];
     if (v < f.row0 || v > f.row1) continue;
@@ -555,13 +570,23 @@ float Renderer::shade(const RayHit& hit, const Ray& ray, const std::vector<Dynam
 void Renderer::face_size(const StaticBox& box, int face, float& su, float& sv) {
   const V3 size = box.hi - box.lo;
   switch (face / 2) {
-    case 0: su = size.y; sv = size.z; break;
-    case 1: su = size.x; sv = size.z; break;
-    default: su = size.x; sv = size.y; break;
+    case 0:
+      su = size.y;
+      sv = size.z;
+      break;
+    case 1:
+      su = size.x;
+      sv = size.z;
+      break;
+    default:
+      su = size.x;
+      sv = size.y;
+      break;
   }
 }
 
-AGVSLAM_SIM_CLONES float Renderer::box_face_albedo(std::size_t box_index, int face, float u, float v, float footprint_m) const {
+AGVSLAM_SIM_CLONES float Renderer::box_face_albedo(std::size_t box_index, int face, float u, float v,
+                                                   float footprint_m) const {
   const StaticBox& box = warehouse_.boxes[box_index];
   FaceSample f;
   f.box_size = box.hi - box.lo;
@@ -590,7 +615,8 @@ AGVSLAM_SIM_CLONES float Renderer::cached_wall_albedo(int wall, float u, float z
                           footprint_m, [this, wall](float a, float b, float w) { return wall_albedo(wall, a, b, w); });
 }
 
-AGVSLAM_SIM_CLONES float Renderer::cached_box_face_albedo(std::size_t box, int face, float u, float v, float footprint_m) const {
+AGVSLAM_SIM_CLONES float Renderer::cached_box_face_albedo(std::size_t box, int face, float u, float v,
+                                                          float footprint_m) const {
   float su, sv;
   face_size(warehouse_.boxes[box], face, su, sv);
   return textures_.sample(box_surface(box, face), su, sv, u, v, footprint_m,
@@ -622,8 +648,9 @@ float Renderer::shade_hit(const RayHit& hit, const V3& origin, const V3& dir, co
   return hazed(s, albedo * lighting(s, hit.normal), hit.t * dir_len);
 }
 
-AGVSLAM_SIM_CLONES float Renderer::surface_albedo(const RayHit& hit, const V3& p, float footprint, const std::vector<DynamicObject>& objects,
-                               const std::vector<BlobShadow>& shadows) const {
+AGVSLAM_SIM_CLONES float Renderer::surface_albedo(const RayHit& hit, const V3& p, float footprint,
+                                                  const std::vector<DynamicObject>& objects,
+                                                  const std::vector<BlobShadow>& shadows) const {
   float albedo = 0.5f;
   switch (hit.kind) {
     case RayHit::Kind::kFloor: {
@@ -643,15 +670,25 @@ AGVSLAM_SIM_CLONES float Renderer::surface_albedo(const RayHit& hit, const V3& p
       }
       break;
     }
-    case RayHit::Kind::kCeiling: albedo = cached_ceiling_albedo(p.x, p.y, footprint); break;
+    case RayHit::Kind::kCeiling:
+      albedo = cached_ceiling_albedo(p.x, p.y, footprint);
+      break;
     case RayHit::Kind::kWall: {
       const Warehouse& w = warehouse_;
       float u = 0;
       switch (hit.face) {
-        case 0: u = p.x; break;
-        case 1: u = p.y; break;
-        case 2: u = w.width_m - p.x; break;
-        default: u = w.depth_m - p.y; break;
+        case 0:
+          u = p.x;
+          break;
+        case 1:
+          u = p.y;
+          break;
+        case 2:
+          u = w.width_m - p.x;
+          break;
+        default:
+          u = w.depth_m - p.y;
+          break;
       }
       albedo = cached_wall_albedo(hit.face, u, p.z, footprint);
       break;
@@ -675,7 +712,8 @@ AGVSLAM_SIM_CLONES float Renderer::surface_albedo(const RayHit& hit, const V3& p
       albedo = actor_albedo(obj, prim, p_local, n_local, hit.axis_param, footprint);
       break;
     }
-    case RayHit::Kind::kNone: break;
+    case RayHit::Kind::kNone:
+      break;
   }
   return albedo;
 }
@@ -685,8 +723,8 @@ struct Renderer::RenderPass {
   int width = 0, height = 0;
   V3 origin, col_x, col_y, col_z;  // camera centre and the camera axes in the map frame
   float fx = 1, fy = 1, cx = 0, cy = 0, focal = 1;
-  V3 hall;                         // the hall's extent
-  const float* column_x = nullptr; // normalised image x of each pixel column
+  V3 hall;                          // the hall's extent
+  const float* column_x = nullptr;  // normalised image x of each pixel column
   const std::vector<DynamicObject>* objects = nullptr;
   const ObjectRects* rects = nullptr;
   const std::vector<BlobShadow>* shadows = nullptr;
@@ -891,8 +929,8 @@ AGVSLAM_SIM_CLONES void Renderer::render_row(const RenderPass& p, int v) const {
     classes[u] = static_cast<uint8_t>(hit_class(hit, warehouse_.boxes, objects));
     keys[u] = surface_key(hit);
   }
-  row_footprint_light_haze(width, col_x, row_dir, column_x, focal, s, row.t.data(), row.nx.data(),
-                           row.ny.data(), row.nz.data(), row.footprint.data(), row.light.data(), row.haze.data());
+  row_footprint_light_haze(width, col_x, row_dir, column_x, focal, s, row.t.data(), row.nx.data(), row.ny.data(),
+                           row.nz.data(), row.footprint.data(), row.light.data(), row.haze.data());
   for (int u = 0; u < width; ++u) {
     const RayHit& hit = row.hits[static_cast<std::size_t>(u)];
     if (hit.kind == RayHit::Kind::kNone) {  // nothing hit (not in a closed hall): all haze
@@ -1001,7 +1039,8 @@ AGVSLAM_SIM_CLONES float Renderer::floor_albedo(float x, float y, float w) const
     c -= 0.10f * track_vis * smoothstep(0.7f, 0.88f, track);
   }
   // Saw-cut joints between slabs (6 m), dark.
-  const float joints = std::max(stripe_coverage(x - 0.004f, 6.0f, 0.008f, w), stripe_coverage(y - 0.004f, 6.0f, 0.008f, w));
+  const float joints =
+      std::max(stripe_coverage(x - 0.004f, 6.0f, 0.008f, w), stripe_coverage(y - 0.004f, 6.0f, 0.008f, w));
   c = lerp(c, 0.16f, 0.85f * joints);
   // Painted marks.
   const int ix = std::clamp(static_cast<int>(x / mark_cell_m_), 0, mark_nx_ - 1);
@@ -1011,9 +1050,14 @@ AGVSLAM_SIM_CLONES float Renderer::floor_albedo(float x, float y, float w) const
     float cov = rect_coverage(x, y, m.x0, m.x1, m.y0, m.y1, w);
     if (cov <= 0) continue;
     switch (m.kind) {
-      case FloorMark::Kind::kSolid: break;
-      case FloorMark::Kind::kDashedX: cov *= stripe_coverage(x, 1.0f, 0.6f, w); break;
-      case FloorMark::Kind::kDashedY: cov *= stripe_coverage(y, 1.0f, 0.6f, w); break;
+      case FloorMark::Kind::kSolid:
+        break;
+      case FloorMark::Kind::kDashedX:
+        cov *= stripe_coverage(x, 1.0f, 0.6f, w);
+        break;
+      case FloorMark::Kind::kDashedY:
+        cov *= stripe_coverage(y, 1.0f, 0.6f, w);
+        break;
       case FloorMark::Kind::kHatched: {
         const float frame = 1.0f - rect_coverage(x, y, m.x0 + 0.06f, m.x1 - 0.06f, m.y0 + 0.06f, m.y1 - 0.06f, w);
         cov *= std::max(frame, stripe_coverage(x + y, 0.3f, 0.13f, w * 1.41f));
@@ -1052,7 +1096,7 @@ AGVSLAM_SIM_CLONES float Renderer::wall_albedo(int wall, float u, float z, float
   } else {
     // Corrugated metal cladding with panel seams and fasteners.
     // Corrugation: a smooth periodic profile (parabolic arcs, no libm call).
-    const float phase = u * 5.0f - fast_floor(u * 5.0f);  // 0.2 m ribs
+    const float phase = u * 5.0f - fast_floor(u * 5.0f);     // 0.2 m ribs
     const float rib = 8.0f * phase * (1.0f - phase) - 1.0f;  // -1..1
     c = 0.56f + 0.1f * rib * detail_visibility(0.2f, w);
     // Weathering: streaks running down the panels and patchy dirt, so the ribs are not a perfect grating.
@@ -1081,8 +1125,9 @@ AGVSLAM_SIM_CLONES float Renderer::wall_albedo(int wall, float u, float z, float
         // Dock number sign.
         const float sign = rect_coverage(lu, lz, fw * 0.5f - 0.25f, fw * 0.5f + 0.25f, fh - 0.55f, fh - 0.2f, w);
         fc = lerp(fc, 0.9f, sign);
-        fc = lerp(fc, 0.05f, text_coverage(lu, lz, fw * 0.5f - 0.2f, fw * 0.5f + 0.2f, fh - 0.5f, fh - 0.25f, 0.1f, w,
-                                           f.seed) * sign);
+        fc = lerp(
+            fc, 0.05f,
+            text_coverage(lu, lz, fw * 0.5f - 0.2f, fw * 0.5f + 0.2f, fh - 0.5f, fh - 0.25f, 0.1f, w, f.seed) * sign);
         break;
       }
       case WallFeature::Kind::kPoster: {
@@ -1093,11 +1138,13 @@ AGVSLAM_SIM_CLONES float Renderer::wall_albedo(int wall, float u, float z, float
         const float head_h = fh * 0.22f;
         fc = lerp(fc, 0.15f + 0.4f * unit_from_hash(hash32(h, 2U)),
                   rect_coverage(lu, lz, 0.05f, fw - 0.05f, fh - 0.05f - head_h, fh - 0.05f, w));
-        fc = lerp(fc, 0.95f, text_coverage(lu, lz, 0.08f, fw - 0.08f, fh - head_h, fh - 0.08f, head_h * 0.4f, w, h + 3U));
+        fc = lerp(fc, 0.95f,
+                  text_coverage(lu, lz, 0.08f, fw - 0.08f, fh - head_h, fh - 0.08f, head_h * 0.4f, w, h + 3U));
         const float pic_w = fw * (0.3f + 0.3f * unit_from_hash(hash32(h, 4U)));
         fc = lerp(fc, 0.1f + 0.6f * unit_from_hash(hash32(h, 5U)),
                   rect_coverage(lu, lz, 0.05f, 0.05f + pic_w, fh * 0.3f, fh - 0.1f - head_h, w));
-        fc = lerp(fc, 0.1f, text_coverage(lu, lz, 0.1f + pic_w, fw - 0.05f, fh * 0.3f, fh - 0.1f - head_h, 0.025f, w, h + 6U));
+        fc = lerp(fc, 0.1f,
+                  text_coverage(lu, lz, 0.1f + pic_w, fw - 0.05f, fh * 0.3f, fh - 0.1f - head_h, 0.025f, w, h + 6U));
         fc = lerp(fc, 0.1f, text_coverage(lu, lz, 0.05f, fw - 0.05f, 0.05f, fh * 0.27f, 0.018f, w, h + 7U));
         break;
       }
@@ -1106,8 +1153,10 @@ AGVSLAM_SIM_CLONES float Renderer::wall_albedo(int wall, float u, float z, float
         fc = dark ? 0.22f : 0.85f;
         fc = lerp(fc, dark ? 0.9f : 0.1f, frame_coverage(lu, lz, 0.02f, fw - 0.02f, 0.02f, fh - 0.02f, 0.025f, w));
         const float sym = std::min(fw, fh) * 0.5f;
-        fc = lerp(fc, dark ? 0.92f : 0.12f, rect_coverage(lu, lz, 0.08f, 0.08f + sym, (fh - sym) * 0.5f, (fh + sym) * 0.5f, w));
-        fc = lerp(fc, dark ? 0.9f : 0.1f, text_coverage(lu, lz, 0.12f + sym, fw - 0.05f, fh * 0.3f, fh * 0.7f, fh * 0.12f, w, f.seed));
+        fc = lerp(fc, dark ? 0.92f : 0.12f,
+                  rect_coverage(lu, lz, 0.08f, 0.08f + sym, (fh - sym) * 0.5f, (fh + sym) * 0.5f, w));
+        fc = lerp(fc, dark ? 0.9f : 0.1f,
+                  text_coverage(lu, lz, 0.12f + sym, fw - 0.05f, fh * 0.3f, fh * 0.7f, fh * 0.12f, w, f.seed));
         break;
       }
       case WallFeature::Kind::kCabinet: {
@@ -1124,7 +1173,9 @@ AGVSLAM_SIM_CLONES float Renderer::wall_albedo(int wall, float u, float z, float
         fc = lerp(fc, 0.18f, std::max(mullions, frame_coverage(lu, lz, 0, fw, 0, fh, 0.06f, w)));
         break;
       }
-      case WallFeature::Kind::kPipe: fc = 0.4f; break;
+      case WallFeature::Kind::kPipe:
+        fc = 0.4f;
+        break;
     }
     c = lerp(c, fc, cov);
   }
@@ -1134,8 +1185,8 @@ AGVSLAM_SIM_CLONES float Renderer::wall_albedo(int wall, float u, float z, float
 AGVSLAM_SIM_CLONES float Renderer::ceiling_albedo(float x, float y, float w) const {
   const uint32_t seed = warehouse_.ceiling_seed;
   float c = 0.32f + 0.1f * fractal_noise(x, y, 1.0f, 3, 0.6f, w, seed);
-  c = lerp(c, 0.5f, stripe_coverage(x, 5.0f, 0.3f, w));   // roof trusses
-  c = lerp(c, 0.22f, stripe_coverage(y, 1.2f, 0.06f, w)); // purlins
+  c = lerp(c, 0.5f, stripe_coverage(x, 5.0f, 0.3f, w));    // roof trusses
+  c = lerp(c, 0.22f, stripe_coverage(y, 1.2f, 0.06f, w));  // purlins
   // Light fittings: bright strips on a 5 m x 4 m grid.
   const float lx = x - fast_floor(x / 5.0f) * 5.0f, ly = y - fast_floor(y / 4.0f) * 4.0f;
   c = lerp(c, 3.0f, rect_coverage(lx, ly, 2.3f, 2.7f, 1.2f, 2.8f, w));

@@ -176,8 +176,7 @@ void SpeedProfile::solve() {
 double SpeedProfile::distance_at(double t) const {
   if (stop_at_m >= 0) {
     if (cruise_mps <= 0) return 0;
-    if (t < stop_end_s())
-      return trapezoid_distance(t - hold_start_s, stop_at_m, cruise_mps, accel_mps2);
+    if (t < stop_end_s()) return trapezoid_distance(t - hold_start_s, stop_at_m, cruise_mps, accel_mps2);
     return stop_at_m + trapezoid_distance(t - stop_end_s(), distance_m - stop_at_m, cruise_mps, accel_mps2);
   }
   const double t_move = std::max(1e-3, duration_s - hold_start_s - hold_end_s);
@@ -221,12 +220,19 @@ std::vector<Circle> actor_footprint(const Actor& a, const ActorState& st) {
   auto at = [&](double fwd, double r) { return Circle{st.x + c * fwd, st.y + s * fwd, r}; };
   std::vector<Circle> circles;
   switch (a.cls) {
-    case ActorClass::kPerson: circles = {at(0.0, 0.3)}; break;
-    case ActorClass::kForklift: circles = {at(-0.5, 0.75), at(0.45, 0.75), at(1.5, 0.7)}; break;
-    case ActorClass::kAgv:
-      circles = a.vehicle.tugger_carts > 0 ? std::vector<Circle>{at(-0.1, 0.6)} : std::vector<Circle>{at(-0.3, 0.45), at(0.3, 0.45)};
+    case ActorClass::kPerson:
+      circles = {at(0.0, 0.3)};
       break;
-    case ActorClass::kPallet: circles = {at(-0.3, 0.5), at(0.3, 0.5)}; break;
+    case ActorClass::kForklift:
+      circles = {at(-0.5, 0.75), at(0.45, 0.75), at(1.5, 0.7)};
+      break;
+    case ActorClass::kAgv:
+      circles = a.vehicle.tugger_carts > 0 ? std::vector<Circle>{at(-0.1, 0.6)}
+                                           : std::vector<Circle>{at(-0.3, 0.45), at(0.3, 0.45)};
+      break;
+    case ActorClass::kPallet:
+      circles = {at(-0.3, 0.5), at(0.3, 0.5)};
+      break;
   }
   for (int k = 0; k < trailer_count(a); ++k) {  // a cart: 1.6 m x 1.2 m
     double x, y, heading;
@@ -266,11 +272,12 @@ float contrasting(float shade, Rng& a) {
 void dress(PersonLook& look, double colour_u, double pattern_u, double trousers_u, Rng& a) {
   using P = PersonLook;
   const double top = a.uniform();
-  look.top = top < 0.22 ? P::Top::kTshirt
-                        : top < 0.44 ? P::Top::kLongSleeve
-                                     : top < 0.64 ? P::Top::kJacket
-                                                  : top < 0.76 ? P::Top::kHoodie
-                                                               : top < 0.92 ? P::Top::kHiVisVest : P::Top::kOveralls;
+  look.top = top < 0.22   ? P::Top::kTshirt
+             : top < 0.44 ? P::Top::kLongSleeve
+             : top < 0.64 ? P::Top::kJacket
+             : top < 0.76 ? P::Top::kHoodie
+             : top < 0.92 ? P::Top::kHiVisVest
+                          : P::Top::kOveralls;
   look.shirt_shade = std::clamp(pick(kClothShades, colour_u) + static_cast<float>(a.uniform(-0.03, 0.03)), 0.03f, 0.9f);
   look.inner_shade = pick(kClothShades, a.uniform());
   if (look.top == P::Top::kHiVisVest) look.shirt_shade = pick(kHiVisShades, a.uniform());
@@ -290,12 +297,19 @@ void dress(PersonLook& look, double colour_u, double pattern_u, double trousers_
   look.pockets = a.chance(0.75);
   look.folds = a.chance(0.9);
   const double bottom = a.uniform();
-  look.bottom = bottom < 0.4 ? P::Bottom::kWork : bottom < 0.7 ? P::Bottom::kJeans : bottom < 0.9 ? P::Bottom::kCargo : P::Bottom::kHiVis;
-  look.trousers_shade = look.bottom == P::Bottom::kHiVis ? pick(kHiVisShades, trousers_u) : pick(kTrouserShades, trousers_u);
+  look.bottom = bottom < 0.4   ? P::Bottom::kWork
+                : bottom < 0.7 ? P::Bottom::kJeans
+                : bottom < 0.9 ? P::Bottom::kCargo
+                               : P::Bottom::kHiVis;
+  look.trousers_shade =
+      look.bottom == P::Bottom::kHiVis ? pick(kHiVisShades, trousers_u) : pick(kTrouserShades, trousers_u);
   if (look.top == P::Top::kOveralls) look.trousers_shade = look.shirt_shade;
   look.shoe_shade = static_cast<float>(a.uniform(0.04, 0.2));
   const double carry = a.uniform();
-  look.carry = carry < 0.7 ? P::Carry::kNothing : carry < 0.82 ? P::Carry::kBox : carry < 0.94 ? P::Carry::kScanner : P::Carry::kPhone;
+  look.carry = carry < 0.7    ? P::Carry::kNothing
+               : carry < 0.82 ? P::Carry::kBox
+               : carry < 0.94 ? P::Carry::kScanner
+                              : P::Carry::kPhone;
   look.arm_swing = static_cast<float>(a.uniform(0.6, 1.25));
   look.build = static_cast<float>(a.uniform(0.9, 1.12));
   look.girth = static_cast<float>(a.uniform(0.9, 1.2));
@@ -341,7 +355,8 @@ Actor make_actor(int id, ActorClass cls, const std::string& role, std::vector<Wa
   Rng appearance(a.seed, RngStream::kAppearance);
   if (cls == ActorClass::kForklift) {
     if ((a.seed & 1U) != 0) a.vehicle.load = {Load::Kind::kWrapped, 0.9f};
-    a.vehicle.body_shade = pick(kForkliftShades, appearance.uniform()) + static_cast<float>(appearance.uniform(-0.03, 0.03));
+    a.vehicle.body_shade =
+        pick(kForkliftShades, appearance.uniform()) + static_cast<float>(appearance.uniform(-0.03, 0.03));
     a.look = driver_look(appearance);
   }
   if (cls == ActorClass::kAgv)
@@ -412,13 +427,15 @@ Scenario make_scenario(const ScenarioOptions& options, const Warehouse& warehous
     path.push_back({t_enter, x_enter, y_in});
     path.push_back({t_turn, x_turn, y_turn});
     path.push_back({t_back, x_turn, y_turn});
-    const double back_a = std::hypot(x_mid - x_turn, y_mid - y_turn), back_b = std::hypot(x_exit - x_mid, y_out - y_mid);
+    const double back_a = std::hypot(x_mid - x_turn, y_mid - y_turn),
+                 back_b = std::hypot(x_exit - x_mid, y_out - y_mid);
     const double back_speed = (back_a + back_b) / (t_leave - t_back);
     path.push_back({t_back + back_a / back_speed, x_mid, y_mid});
     path.push_back({t_leave, x_exit, y_out});
     const double x_to = x_exit - 1.6, y_to = y_out + 0.6;
     path.push_back({t_leave + std::hypot(x_to - x_exit, y_to - y_out) / back_speed, x_to, y_to});
-    sc.actors.push_back(make_actor(1, ActorClass::kPerson, "walks in from the left close ahead, stands, walks back", path, r));
+    sc.actors.push_back(
+        make_actor(1, ActorClass::kPerson, "walks in from the left close ahead, stands, walks back", path, r));
   } else if (name == "scene2" || name == "scene3") {
     b.agv_line(options.start_offset_m);
     const double x_start = L.line_x_start + options.start_offset_m;
@@ -428,9 +445,7 @@ Scenario make_scenario(const ScenarioOptions& options, const Warehouse& warehous
     for (double g : L.line_cross_aisles_x)
       if (g - x_start >= 2.7 && g < x_end + 1.0) gaps.push_back(g);
     if (gaps.empty()) gaps.push_back(L.line_cross_aisles_x.back());
-    auto crossing_time = [&](double gap_x, double ahead_m) {
-      return b.time_at_distance(gap_x - ahead_m - x_start);
-    };
+    auto crossing_time = [&](double gap_x, double ahead_m) { return b.time_at_distance(gap_x - ahead_m - x_start); };
     // Close crossing: 1.6-2.4 m ahead (later candidates further), never before the AGV has driven 1 m.
     auto close_ahead = [&](double gap_x, int i, Rng& ri) {
       return std::min(1.6 + 0.1 * i + ri.uniform(0.0, 0.8), std::max(1.6, gap_x - x_start - 1.0) + 0.1 * i);
@@ -489,8 +504,7 @@ Scenario make_scenario(const ScenarioOptions& options, const Warehouse& warehous
         b.add_best(64, [&](int i) {
           Rng ri = r.fork(static_cast<uint64_t>(i));
           const double ahead = 3.3 + 0.2 * (i / 2) + ri.uniform(0.0, 0.6);
-          return b.line_crossing_person(3, gap_x, (i % 2 == 0) == north_to_south, crossing_time(gap_x, ahead), ri,
-                                        -1);
+          return b.line_crossing_person(3, gap_x, (i % 2 == 0) == north_to_south, crossing_time(gap_x, ahead), ri, -1);
         });
       }
       {  // Forklift: parked facing the aisle beyond the racks, then drives across it and away.
@@ -614,8 +628,10 @@ Scenario make_scenario(const ScenarioOptions& options, const Warehouse& warehous
         const bool north_to_south = r.chance(0.5);
         b.add_best(24, [&](int i) {
           Rng ri = r.fork(static_cast<uint64_t>(i));
-          const double ahead = name == "scene5" ? 3.3 + 0.2 * i + ri.uniform(0.0, 0.8) : 1.6 + 0.1 * i + ri.uniform(0.0, 0.8);
-          return b.loop_crossing_person(id, north_to_south, chosen.leg_y, b.time_at_distance(chosen.distance - ahead), ri);
+          const double ahead =
+              name == "scene5" ? 3.3 + 0.2 * i + ri.uniform(0.0, 0.8) : 1.6 + 0.1 * i + ri.uniform(0.0, 0.8);
+          return b.loop_crossing_person(id, north_to_south, chosen.leg_y, b.time_at_distance(chosen.distance - ahead),
+                                        ri);
         });
       }
       if (name == "scene4") {  // a forklift parked in the east lane (never moves)

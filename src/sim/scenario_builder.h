@@ -18,7 +18,7 @@ namespace agvslam::sim::scenario_detail {
 constexpr double kPi = 3.14159265358979323846;
 constexpr double kPersonCameraClearanceM = 1.0;   // person's surface to the camera (they come close, as in the paper)
 constexpr double kVehicleCameraClearanceM = 1.5;  // vehicle's surface to the camera
-constexpr double kActorClearanceM = 0.5;   // between actors
+constexpr double kActorClearanceM = 0.5;          // between actors
 constexpr double kCheckStepS = 0.05;
 
 inline double wrap_angle(double a) { return std::atan2(std::sin(a), std::cos(a)); }
@@ -220,8 +220,8 @@ class ScenarioBuilder {
     pb.walk_to(gap_x + j, y_to, speed);
     pb.walk_to(gap_x + j + b, y_to, speed);
     pb.align(mid, t_cross);
-    return make_actor(id, ActorClass::kPerson, north_to_south ? "crosses the aisle southwards" : "crosses the aisle northwards",
-                      pb.pts, r);
+    return make_actor(id, ActorClass::kPerson,
+                      north_to_south ? "crosses the aisle southwards" : "crosses the aisle northwards", pb.pts, r);
   }
 
   // Person walking through the loop's cross-aisle (crossing both legs); at leg_y at t_cross.
@@ -276,7 +276,6 @@ class ScenarioBuilder {
   const WarehouseLayout& L_;
   Rng rng_;
 };
-
 
 // The scenarios of scenario_operations.cpp (the AGV's motion and the actors, into the builder's scenario).
 void build_follow(ScenarioBuilder& b, const ScenarioOptions& options);

@@ -9,14 +9,14 @@
 namespace agvslam::sim::scenario_detail {
 namespace {
 
-constexpr double kSampleS = 0.1;         // spacing of sampled waypoints, s
-constexpr double kVehicleAccel = 1.0;    // m/s^2: forklifts and tuggers accelerating and braking
-constexpr double kWalkAccel = 1.0;       // m/s^2: people setting off and stopping
-constexpr double kForkForwardM = 1.6;    // a pallet on the forks: its centre ahead of the forklift's origin, m
-constexpr double kForkTravelZ = 0.12;    // the forks' height above the floor at lift 0 (actors.cpp), m
-constexpr double kForksInPalletM = 0.06; // the forks' underside above the base of the pallet they carry, m
-constexpr double kForksLowered = -0.06;  // lift of forks sliding into a pallet standing on the floor, m
-constexpr double kForkliftPivotM = 0.55; // a forklift turns on the spot about its drive axle, this far ahead, m
+constexpr double kSampleS = 0.1;          // spacing of sampled waypoints, s
+constexpr double kVehicleAccel = 1.0;     // m/s^2: forklifts and tuggers accelerating and braking
+constexpr double kWalkAccel = 1.0;        // m/s^2: people setting off and stopping
+constexpr double kForkForwardM = 1.6;     // a pallet on the forks: its centre ahead of the forklift's origin, m
+constexpr double kForkTravelZ = 0.12;     // the forks' height above the floor at lift 0 (actors.cpp), m
+constexpr double kForksInPalletM = 0.06;  // the forks' underside above the base of the pallet they carry, m
+constexpr double kForksLowered = -0.06;   // lift of forks sliding into a pallet standing on the floor, m
+constexpr double kForkliftPivotM = 0.55;  // a forklift turns on the spot about its drive axle, this far ahead, m
 
 // Lanes of the main aisle for vehicles keeping right: the AGV's (driving +x) and the oncoming traffic's. Between
 // the rack faces (3.2 m apart) a 0.8 m AGV and a 1.2 m forklift pass with ~0.4 m between them.
@@ -177,9 +177,10 @@ void build_follow(ScenarioBuilder& b, const ScenarioOptions& options) {
     s_prev = s_rear;
     path.push_back(waypoint(t, x0 + s_rear + rear_m, y));
   }
-  Actor leader = make_actor(1, tugger ? ActorClass::kAgv : ActorClass::kForklift,
-                            tugger ? "tugger train the AGV follows down the aisle" : "loaded forklift the AGV follows down the aisle",
-                            path, r);
+  Actor leader = make_actor(
+      1, tugger ? ActorClass::kAgv : ActorClass::kForklift,
+      tugger ? "tugger train the AGV follows down the aisle" : "loaded forklift the AGV follows down the aisle", path,
+      r);
   if (tugger) {
     leader.vehicle.tugger_carts = carts;
     leader.vehicle.load = random_load(r, 1.1f, 1.5f);
@@ -270,8 +271,8 @@ void build_pallet(ScenarioBuilder& b, const ScenarioOptions& options) {
   Rng r = b.rng().fork(22);
   const double sx = L.stage_x, cam_x = sx + options.start_offset_m, cam_y = L.stage_y;
   b.agv_stationary(cam_x, cam_y, 0.5 * kPi);
-  const double y_row = cam_y + 2.8;            // slot centres (pallets 1.2 m deep along y, fork side north)
-  const double y_lane = y_row + 3.3;           // where the forklift drives across, forks clear of the row
+  const double y_row = cam_y + 2.8;   // slot centres (pallets 1.2 m deep along y, fork side north)
+  const double y_lane = y_row + 3.3;  // where the forklift drives across, forks clear of the row
   const double slots[3] = {sx - 1.1, sx, sx + 1.1};
   const int free_slot = r.uniform_int(0, 2);
   const int picked_slot = (free_slot + r.uniform_int(1, 2)) % 3;
@@ -372,9 +373,10 @@ void build_oncoming(ScenarioBuilder& b, const ScenarioOptions& options) {
   {
     Rng ra = r.fork(2);
     const bool tugger = ra.chance(0.6);
-    Actor a = make_actor(2, ActorClass::kAgv,
-                         tugger ? "tugger train coming towards the AGV, passing it" : "cart AGV coming towards the AGV, passing it",
-                         oncoming(ra.uniform(1.0, 1.2), ra.uniform(16.0, 19.0)), ra);
+    Actor a = make_actor(
+        2, ActorClass::kAgv,
+        tugger ? "tugger train coming towards the AGV, passing it" : "cart AGV coming towards the AGV, passing it",
+        oncoming(ra.uniform(1.0, 1.2), ra.uniform(16.0, 19.0)), ra);
     if (tugger) {
       a.vehicle.tugger_carts = static_cast<uint8_t>(ra.uniform_int(1, 2));
       a.vehicle.load = random_load(ra, 0.9f, 1.4f);

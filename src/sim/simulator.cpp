@@ -43,8 +43,7 @@ AGVSLAM_SIM_CLONES void expose_row(const float* rad, uint8_t* px, int width, int
     // Approximately Gaussian noise: sum of four 16-bit uniforms (Irwin-Hall), unit variance.
     const uint32_t pixel = static_cast<uint32_t>(v * width + u);
     const uint32_t h1 = hash32(pixel, cam_seed), h2 = hash32(pixel ^ 0x5bd1e995U, cam_seed + 0x68e31da4U);
-    const float sum =
-        static_cast<float>((h1 & 0xffffU) + (h1 >> 16) + (h2 & 0xffffU) + (h2 >> 16)) * (1.0f / 65536.0f);
+    const float sum = static_cast<float>((h1 & 0xffffU) + (h1 >> 16) + (h2 & 0xffffU) + (h2 >> 16)) * (1.0f / 65536.0f);
     const float noise = (sum - 2.0f) * 1.7320508f * sigma;
     const float value = rad[u] * gain * vig + noise;
     px[u] = static_cast<uint8_t>(value <= 0.0f ? 0 : (value >= 254.5f ? 255 : static_cast<int>(value + 0.5f)));
@@ -294,7 +293,8 @@ void prepare_output_dir(const std::string& dir, const std::string& option) {
     throw InputError(option, dir, "expected a folder, but this path is an existing file");
   fs::create_directories(dir, ec);
   if (ec || !fs::is_directory(dir))
-    throw InputError(option, dir, "could not create the output folder: " + (ec ? ec.message() : std::string("unknown")));
+    throw InputError(option, dir,
+                     "could not create the output folder: " + (ec ? ec.message() : std::string("unknown")));
   for (const char* sub : {"image_0", "image_1", "disp_0", "mask_0", "instance_0", "class_0"}) {
     fs::create_directories(fs::path(dir) / sub, ec);
     if (ec) throw InputError(option, (fs::path(dir) / sub).string(), "could not create the folder: " + ec.message());

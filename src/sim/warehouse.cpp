@@ -28,9 +28,11 @@ void Warehouse::build_grid(float cell_m, float slab_m) {
     cell_range(boxes[b].lo.z, boxes[b].hi.z, slab_m, grid.nz, iz0, iz1);
     for (int iy = iy0; iy <= iy1; ++iy)
       for (int ix = ix0; ix <= ix1; ++ix) {
-        const std::size_t c = static_cast<std::size_t>(iy) * static_cast<std::size_t>(grid.nx) + static_cast<std::size_t>(ix);
+        const std::size_t c =
+            static_cast<std::size_t>(iy) * static_cast<std::size_t>(grid.nx) + static_cast<std::size_t>(ix);
         grid.cell_top_z[c] = std::max(grid.cell_top_z[c], boxes[b].hi.z);
-        for (int iz = iz0; iz <= iz1; ++iz) lists[c * nz + static_cast<std::size_t>(iz)].push_back(static_cast<uint32_t>(b));
+        for (int iz = iz0; iz <= iz1; ++iz)
+          lists[c * nz + static_cast<std::size_t>(iz)].push_back(static_cast<uint32_t>(b));
       }
   }
   grid.slab_begin.assign(n_cells * nz + 1, 0);
@@ -45,7 +47,9 @@ void Warehouse::build_grid(float cell_m, float slab_m) {
   const int nx = grid.nx, ny = grid.ny;
   std::vector<int> dist(n_cells);
   for (std::size_t c = 0; c < n_cells; ++c) dist[c] = grid.cell_top_z[c] > -kInfinity ? 0 : 100000;
-  auto at = [&](int x, int y) -> int& { return dist[static_cast<std::size_t>(y) * static_cast<std::size_t>(nx) + static_cast<std::size_t>(x)]; };
+  auto at = [&](int x, int y) -> int& {
+    return dist[static_cast<std::size_t>(y) * static_cast<std::size_t>(nx) + static_cast<std::size_t>(x)];
+  };
   for (int y = 0; y < ny; ++y)
     for (int x = 0; x < nx; ++x) {
       int& d = at(x, y);
@@ -90,8 +94,8 @@ struct Rect {
 // A rack row: bays along `a` (x when along_x, else y), depth along `b`.
 struct RackRow {
   bool along_x = true;
-  float a0 = 0, a1 = 0;  // extent along the row
-  float b0 = 0, b1 = 0;  // extent across (depth)
+  float a0 = 0, a1 = 0;                       // extent along the row
+  float b0 = 0, b1 = 0;                       // extent across (depth)
   std::vector<std::pair<float, float>> gaps;  // cross-aisles (along-row intervals without racking)
   std::vector<float> level_z;                 // beam tops; level 0 (the floor) is implicit
   float top_z = 5.0f;
@@ -234,7 +238,8 @@ class Builder {
           const float slot = (right - left) / static_cast<float>(n_pallets);
           for (int p = 0; p < n_pallets; ++p) {
             if (rng_.chance(0.16)) continue;
-            const float pa = left + slot * (static_cast<float>(p) + 0.5f) + static_cast<float>(rng_.uniform(-0.03, 0.03));
+            const float pa =
+                left + slot * (static_cast<float>(p) + 0.5f) + static_cast<float>(rng_.uniform(-0.03, 0.03));
             const float pb = 0.5f * (row.b0 + row.b1) + static_cast<float>(rng_.uniform(-0.03, 0.03));
             const float half_depth = 0.5f * (row.b1 - row.b0) + 0.05f;  // pallets overhang the beams a little
             add_pallet_load(row, pa - 0.4f, pa + 0.4f, pb - half_depth, pb + half_depth, z + (level == 0 ? 0 : 0.0f),
@@ -269,7 +274,10 @@ class Builder {
       const int kind = rng_.uniform_int(0, 9);
       float sx = along_x ? 1.2f : 0.8f, sy = along_x ? 0.8f : 1.2f;
       if (kind >= 8) {  // a 2 x 1 block of pallets side by side
-        if (along_x) sy *= 2.0f; else sx *= 2.0f;
+        if (along_x)
+          sy *= 2.0f;
+        else
+          sx *= 2.0f;
       }
       const float x0 = static_cast<float>(rng_.uniform(area.x0, area.x1 - sx));
       const float y0 = static_cast<float>(rng_.uniform(area.y0, area.y1 - sy));
@@ -283,8 +291,7 @@ class Builder {
       frame.along_x = true;
       if (kind <= 2) {  // stack of empty pallets
         const int n = rng_.uniform_int(3, 12);
-        add_box(r.x0, r.y0, 0, r.x1, r.y1, 0.144f * static_cast<float>(n), Material::kPalletStack,
-                along_x ? 0 : 1);
+        add_box(r.x0, r.y0, 0, r.x1, r.y1, 0.144f * static_cast<float>(n), Material::kPalletStack, along_x ? 0 : 1);
       } else if (kind >= 8) {
         const float mx = along_x ? 0 : 0.8f, my = along_x ? 0.8f : 0;
         add_pallet_load(frame, r.x0, r.x0 + (along_x ? 1.2f : 0.8f), r.y0, r.y0 + (along_x ? 0.8f : 1.2f), 0,
@@ -379,12 +386,12 @@ Warehouse generate_warehouse(uint64_t layout_seed) {
       {1.0f, 3.1f, 37.3f, 6.0f},    // main aisle (the line route and the view along it)
       {0.0f, 8.45f, 39.6f, 9.85f},  // north service corridor
       {0.0f, 0.0f, 40.0f, 1.85f},   // south service corridor
-      {static_cast<float>(L.loop_x0) - 1.5f, static_cast<float>(L.loop_y0) - 1.5f,
-       static_cast<float>(L.loop_x1) + 1.5f, static_cast<float>(L.loop_y1) + 1.5f},  // loop ring
-      {cross - cross_hw - 0.1f, 8.4f, cross + cross_hw + 0.1f, 25.9f},             // loop cross-aisle
-      {21.5f, 23.2f, 39.0f, 24.8f},  // walkway north of the loop
-      {21.5f, 20.2f, 36.0f, 21.35f}, // strip in front of the north outer row
-      {36.0f, 8.4f, 38.2f, 25.2f},   // east vehicle lane
+      {static_cast<float>(L.loop_x0) - 1.5f, static_cast<float>(L.loop_y0) - 1.5f, static_cast<float>(L.loop_x1) + 1.5f,
+       static_cast<float>(L.loop_y1) + 1.5f},                           // loop ring
+      {cross - cross_hw - 0.1f, 8.4f, cross + cross_hw + 0.1f, 25.9f},  // loop cross-aisle
+      {21.5f, 23.2f, 39.0f, 24.8f},                                     // walkway north of the loop
+      {21.5f, 20.2f, 36.0f, 21.35f},                                    // strip in front of the north outer row
+      {36.0f, 8.4f, 38.2f, 25.2f},                                      // east vehicle lane
       {static_cast<float>(L.stage_x) - 4.5f, 10.0f, static_cast<float>(L.stage_x) + 4.5f, 21.5f},   // scene1 view
       {static_cast<float>(L.stage_x) - 10.5f, 14.6f, static_cast<float>(L.stage_x) + 2.5f, 21.0f},  // scene1 walk
   };
@@ -406,15 +413,15 @@ Warehouse generate_warehouse(uint64_t layout_seed) {
   // ---- Floor-standing goods ------------------------------------------------------------------------------------
   const float stage_x = static_cast<float>(L.stage_x);
   const std::vector<std::pair<Rect, int>> areas = {
-      {{0.4f, 21.6f, 21.4f, 24.3f}, 16},        // staging area: block-stacked goods behind the walkway
-      {{0.4f, 10.0f, stage_x - 4.6f, 14.5f}, 7},     // ... left of the stationary AGV's view
-      {{stage_x + 4.6f, 10.0f, 21.4f, 24.3f}, 14},   // ... right of it
-      {{0.4f, 10.0f, 21.4f, 24.3f}, 10},        // ... anywhere free
-      {{21.2f, 6.0f, 39.7f, 8.4f}, 10},   // east of the north rows
-      {{37.3f, 3.0f, 39.7f, 6.2f}, 3},    // end of the main aisle, against the east wall
-      {{38.2f, 9.9f, 39.8f, 25.8f}, 9},   // along the east wall
-      {{34.5f, 1.9f, 39.8f, 3.05f}, 3},   // south-east corner
-      {{21.4f, 24.9f, 39.8f, 25.8f}, 5},  // north wall beside the loop
+      {{0.4f, 21.6f, 21.4f, 24.3f}, 16},            // staging area: block-stacked goods behind the walkway
+      {{0.4f, 10.0f, stage_x - 4.6f, 14.5f}, 7},    // ... left of the stationary AGV's view
+      {{stage_x + 4.6f, 10.0f, 21.4f, 24.3f}, 14},  // ... right of it
+      {{0.4f, 10.0f, 21.4f, 24.3f}, 10},            // ... anywhere free
+      {{21.2f, 6.0f, 39.7f, 8.4f}, 10},             // east of the north rows
+      {{37.3f, 3.0f, 39.7f, 6.2f}, 3},              // end of the main aisle, against the east wall
+      {{38.2f, 9.9f, 39.8f, 25.8f}, 9},             // along the east wall
+      {{34.5f, 1.9f, 39.8f, 3.05f}, 3},             // south-east corner
+      {{21.4f, 24.9f, 39.8f, 25.8f}, 5},            // north wall beside the loop
   };
   for (const auto& [area, count] : areas)
     for (int i = 0; i < count; ++i) b.place_floor_item(area, reserved);
@@ -428,7 +435,7 @@ Warehouse generate_warehouse(uint64_t layout_seed) {
   mark(1.0f, ly - 1.45f, 37.0f, ly - 1.37f, FK::kSolid);  // aisle edge lines
   mark(1.0f, ly + 1.37f, 37.0f, ly + 1.45f, FK::kSolid);
   mark(1.0f, ly - 0.04f, 37.0f, ly + 0.04f, FK::kDashedX, 0.86f);  // dashed guide line
-  for (double x : L.line_cross_aisles_x) {  // stop lines where cross-aisles meet the main aisle
+  for (double x : L.line_cross_aisles_x) {                         // stop lines where cross-aisles meet the main aisle
     const float cx = static_cast<float>(x);
     mark(cx - 1.2f, ly + 1.55f, cx + 1.2f, ly + 1.65f, FK::kSolid, 0.9f);
     mark(cx - 1.2f, ly - 1.65f, cx + 1.2f, ly - 1.55f, FK::kSolid, 0.9f);
@@ -495,7 +502,8 @@ Warehouse generate_warehouse(uint64_t layout_seed) {
     using WK = WallFeature::Kind;
     if (wall == 1 || wall == 2) {
       for (int i = 0; i < 2; ++i)
-        add(WK::kRollerDoor, static_cast<float>(rng.uniform(3.2, 4.2)), 0.0f, static_cast<float>(rng.uniform(4.0, 4.8)), 20);
+        add(WK::kRollerDoor, static_cast<float>(rng.uniform(3.2, 4.2)), 0.0f, static_cast<float>(rng.uniform(4.0, 4.8)),
+            20);
     }
     const int n_posters = rng.uniform_int(4, 7);
     for (int i = 0; i < n_posters; ++i) {

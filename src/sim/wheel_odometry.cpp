@@ -37,8 +37,8 @@ Trajectory simulate_wheel_odometry(const Trajectory& gt, const WheelOdometryConf
       const double yaw_mid = yaw_a + 0.5 * dyaw;
       const double ds = dp.x() * std::sin(yaw_mid) + dp.z() * std::cos(yaw_mid);
       const double dist = std::abs(ds);
-      const double ds_odom = ds * (1.0 + config.distance_scale_error) +
-                             config.distance_noise_m_per_sqrt_m * std::sqrt(dist) * unit(rng);
+      const double ds_odom =
+          ds * (1.0 + config.distance_scale_error) + config.distance_noise_m_per_sqrt_m * std::sqrt(dist) * unit(rng);
       const double dyaw_odom = dyaw + config.yaw_bias_rad_per_m * dist +
                                config.yaw_noise_rad_per_sqrt_m * std::sqrt(dist) * unit(rng) +
                                config.yaw_noise_rad_per_rad * std::abs(dyaw) * unit(rng);
@@ -50,8 +50,8 @@ Trajectory simulate_wheel_odometry(const Trajectory& gt, const WheelOdometryConf
     StampedPose sp;
     sp.t_ns = gt[i].t_ns;
     // Rotation about the up axis (-y): forward (z) turns towards x for positive yaw.
-    sp.T_w_c = make_se3(Eigen::Matrix3d(Eigen::AngleAxisd(yaw, Eigen::Vector3d::UnitY())),
-                        Eigen::Vector3d(x, camera_y, z));
+    sp.T_w_c =
+        make_se3(Eigen::Matrix3d(Eigen::AngleAxisd(yaw, Eigen::Vector3d::UnitY())), Eigen::Vector3d(x, camera_y, z));
     odom.push_back(sp);
   }
   return odom;

@@ -53,7 +53,8 @@ void FeatureGrid::build(const std::vector<cv::KeyPoint>& keypoints, const FrameG
     cell_of_[i] = c;
     ++cell_start_[static_cast<std::size_t>(c) + 1];
   }
-  for (int c = 0; c < kCells; ++c) cell_start_[static_cast<std::size_t>(c) + 1] += cell_start_[static_cast<std::size_t>(c)];
+  for (int c = 0; c < kCells; ++c)
+    cell_start_[static_cast<std::size_t>(c) + 1] += cell_start_[static_cast<std::size_t>(c)];
   indices_.resize(keypoints.size());
   fill_.assign(cell_start_.begin(), cell_start_.end() - 1);
   for (std::size_t i = 0; i < keypoints.size(); ++i) {
@@ -88,8 +89,9 @@ void FeatureGrid::features_in_area(const std::vector<cv::KeyPoint>& keypoints, c
   }
 }
 
-void Frame::assign(uint64_t frame_id, int64_t time_ns, const FrameGeometryPtr& geom, const std::vector<cv::KeyPoint>& kps,
-                   const cv::Mat& descs, const std::vector<float>& u_right_px, const std::vector<float>& depth_m) {
+void Frame::assign(uint64_t frame_id, int64_t time_ns, const FrameGeometryPtr& geom,
+                   const std::vector<cv::KeyPoint>& kps, const cv::Mat& descs, const std::vector<float>& u_right_px,
+                   const std::vector<float>& depth_m) {
   id = frame_id;
   t_ns = time_ns;
   geometry = geom;

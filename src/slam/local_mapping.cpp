@@ -1,5 +1,5 @@
-#include "agvslam/core/clock.h"
 #include "agvslam/slam/local_mapping.h"
+#include "agvslam/core/clock.h"
 
 #include <algorithm>
 #include <chrono>
@@ -118,8 +118,8 @@ void LocalMapping::process(const KeyFramePtr& kf) {
     stats_.ba_ms = s.ba_ms;
     stats_.kf_culling_ms = s.kf_culling_ms;
     stats_.total_ms = s.total_ms;
-    history_.push_back({kf->id, s.insert_ms, s.culling_ms, s.triangulation_ms, s.fusion_ms, s.ba_ms, s.kf_culling_ms,
-                        s.total_ms});
+    history_.push_back(
+        {kf->id, s.insert_ms, s.culling_ms, s.triangulation_ms, s.fusion_ms, s.ba_ms, s.kf_culling_ms, s.total_ms});
   }
   if (sink_) sink_(kf);
 }
@@ -245,7 +245,8 @@ void LocalMapping::create_new_map_points(KeyFrame& kf) {
       const double dist1 = (p_w - c1).norm(), dist2 = (p_w - c2).norm();
       if (dist1 == 0 || dist2 == 0) continue;
       const double ratio_dist = dist2 / dist1;
-      const double ratio_octave = g.scale_factors[static_cast<std::size_t>(kp1.octave)] / g.scale_factors[static_cast<std::size_t>(kp2.octave)];
+      const double ratio_octave =
+          g.scale_factors[static_cast<std::size_t>(kp1.octave)] / g.scale_factors[static_cast<std::size_t>(kp2.octave)];
       if (ratio_dist * ratio_factor < ratio_octave || ratio_dist > ratio_octave * ratio_factor) continue;
 
       auto point = std::make_shared<MapPoint>(map_.new_map_point_id(), p_w, &kf, kf.frame_id);
@@ -308,8 +309,8 @@ void LocalMapping::search_in_neighbours(KeyFrame& kf) {
 
 void LocalMapping::local_bundle_adjustment(KeyFrame& kf) {
   BaProblem problem;
-  std::vector<KeyFramePtr> pose_kfs;   // problem.poses[k] <-> pose_kfs[k]
-  std::vector<MapPointPtr> point_refs; // problem.points_w[k] <-> point_refs[k]
+  std::vector<KeyFramePtr> pose_kfs;    // problem.poses[k] <-> pose_kfs[k]
+  std::vector<MapPointPtr> point_refs;  // problem.points_w[k] <-> point_refs[k]
   struct ObsRef {
     KeyFrame* kf;
     int index;
@@ -365,9 +366,9 @@ void LocalMapping::local_bundle_adjustment(KeyFrame& kf) {
   if (problem.observations.empty()) return;
 
   // Ceres works on the copy while tracking uses the map.
-  const BaStats stats = solve_bundle_adjustment(problem, intrinsics_, config_.optimizer,
-                                                config_.mapping.local_ba_iterations_first,
-                                                config_.mapping.local_ba_iterations_second, &abort_ba_);
+  const BaStats stats =
+      solve_bundle_adjustment(problem, intrinsics_, config_.optimizer, config_.mapping.local_ba_iterations_first,
+                              config_.mapping.local_ba_iterations_second, &abort_ba_);
 
   std::lock_guard<std::mutex> lock(map_.mutex());
   uint64_t removed = 0;

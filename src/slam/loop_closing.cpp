@@ -1,5 +1,5 @@
-#include "agvslam/core/clock.h"
 #include "agvslam/slam/loop_closing.h"
+#include "agvslam/core/clock.h"
 
 #include <algorithm>
 #include <chrono>
@@ -165,11 +165,15 @@ bool LoopClosing::detect_loop(KeyFrame& kf) {
     std::vector<MapPointPtr> m12;
     for (KeyFrame* c : candidates) {
       const int n = matcher_.search_by_bow(kf, *c, 0.75f, m12);
-      std::fprintf(stderr, " %llu(s%.3f,m%d,pts%d)", ull(c->id), PlaceRecognition::score(kf, *c), n, c->tracked_map_points(0));
+      std::fprintf(stderr, " %llu(s%.3f,m%d,pts%d)", ull(c->id), PlaceRecognition::score(kf, *c), n,
+                   c->tracked_map_points(0));
     }
     // best overall non-connected
     std::fprintf(stderr, " | kf0:");
-    if (auto k0 = map_.keyframe(0)) { const int n = matcher_.search_by_bow(kf, *k0, 0.75f, m12); std::fprintf(stderr, "s%.3f m%d", PlaceRecognition::score(kf, *k0), n); }
+    if (auto k0 = map_.keyframe(0)) {
+      const int n = matcher_.search_by_bow(kf, *k0, 0.75f, m12);
+      std::fprintf(stderr, "s%.3f m%d", PlaceRecognition::score(kf, *k0), n);
+    }
     std::fprintf(stderr, "\n");
   }
   enough_consistent_.clear();
@@ -250,7 +254,8 @@ int LoopClosing::covisible_confirmations(const KeyFrame& kf, std::vector<double>
     const double moved_m = (T.inverse().translation() - T_n_w_predicted.inverse().translation()).norm();
     const double turned_deg = rotation_angle_deg(T.linear() * T_n_w_predicted.linear().transpose());
     if (errors) errors->push_back(st.inliers >= lc.min_refined_inliers ? moved_m : -1);
-    if (st.inliers >= lc.min_refined_inliers && moved_m <= lc.confirmation_max_m && turned_deg <= lc.confirmation_max_deg) {
+    if (st.inliers >= lc.min_refined_inliers && moved_m <= lc.confirmation_max_m &&
+        turned_deg <= lc.confirmation_max_deg) {
       ++confirmed;
     }
   }
@@ -298,7 +303,8 @@ bool LoopClosing::verify_loop(KeyFrame& kf, LoopEvent& event) {
     // Keep the RANSAC inliers, add matches by projection both ways, refine on all of them.
     std::vector<MapPointPtr> verified(kf.size(), nullptr);
     for (std::size_t k = 0; k < matches3d.size(); ++k) {
-      if (ransac.inlier[k]) verified[static_cast<std::size_t>(index_of[k])] = matches12[static_cast<std::size_t>(index_of[k])];
+      if (ransac.inlier[k])
+        verified[static_cast<std::size_t>(index_of[k])] = matches12[static_cast<std::size_t>(index_of[k])];
     }
     SE3d T_c1_c2 = ransac.T_c1_c2;
     matcher_.search_by_se3(kf, *candidate, T_c1_c2, static_cast<float>(lc.projection_radius_px), verified);
@@ -317,9 +323,12 @@ bool LoopClosing::verify_loop(KeyFrame& kf, LoopEvent& event) {
     break;
   }
   if (loop_debug()) {
-    std::fprintf(stderr, "loop kf %llu (frame %llu): %zu candidates [", ull(kf.id), ull(kf.frame_id), enough_consistent_.size());
-    for (const LoopCandidate& c : enough_consistent_) std::fprintf(stderr, " %llu/f%llu%s", ull(c.kf->id), ull(c.kf->frame_id), c.consistent ? "*" : "");
-    std::fprintf(stderr, "] bow %d ransac %d refined %d matched %d\n", event.bow_matches, event.ransac_inliers, event.refined_inliers, matched_kf_ ? 1 : 0);
+    std::fprintf(stderr, "loop kf %llu (frame %llu): %zu candidates [", ull(kf.id), ull(kf.frame_id),
+                 enough_consistent_.size());
+    for (const LoopCandidate& c : enough_consistent_)
+      std::fprintf(stderr, " %llu/f%llu%s", ull(c.kf->id), ull(c.kf->frame_id), c.consistent ? "*" : "");
+    std::fprintf(stderr, "] bow %d ransac %d refined %d matched %d\n", event.bow_matches, event.ransac_inliers,
+                 event.refined_inliers, matched_kf_ ? 1 : 0);
   }
   if (!matched_kf_) return fail(false);
 
@@ -340,8 +349,8 @@ bool LoopClosing::verify_loop(KeyFrame& kf, LoopEvent& event) {
     }
   }
   matcher_.search_loop_projection(kf, T_cur_w_corrected_, loop_points_, 10.0f, current_matches_);
-  event.total_matches = static_cast<int>(
-      std::count_if(current_matches_.begin(), current_matches_.end(), [](const MapPointPtr& p) { return p != nullptr; }));
+  event.total_matches = static_cast<int>(std::count_if(current_matches_.begin(), current_matches_.end(),
+                                                       [](const MapPointPtr& p) { return p != nullptr; }));
   if (event.total_matches < lc.min_total_matches) return fail(false);
   if (!matched_consistent_) {
     std::vector<double> errors;
@@ -603,8 +612,8 @@ void LoopClosing::run_global_ba(uint64_t /*loop_kf_id*/, std::size_t event_index
   if (problem.observations.empty()) return;
   OptimizerConfig oc = config_.optimizer;
   oc.local_ba_dense_schur = false;  // hundreds of keyframes: the sparse Schur complement
-  const BaStats ba = solve_bundle_adjustment(problem, intrinsics_, oc, config_.loop_closing.global_ba_iterations, 0,
-                                             &gba_abort_);
+  const BaStats ba =
+      solve_bundle_adjustment(problem, intrinsics_, oc, config_.loop_closing.global_ba_iterations, 0, &gba_abort_);
   const double solve_ms = ms_since(t0);
   if (ba.aborted || gba_abort_.load()) {
     std::lock_guard<std::mutex> lock(stats_mutex_);

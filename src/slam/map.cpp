@@ -52,7 +52,8 @@ MapCounts Map::counts() const {
   c.map_points = map_points_.size();
   std::size_t bytes = 0;
   for (const auto& [id, kf] : keyframes_) {
-    bytes += sizeof(KeyFrame) + kf->size() * (sizeof(cv::KeyPoint) + 32 + 2 * sizeof(float) + sizeof(MapPointPtr) + sizeof(int));
+    bytes += sizeof(KeyFrame) +
+             kf->size() * (sizeof(cv::KeyPoint) + 32 + 2 * sizeof(float) + sizeof(MapPointPtr) + sizeof(int));
   }
   for (const auto& [id, p] : map_points_) {
     c.observations += p->observations().size();

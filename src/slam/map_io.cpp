@@ -145,8 +145,9 @@ class Reader {
  private:
   void need(std::size_t n, const char* field) const {
     if (data_.size() - pos_ < n) {
-      throw InputError(source_, field, "expected " + std::to_string(n) + " more bytes at offset " +
-                                           std::to_string(pos_) + " (the payload ends early)");
+      throw InputError(source_, field,
+                       "expected " + std::to_string(n) + " more bytes at offset " + std::to_string(pos_) +
+                           " (the payload ends early)");
     }
   }
   const std::string& data_;
@@ -339,9 +340,10 @@ std::string encode_map(const Map& map, const MapFileContext& context) {
 MapFileSummary check_map_file(const std::string& bytes, const std::string& source) {
   MapFileSummary s;
   if (bytes.size() < kMapHeaderBytes) {
-    throw InputError(source, "header", "expected at least the " + std::to_string(kMapHeaderBytes) +
-                                           "-byte header of an agvslam map file; the file has " +
-                                           std::to_string(bytes.size()) + " bytes (truncated?)");
+    throw InputError(source, "header",
+                     "expected at least the " + std::to_string(kMapHeaderBytes) +
+                         "-byte header of an agvslam map file; the file has " + std::to_string(bytes.size()) +
+                         " bytes (truncated?)");
   }
   const char* h = bytes.data();
   if (std::memcmp(h, kMagic, 8) != 0) {
@@ -351,19 +353,21 @@ MapFileSummary check_map_file(const std::string& bytes, const std::string& sourc
   std::memcpy(&header_crc, h + 60, 4);
   const uint32_t computed_header_crc = crc32_of(h, 60);
   if (header_crc != computed_header_crc) {
-    throw InputError(source, "header", "expected header checksum " + hex(header_crc, 8) + ", computed " +
-                                           hex(computed_header_crc, 8) + " (corrupt file)");
+    throw InputError(source, "header",
+                     "expected header checksum " + hex(header_crc, 8) + ", computed " + hex(computed_header_crc, 8) +
+                         " (corrupt file)");
   }
   uint32_t header_size = 0;
   std::memcpy(&s.version, h + 8, 4);
   std::memcpy(&header_size, h + 12, 4);
   if (s.version != kMapFormatVersion) {
-    throw InputError(source, "version", "expected map format version " + std::to_string(kMapFormatVersion) +
-                                            ", the file has version " + std::to_string(s.version));
+    throw InputError(source, "version",
+                     "expected map format version " + std::to_string(kMapFormatVersion) + ", the file has version " +
+                         std::to_string(s.version));
   }
   if (header_size != kMapHeaderBytes) {
-    throw InputError(source, "header size", "expected " + std::to_string(kMapHeaderBytes) + ", read " +
-                                                std::to_string(header_size));
+    throw InputError(source, "header size",
+                     "expected " + std::to_string(kMapHeaderBytes) + ", read " + std::to_string(header_size));
   }
   std::memcpy(&s.payload_bytes, h + 16, 8);
   std::memcpy(&s.payload_crc32, h + 24, 4);
@@ -375,14 +379,14 @@ MapFileSummary check_map_file(const std::string& bytes, const std::string& sourc
   s.direct_index_level = static_cast<int>(level);
   const uint64_t actual = bytes.size() - kMapHeaderBytes;
   if (actual != s.payload_bytes) {
-    throw InputError(source, "payload", "expected " + std::to_string(s.payload_bytes) +
-                                            " bytes after the header, the file has " + std::to_string(actual) +
-                                            (actual < s.payload_bytes ? " (truncated)" : " (trailing bytes)"));
+    throw InputError(source, "payload",
+                     "expected " + std::to_string(s.payload_bytes) + " bytes after the header, the file has " +
+                         std::to_string(actual) + (actual < s.payload_bytes ? " (truncated)" : " (trailing bytes)"));
   }
   const uint32_t crc = crc32_of(bytes.data() + kMapHeaderBytes, actual);
   if (crc != s.payload_crc32) {
-    throw InputError(source, "payload", "expected CRC-32 " + hex(s.payload_crc32, 8) + ", computed " + hex(crc, 8) +
-                                            " (corrupt file)");
+    throw InputError(source, "payload",
+                     "expected CRC-32 " + hex(s.payload_crc32, 8) + ", computed " + hex(crc, 8) + " (corrupt file)");
   }
   return s;
 }
@@ -413,11 +417,12 @@ MapFileSummary decode_map(const std::string& bytes, const std::string& source, c
   c.n_levels = r.get<int32_t>("camera");
   c.scale_factor = r.get<double>("camera");
   auto close = [](double a, double b) { return std::fabs(a - b) <= 1e-6 * std::max(1.0, std::fabs(b)); };
-  if (!close(c.fx, expected.fx) || !close(c.fy, expected.fy) || !close(c.cx, expected.cx) || !close(c.cy, expected.cy) ||
-      !close(c.baseline_m, expected.baseline_m) || c.width != expected.width || c.height != expected.height ||
-      c.n_levels != expected.n_levels || !close(c.scale_factor, expected.scale_factor)) {
-    throw InputError(source, "camera", "expected a map made with this camera and ORB pyramid (" + expected.describe() +
-                                           "); the map has " + c.describe());
+  if (!close(c.fx, expected.fx) || !close(c.fy, expected.fy) || !close(c.cx, expected.cx) ||
+      !close(c.cy, expected.cy) || !close(c.baseline_m, expected.baseline_m) || c.width != expected.width ||
+      c.height != expected.height || c.n_levels != expected.n_levels || !close(c.scale_factor, expected.scale_factor)) {
+    throw InputError(source, "camera",
+                     "expected a map made with this camera and ORB pyramid (" + expected.describe() +
+                         "); the map has " + c.describe());
   }
   const uint64_t next_kf = r.get<uint64_t>("counters");
   const uint64_t next_point = r.get<uint64_t>("counters");
@@ -460,9 +465,9 @@ MapFileSummary decode_map(const std::string& bytes, const std::string& source, c
       kp.octave = r.get<int32_t>(where.c_str());
       kp.class_id = r.get<int32_t>(where.c_str());
       if (kp.octave < 0 || kp.octave >= geometry->n_levels || !std::isfinite(kp.pt.x) || !std::isfinite(kp.pt.y)) {
-        throw InputError(source, where + " keypoint " + std::to_string(i),
-                         "expected a finite position and a pyramid level in [0, " +
-                             std::to_string(geometry->n_levels - 1) + "]");
+        throw InputError(
+            source, where + " keypoint " + std::to_string(i),
+            "expected a finite position and a pyramid level in [0, " + std::to_string(geometry->n_levels - 1) + "]");
       }
     }
     descs.create(static_cast<int>(n), 32, CV_8UC1);
@@ -501,7 +506,8 @@ MapFileSummary decode_map(const std::string& bytes, const std::string& source, c
   }
   auto keyframe_of = [&](uint64_t id, const std::string& where) {
     const auto it = kf_by_id.find(id);
-    if (it == kf_by_id.end()) throw InputError(source, where, "expected the id of a saved keyframe, read " + std::to_string(id));
+    if (it == kf_by_id.end())
+      throw InputError(source, where, "expected the id of a saved keyframe, read " + std::to_string(id));
     return it->second;
   };
 
@@ -531,8 +537,9 @@ MapFileSummary decode_map(const std::string& bytes, const std::string& source, c
       KeyFrame* kf = keyframe_of(r.get<uint64_t>(where.c_str()), where);
       const int32_t index = r.get<int32_t>(where.c_str());
       if (index < 0 || static_cast<std::size_t>(index) >= kf->size() || point->is_in(kf)) {
-        throw InputError(source, where, "expected one observation per keyframe at a keypoint index below " +
-                                            std::to_string(kf->size()) + " (keyframe " + std::to_string(kf->id) + ")");
+        throw InputError(source, where,
+                         "expected one observation per keyframe at a keypoint index below " +
+                             std::to_string(kf->size()) + " (keyframe " + std::to_string(kf->id) + ")");
       }
       point->add_observation(kf, index);
     }
@@ -591,8 +598,9 @@ MapFileSummary decode_map(const std::string& bytes, const std::string& source, c
     removed.push_back({id, parent, r.pose("removed keyframes")});
   }
   if (!r.at_end()) {
-    throw InputError(source, "payload", "expected the payload to end after the removed keyframes (offset " +
-                                            std::to_string(r.position()) + ")");
+    throw InputError(
+        source, "payload",
+        "expected the payload to end after the removed keyframes (offset " + std::to_string(r.position()) + ")");
   }
   // The origin first (Map::add_keyframe marks the first keyframe added when it has no origin yet).
   MapFileAccess::set_counters(loaded, next_kf, next_point, s.keyframes > 0 ? origin : UINT64_MAX);

@@ -97,7 +97,8 @@ void Matcher::rotation_outliers(std::vector<int>& out) const {
   }
 }
 
-int Matcher::search_last_frame(Frame& current, const Frame& last, float radius_px, bool check_orientation, float ratio) {
+int Matcher::search_last_frame(Frame& current, const Frame& last, float radius_px, bool check_orientation,
+                               float ratio) {
   const FrameGeometry& g = *current.geometry;
   const SE3d& T_c_w = current.T_c_w();
   // The current camera centre in the last camera's frame: moving forward, points appear at coarser levels.
@@ -148,7 +149,8 @@ int Matcher::search_last_frame(Frame& current, const Frame& last, float radius_p
       current.map_points[static_cast<std::size_t>(best)] = point;
       ++matches;
       if (check_orientation) {
-        add_to_histogram(angle_diff_deg(last.keypoints[i].angle, current.keypoints[static_cast<std::size_t>(best)].angle), best);
+        add_to_histogram(
+            angle_diff_deg(last.keypoints[i].angle, current.keypoints[static_cast<std::size_t>(best)].angle), best);
       }
     }
   }
@@ -216,7 +218,8 @@ int Matcher::search_keyframe_brute_force(const KeyFrame& kf, const Frame& frame,
         second = d;
       }
     }
-    if (best_j < 0 || best > kMatchThresholdLow || static_cast<float>(best) >= ratio * static_cast<float>(second)) continue;
+    if (best_j < 0 || best > kMatchThresholdLow || static_cast<float>(best) >= ratio * static_cast<float>(second))
+      continue;
     const std::size_t sj = static_cast<std::size_t>(best_j);
     if (best < best_dist_[sj]) {  // keep the better of two keyframe points claiming one keypoint
       best_dist_[sj] = best;
@@ -250,7 +253,7 @@ int Matcher::search_for_triangulation(const KeyFrame& kf1, const KeyFrame& kf2, 
   best_dist_.assign(kf2.size(), 256);
   best_index_.assign(kf2.size(), -1);
   stamp_.assign(kf2.size(), -1);
-  constexpr double kMinDepth = 0.2;     // m
+  constexpr double kMinDepth = 0.2;  // m
   const double max_depth = 2000.0 * g.baseline_m;
 
   for (std::size_t i1 = 0; i1 < kf1.size(); ++i1) {
@@ -343,8 +346,9 @@ int Matcher::search_for_triangulation(const KeyFrame& kf1, const KeyFrame& kf2, 
   std::vector<int>& pair_of_2 = best_index_;
   for (std::size_t i2 = 0; i2 < kf2.size(); ++i2) {
     if (pair_of_2[i2] < 0) continue;
-    add_to_histogram(angle_diff_deg(kf1.keypoints[static_cast<std::size_t>(pair_of_2[i2])].angle, kf2.keypoints[i2].angle),
-                     static_cast<int>(i2));
+    add_to_histogram(
+        angle_diff_deg(kf1.keypoints[static_cast<std::size_t>(pair_of_2[i2])].angle, kf2.keypoints[i2].angle),
+        static_cast<int>(i2));
   }
   rotation_outliers(rejected_);
   for (const int i2 : rejected_) pair_of_2[static_cast<std::size_t>(i2)] = -1;
@@ -439,12 +443,13 @@ int Matcher::search_by_bow(const KeyFrame& kf, const Frame& frame, float ratio, 
               second = d;
             }
           }
-          if (best_j < 0 || best > kMatchThresholdLow || static_cast<float>(best) >= ratio * static_cast<float>(second)) {
+          if (best_j < 0 || best > kMatchThresholdLow ||
+              static_cast<float>(best) >= ratio * static_cast<float>(second)) {
             continue;
           }
           matches[static_cast<std::size_t>(best_j)] = point;
-          add_to_histogram(angle_diff_deg(kf.keypoints[i].angle, frame.keypoints[static_cast<std::size_t>(best_j)].angle),
-                           best_j);
+          add_to_histogram(
+              angle_diff_deg(kf.keypoints[i].angle, frame.keypoints[static_cast<std::size_t>(best_j)].angle), best_j);
           ++n;
         }
       });
@@ -479,7 +484,8 @@ int Matcher::search_by_bow(const KeyFrame& kf1, const KeyFrame& kf2, float ratio
               second = d;
             }
           }
-          if (best_i2 < 0 || best > kMatchThresholdLow || static_cast<float>(best) >= ratio * static_cast<float>(second)) {
+          if (best_i2 < 0 || best > kMatchThresholdLow ||
+              static_cast<float>(best) >= ratio * static_cast<float>(second)) {
             continue;
           }
           const std::size_t s2 = static_cast<std::size_t>(best_i2);
@@ -523,7 +529,8 @@ int Matcher::search_keyframe_projection(Frame& frame, const KeyFrame& kf, float 
     if (best_j < 0 || best > max_distance) continue;
     frame.map_points[static_cast<std::size_t>(best_j)] = point;
     found.insert(point.get());
-    add_to_histogram(angle_diff_deg(kf.keypoints[i].angle, frame.keypoints[static_cast<std::size_t>(best_j)].angle), best_j);
+    add_to_histogram(angle_diff_deg(kf.keypoints[i].angle, frame.keypoints[static_cast<std::size_t>(best_j)].angle),
+                     best_j);
     ++n;
   }
   n -= drop_rotation_outliers(frame.map_points);
@@ -607,14 +614,17 @@ int Matcher::search_by_se3(const KeyFrame& kf1, const KeyFrame& kf2, const SE3d&
       if (dist < point->min_invariance_distance() || dist > point->max_invariance_distance()) continue;
       const int level = point->predict_scale_level(dist, g);
       const float radius = radius_px * g.scale_factors[static_cast<std::size_t>(level)];
-      to.grid.features_in_area(to.keypoints, g, static_cast<float>(u), static_cast<float>(v), radius, 0, -1, candidates_);
+      to.grid.features_in_area(to.keypoints, g, static_cast<float>(u), static_cast<float>(v), radius, 0, -1,
+                               candidates_);
       const auto [best, best_j] = nearest_candidate(point->descriptor.data(), to, candidates_, level, kSkipNone);
       if (best_j >= 0 && best <= kMatchThresholdHigh) match[i] = best_j;
     }
   };
   std::vector<int> match1, match2;
-  search(kf1, kf2, T_c2_c1, [&](std::size_t i1) { return matches12[i1] != nullptr; }, match1);
-  search(kf2, kf1, T_c1_c2, [&](std::size_t i2) { return matched2[i2] != 0; }, match2);
+  search(
+      kf1, kf2, T_c2_c1, [&](std::size_t i1) { return matches12[i1] != nullptr; }, match1);
+  search(
+      kf2, kf1, T_c1_c2, [&](std::size_t i2) { return matched2[i2] != 0; }, match2);
   int n = 0;
   for (std::size_t i1 = 0; i1 < n1; ++i1) {
     const int i2 = match1[i1];

@@ -338,7 +338,8 @@ BaStats solve_bundle_adjustment(BaProblem& problem, const StereoIntrinsics& came
     double c = 0;
     for (BaProblem::Observation& o : problem.observations) {
       const SE3d T = params_to_pose(&pose_params[7 * static_cast<std::size_t>(o.pose)]);
-      const Eigen::Vector3d p_w = Eigen::Map<const Eigen::Vector3d>(&point_params[3 * static_cast<std::size_t>(o.point)]);
+      const Eigen::Vector3d p_w =
+          Eigen::Map<const Eigen::Vector3d>(&point_params[3 * static_cast<std::size_t>(o.point)]);
       bool in_front = true;
       const double chi2 = reprojection_chi2(camera, T * p_w, o.uv_px, o.u_right_px, o.inv_sigma2, &in_front);
       const double th = o.u_right_px >= 0 ? config.chi2_stereo : config.chi2_mono;
@@ -400,7 +401,8 @@ BaStats solve_bundle_adjustment(BaProblem& problem, const StereoIntrinsics& came
   for (std::size_t k = 0; k < n_poses; ++k) {
     if (!problem.poses[k].fixed) problem.poses[k].T_c_w = params_to_pose(&pose_params[7 * k]);
   }
-  for (std::size_t k = 0; k < n_points; ++k) problem.points_w[k] = Eigen::Map<const Eigen::Vector3d>(&point_params[3 * k]);
+  for (std::size_t k = 0; k < n_points; ++k)
+    problem.points_w[k] = Eigen::Map<const Eigen::Vector3d>(&point_params[3 * k]);
   return stats;
 }
 

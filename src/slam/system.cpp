@@ -1,5 +1,5 @@
-#include "agvslam/core/clock.h"
 #include "agvslam/slam/system.h"
+#include "agvslam/core/clock.h"
 
 #include <chrono>
 #include <cstdio>
@@ -36,9 +36,9 @@ MapMode parse_map_mode(const std::string& text, const std::string& option) {
 System::System(const StereoCalibration& calibration, const SystemConfig& config)
     : config_(config),
       calibration_(calibration),
-      geometry_(std::make_shared<const FrameGeometry>(FrameGeometry::make(
-          calibration.left, calibration.baseline_m, config.slam.tracking.close_depth_baselines, config.orb.n_levels,
-          config.orb.scale_factor))),
+      geometry_(std::make_shared<const FrameGeometry>(
+          FrameGeometry::make(calibration.left, calibration.baseline_m, config.slam.tracking.close_depth_baselines,
+                              config.orb.n_levels, config.orb.scale_factor))),
       extractor_(config.orb),
       stereo_matcher_(config.stereo, calibration) {
   config_.slam.validate("SystemConfig.slam");
@@ -76,11 +76,10 @@ std::vector<std::string> System::describe() const {
   lines.push_back(config_.orb.describe());
   lines.push_back(config_.stereo.describe());
   char buf[160];
-  std::snprintf(buf, sizeof(buf), "system: %.1f Hz camera, local mapping %s, loop closing %s, mode %s",
-                config_.frame_rate_hz,
-                config_.threaded_mapping ? "in its own thread" : "in the tracking thread (deterministic)",
-                loop_ ? (config_.threaded_mapping ? "in its own thread" : "in the tracking thread") : "off",
-                to_string(mode_));
+  std::snprintf(
+      buf, sizeof(buf), "system: %.1f Hz camera, local mapping %s, loop closing %s, mode %s", config_.frame_rate_hz,
+      config_.threaded_mapping ? "in its own thread" : "in the tracking thread (deterministic)",
+      loop_ ? (config_.threaded_mapping ? "in its own thread" : "in the tracking thread") : "off", to_string(mode_));
   lines.emplace_back(buf);
   if (place_) {
     lines.push_back("place recognition: vocabulary " + place_->vocabulary().describe() + ", direct index level " +

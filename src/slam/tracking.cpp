@@ -1,5 +1,5 @@
-#include "agvslam/core/clock.h"
 #include "agvslam/slam/tracking.h"
+#include "agvslam/core/clock.h"
 
 #include <algorithm>
 #include <chrono>
@@ -20,12 +20,14 @@ using Clock = std::chrono::steady_clock;
 
 }  // namespace
 
-
 const char* to_string(TrackingState state) {
   switch (state) {
-    case TrackingState::kInitialising: return "initialising";
-    case TrackingState::kOk: return "ok";
-    case TrackingState::kLost: return "lost";
+    case TrackingState::kInitialising:
+      return "initialising";
+    case TrackingState::kOk:
+      return "ok";
+    case TrackingState::kLost:
+      return "lost";
   }
   return "?";
 }
@@ -62,7 +64,8 @@ void Tracking::start_relocalising() {
 TrackingState Tracking::track(Frame& frame, TrackTimings& timings, TrackingCounts& counts) {
   std::swap(current_, frame);
   counts.features = static_cast<int>(current_.size());
-  counts.stereo_features = static_cast<int>(std::count_if(current_.depth.begin(), current_.depth.end(), [](float d) { return d > 0; }));
+  counts.stereo_features =
+      static_cast<int>(std::count_if(current_.depth.begin(), current_.depth.end(), [](float d) { return d > 0; }));
 
   const auto t_wait = Clock::now();
   std::unique_lock<std::mutex> lock(map_.mutex());
@@ -167,7 +170,8 @@ bool Tracking::stereo_initialisation() {
   map_.add_keyframe(kf);
   for (std::size_t i = 0; i < current_.size(); ++i) {
     if (current_.depth[i] <= 0) continue;
-    auto point = std::make_shared<MapPoint>(map_.new_map_point_id(), current_.unproject_stereo(i), kf.get(), current_.id);
+    auto point =
+        std::make_shared<MapPoint>(map_.new_map_point_id(), current_.unproject_stereo(i), kf.get(), current_.id);
     point->add_observation(kf.get(), static_cast<int>(i));
     kf->add_map_point(point, i);
     point->compute_distinctive_descriptor();
@@ -216,7 +220,8 @@ int Tracking::optimize_current_pose() {
   if (stats.rounds > 0 && is_valid_pose(T)) current_.set_pose(T);
   std::fill(current_.outlier.begin(), current_.outlier.end(), 0);
   for (std::size_t k = 0; k < observation_keypoint_.size(); ++k) {
-    current_.outlier[static_cast<std::size_t>(observation_keypoint_[k])] = observation_outlier_.empty() ? 1 : observation_outlier_[k];
+    current_.outlier[static_cast<std::size_t>(observation_keypoint_[k])] =
+        observation_outlier_.empty() ? 1 : observation_outlier_[k];
   }
   return stats.inliers;
 }
@@ -446,7 +451,8 @@ void Tracking::update_local_map() {
     local_keyframes_.push_back(kf);
     kf->track.local_for_frame = current_.id;
   }
-  std::sort(local_keyframes_.begin(), local_keyframes_.end(), [](const KeyFrame* a, const KeyFrame* b) { return a->id < b->id; });
+  std::sort(local_keyframes_.begin(), local_keyframes_.end(),
+            [](const KeyFrame* a, const KeyFrame* b) { return a->id < b->id; });
   // Neighbours: ORB-SLAM2 adds one new neighbour, child and the parent per keyframe.
   const std::size_t max_kfs = static_cast<std::size_t>(config_.tracking.max_local_keyframes);
   const std::size_t first_order = local_keyframes_.size();
@@ -510,7 +516,8 @@ void Tracking::search_local_points() {
     }
   }
   if (to_match > 0) {
-    const float th = static_cast<float>(config_.tracking.local_map_radius) * (current_.id < last_recovery_frame_id_ + 2 ? 5.0f : 1.0f);
+    const float th = static_cast<float>(config_.tracking.local_map_radius) *
+                     (current_.id < last_recovery_frame_id_ + 2 ? 5.0f : 1.0f);
     matcher_.search_local_points(current_, local_points_, th);
   }
 }
@@ -531,9 +538,10 @@ bool Tracking::track_local_map(int& inliers) {
       current_.outlier[i] = 0;
     }
   }
-  const int needed = current_.id < last_recovery_frame_id_ + static_cast<uint64_t>(max_frames_) && last_recovery_frame_id_ > 0
-                         ? std::max(50, config_.tracking.min_local_map_inliers)
-                         : config_.tracking.min_local_map_inliers;
+  const int needed =
+      current_.id < last_recovery_frame_id_ + static_cast<uint64_t>(max_frames_) && last_recovery_frame_id_ > 0
+          ? std::max(50, config_.tracking.min_local_map_inliers)
+          : config_.tracking.min_local_map_inliers;
   return inliers >= needed;
 }
 
@@ -631,7 +639,8 @@ void Tracking::create_new_keyframe() {
       create = true;
     }
     if (create) {
-      auto point = std::make_shared<MapPoint>(map_.new_map_point_id(), current_.unproject_stereo(i), kf.get(), current_.id);
+      auto point =
+          std::make_shared<MapPoint>(map_.new_map_point_id(), current_.unproject_stereo(i), kf.get(), current_.id);
       point->add_observation(kf.get(), static_cast<int>(i));
       kf->add_map_point(point, i);
       point->compute_distinctive_descriptor();

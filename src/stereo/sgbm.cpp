@@ -22,10 +22,14 @@ void sgbm_raw_to_px(const cv::Mat& raw_16s, int min_disparity, cv::Mat& disparit
 namespace {
 int to_cv_mode(SgbmMode mode) {
   switch (mode) {
-    case SgbmMode::kSgbm: return cv::StereoSGBM::MODE_SGBM;
-    case SgbmMode::kHh: return cv::StereoSGBM::MODE_HH;
-    case SgbmMode::kSgbm3Way: return cv::StereoSGBM::MODE_SGBM_3WAY;
-    case SgbmMode::kHh4: return cv::StereoSGBM::MODE_HH4;
+    case SgbmMode::kSgbm:
+      return cv::StereoSGBM::MODE_SGBM;
+    case SgbmMode::kHh:
+      return cv::StereoSGBM::MODE_HH;
+    case SgbmMode::kSgbm3Way:
+      return cv::StereoSGBM::MODE_SGBM_3WAY;
+    case SgbmMode::kHh4:
+      return cv::StereoSGBM::MODE_HH4;
   }
   return cv::StereoSGBM::MODE_SGBM;
 }
@@ -83,8 +87,8 @@ cv::Rect StereoSgbm::crop_for(const cv::Rect& roi, cv::Size image_size, int num_
   return cv::Rect(cv::Point(x0, y0), cv::Point(x1, y1)) & cv::Rect(cv::Point(0, 0), image_size);
 }
 
-void StereoSgbm::compute_roi(const cv::Mat& left, const cv::Mat& right, const cv::Rect& roi,
-                             cv::Mat& roi_disparity_px, int max_disparity_px, double scale, int row_step) {
+void StereoSgbm::compute_roi(const cv::Mat& left, const cv::Mat& right, const cv::Rect& roi, cv::Mat& roi_disparity_px,
+                             int max_disparity_px, double scale, int row_step) {
   CV_Assert(scale == 1.0 || scale == 0.5);
   CV_Assert(row_step == 1 || row_step == 2);
   const cv::Rect image_rect(cv::Point(0, 0), left.size());

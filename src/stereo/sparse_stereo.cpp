@@ -41,13 +41,20 @@ int32_t range_min(const int32_t* c, int lo, int hi) {
 
 const char* to_string(SparseMatchStatus status) {
   switch (status) {
-    case SparseMatchStatus::kOk: return "ok";
-    case SparseMatchStatus::kOutside: return "outside";
-    case SparseMatchStatus::kNoTexture: return "no texture";
-    case SparseMatchStatus::kNotUnique: return "not unique";
-    case SparseMatchStatus::kHighCost: return "high cost";
-    case SparseMatchStatus::kLeftRight: return "left-right check";
-    case SparseMatchStatus::kRange: return "out of range";
+    case SparseMatchStatus::kOk:
+      return "ok";
+    case SparseMatchStatus::kOutside:
+      return "outside";
+    case SparseMatchStatus::kNoTexture:
+      return "no texture";
+    case SparseMatchStatus::kNotUnique:
+      return "not unique";
+    case SparseMatchStatus::kHighCost:
+      return "high cost";
+    case SparseMatchStatus::kLeftRight:
+      return "left-right check";
+    case SparseMatchStatus::kRange:
+      return "out of range";
   }
   return "?";
 }
@@ -129,8 +136,8 @@ SparseStereoMatcher::Search SparseStereoMatcher::search(const cv::Mat& ref, cons
     for (int k = 0; k < strip_width; ++k) {
       strip_scaled_[static_cast<std::size_t>(k)] = static_cast<int16_t>(kQuarter * static_cast<int32_t>(row[k]));
     }
-    accumulate_row_costs(ref_zero_mean_.data() + static_cast<std::size_t>(j * side), side, strip_scaled_.data(), wm, m, rc,
-                         cs);
+    accumulate_row_costs(ref_zero_mean_.data() + static_cast<std::size_t>(j * side), side, strip_scaled_.data(), wm, m,
+                         rc, cs);
   }
 
   // The first minimum and the least cost more than one column from it. Minima over plain ranges (vectorised),

@@ -6,9 +6,9 @@
 #include <filesystem>
 #include <fstream>
 #include <iterator>
+#include <map>
 #include <nlohmann/json.hpp>
 #include <opencv2/imgcodecs.hpp>
-#include <map>
 #include <regex>
 #include <sstream>
 #include <vector>
@@ -24,7 +24,8 @@ const std::string& scene1_sequence() {
   static const std::string dir = [] {
     const std::string d = test::make_temp_dir("agvslam-dynamic-tool") + "/scene1";
     std::string out;
-    const int rc = test::run_command(test::tool_path("agvslam-sim") + " --scenario scene1 --seed 7 --squeeze-to 40 --threads 2 --out " + d, &out);
+    const int rc = test::run_command(
+        test::tool_path("agvslam-sim") + " --scenario scene1 --seed 7 --squeeze-to 40 --threads 2 --out " + d, &out);
     EXPECT_EQ(rc, 0) << out;
     return d;
   }();
@@ -120,7 +121,8 @@ TEST(DynamicTool, WritesMasksOverlaysScoresAndJson) {
   EXPECT_GT(checked, 0);
   const nlohmann::json& rb = j["recall_breakdown"];
   int by_size = 0, by_distance = 0;
-  for (const char* k : {"size_lt1500", "size_1500_5000", "size_5000_20000", "size_ge20000"}) by_size += rb[k]["objects"].get<int>();
+  for (const char* k : {"size_lt1500", "size_1500_5000", "size_5000_20000", "size_ge20000"})
+    by_size += rb[k]["objects"].get<int>();
   for (const char* k : {"distance_lt4m", "distance_4_7m", "distance_7_12m", "distance_ge12m"}) {
     by_distance += rb[k]["objects"].get<int>();
     EXPECT_LE(rb[k]["found"].get<int>(), rb[k]["objects"].get<int>()) << k;
@@ -141,7 +143,7 @@ TEST(DynamicTool, WritesMasksOverlaysScoresAndJson) {
   }
   int full_view = 0, full_view_found = 0;
   int left = 0, left_found = 0, right = 0, right_found = 0, missed = 0;
-  std::map<std::string, std::pair<int, int>> by_tracks;  // tracked-point bin -> (found, objects)
+  std::map<std::string, std::pair<int, int>> by_tracks;      // tracked-point bin -> (found, objects)
   std::map<std::string, std::map<std::string, int>> misses;  // distance band -> stage -> count
   for (const auto& jf : j["per_frame"]) {
     if (!jf.contains("objects")) continue;
@@ -155,13 +157,19 @@ TEST(DynamicTool, WritesMasksOverlaysScoresAndJson) {
         right += b.br().x >= 752 - 2;
         right_found += b.br().x >= 752 - 2 && hit;
         const int tracks = o["tracked_points"].get<int>();
-        const std::string bin = tracks == 0 ? "tracks_0" : tracks <= 2 ? "tracks_1_2" : tracks <= 4 ? "tracks_3_4"
-                                : tracks <= 9 ? "tracks_5_9" : "tracks_ge10";
+        const std::string bin = tracks == 0   ? "tracks_0"
+                                : tracks <= 2 ? "tracks_1_2"
+                                : tracks <= 4 ? "tracks_3_4"
+                                : tracks <= 9 ? "tracks_5_9"
+                                              : "tracks_ge10";
         by_tracks[bin].first += hit;
         ++by_tracks[bin].second;
         if (!hit) {
           const double miss_m = o["distance_m"].get<double>();
-          const std::string band = !(miss_m > 0) ? "unknown" : miss_m < 4.0 ? "lt4m" : miss_m < 12.0 ? "4_12m" : "ge12m";
+          const std::string band = !(miss_m > 0)   ? "unknown"
+                                   : miss_m < 4.0  ? "lt4m"
+                                   : miss_m < 12.0 ? "4_12m"
+                                                   : "ge12m";
           const std::string stage = o["in_mask"].get<int>() > 0          ? "outline_below_iou"
                                     : o["in_roi"].get<int>() > 0         ? "roi_not_masked"
                                     : o["dynamic_points"].get<int>() > 0 ? "no_roi"
@@ -204,7 +212,8 @@ TEST(DynamicTool, WritesMasksOverlaysScoresAndJson) {
   }
   EXPECT_EQ(by_track_bins, by_size);
   int found = 0;
-  for (const char* k : {"size_lt1500", "size_1500_5000", "size_5000_20000", "size_ge20000"}) found += rb[k]["found"].get<int>();
+  for (const char* k : {"size_lt1500", "size_1500_5000", "size_5000_20000", "size_ge20000"})
+    found += rb[k]["found"].get<int>();
   EXPECT_EQ(missed, by_size - found);
   EXPECT_GT(missed, 0);
   int counted = 0;
@@ -225,7 +234,10 @@ TEST(DynamicTool, WritesMasksOverlaysScoresAndJson) {
     for (const auto& o : jf["objects"]) {
       if (!o["moving"].get<bool>() || o["pixels"].get<int>() < 400 || !o.contains("gt_motion_px")) continue;
       const double object_m = o["distance_m"].get<double>();
-      const std::string band = !(object_m > 0) ? "unknown" : object_m < 4.0 ? "lt4m" : object_m < 12.0 ? "4_12m" : "ge12m";
+      const std::string band = !(object_m > 0)   ? "unknown"
+                               : object_m < 4.0  ? "lt4m"
+                               : object_m < 12.0 ? "4_12m"
+                                                 : "ge12m";
       const double motion_px = o["gt_motion_px"].get<double>();
       const std::string bin = !o["gt_motion_valid"].get<bool>() ? "visible_part_changed"
                               : motion_px < 1.0                 ? "lt1px"
@@ -294,16 +306,23 @@ TEST(DynamicTool, BadInputNamesTheOptionOrFolder) {
   const std::string data = scene1_sequence();
   const std::string out = test::make_temp_dir("agvslam-dynamic-bad");
   std::string text;
-  EXPECT_EQ(test::run_command(test::tool_path("agvslam-dynamic") + " --dataset " + data + " --out " + out + " --frames 9:3", &text), 2);
+  EXPECT_EQ(test::run_command(
+                test::tool_path("agvslam-dynamic") + " --dataset " + data + " --out " + out + " --frames 9:3", &text),
+            2);
   EXPECT_NE(text.find("--frames"), std::string::npos) << text;
-  EXPECT_EQ(test::run_command(test::tool_path("agvslam-dynamic") + " --dataset " + data + " --out " + out + " --frames 500:", &text), 2);
+  EXPECT_EQ(test::run_command(
+                test::tool_path("agvslam-dynamic") + " --dataset " + data + " --out " + out + " --frames 500:", &text),
+            2);
   EXPECT_NE(text.find("40 frames"), std::string::npos) << text;
-  EXPECT_EQ(test::run_command(test::tool_path("agvslam-dynamic") + " --dataset " + out + "/nothing --out " + out, &text), 2);
+  EXPECT_EQ(
+      test::run_command(test::tool_path("agvslam-dynamic") + " --dataset " + out + "/nothing --out " + out, &text), 2);
   EXPECT_NE(text.find("nothing"), std::string::npos) << text;
   const std::string bad_params = out + "/bad.yaml";
   std::ofstream(bad_params) << "epipolar:\n  a_epi_px: lots\n";
   EXPECT_EQ(test::run_command(test::tool_path("agvslam-dynamic") + " --dataset " + data + " --out " + out +
-                                  " --params-dynamic " + bad_params, &text), 2);
+                                  " --params-dynamic " + bad_params,
+                              &text),
+            2);
   EXPECT_NE(text.find("epipolar.a_epi_px"), std::string::npos) << text;
   fs::remove_all(out);
 }
@@ -313,7 +332,10 @@ TEST(DynamicTool, RealKittiParkedCarsGiveFewRegions) {
   const std::string out = test::make_temp_dir("agvslam-dynamic-kitti");
   std::string text;
   ASSERT_EQ(test::run_command(test::tool_path("agvslam-dynamic") + " --dataset " + root + " --out " + out +
-                                  " --overlay-every 0 --json " + out + "/r.json", &text), 0) << text;
+                                  " --overlay-every 0 --json " + out + "/r.json",
+                              &text),
+            0)
+      << text;
   EXPECT_NE(text.find("PRECISION nan RECALL nan IOU nan"), std::string::npos) << text;
   EXPECT_NE(text.find("not scored"), std::string::npos);
   std::ifstream f(out + "/r.json");

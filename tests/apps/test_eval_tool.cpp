@@ -57,8 +57,8 @@ void write_tum(const std::string& path, const std::vector<Pose>& poses) {
   for (const auto& p : poses) {
     const Eigen::Quaterniond q(p.T.linear());
     const Eigen::Vector3d t = p.T.translation();
-    f << p.t_s << " " << t.x() << " " << t.y() << " " << t.z() << " " << q.x() << " " << q.y() << " " << q.z()
-      << " " << q.w() << "\n";
+    f << p.t_s << " " << t.x() << " " << t.y() << " " << t.z() << " " << q.x() << " " << q.y() << " " << q.z() << " "
+      << q.w() << "\n";
   }
 }
 
@@ -92,18 +92,18 @@ TEST_F(EvalTool, RigidOffsetGivesZeroAteAfterSe3Alignment) {
   write_times(path("times.txt"), gt);
   write_tum(path("est.tum"), est);
   std::string out;
-  ASSERT_EQ(eval("--gt " + path("gt.txt") + " --gt-format kitti --est " + path("est.tum") + " --est-format tum --times " +
-                     path("times.txt") + " --align se3",
+  ASSERT_EQ(eval("--gt " + path("gt.txt") + " --gt-format kitti --est " + path("est.tum") +
+                     " --est-format tum --times " + path("times.txt") + " --align se3",
                  &out),
             0)
       << out;
   EXPECT_LT(ate_from_output(out), 1e-6) << out;
   EXPECT_NE(out.find("by time stamp"), std::string::npos) << out;
   // Without alignment the offset shows in full.
-  ASSERT_EQ(eval("--gt " + path("gt.txt") + " --est " + path("est.tum") + " --times " + path("times.txt") +
-                     " --align none",
-                 &out),
-            0)
+  ASSERT_EQ(
+      eval("--gt " + path("gt.txt") + " --est " + path("est.tum") + " --times " + path("times.txt") + " --align none",
+           &out),
+      0)
       << out;
   EXPECT_GT(ate_from_output(out), 1.0);
 }
@@ -149,14 +149,15 @@ TEST_F(EvalTool, BadInputNamesTheFileLineOrOption) {
   EXPECT_EQ(eval("--gt " + path("missing.txt") + " --est " + path("est.tum"), &out), 2);
   EXPECT_NE(out.find("missing.txt"), std::string::npos) << out;
 
-  EXPECT_EQ(eval("--gt " + path("gt.txt") + " --est " + path("est.tum") + " --gt-format kitti --est-format tum", &out), 2);
+  EXPECT_EQ(eval("--gt " + path("gt.txt") + " --est " + path("est.tum") + " --gt-format kitti --est-format tum", &out),
+            2);
   EXPECT_NE(out.find("--times"), std::string::npos) << out;
 
   write_times(path("times.txt"), gt);
-  EXPECT_EQ(eval("--gt " + path("gt.txt") + " --est " + path("est.tum") + " --align affine --times " +
-                     path("times.txt"),
-                 &out),
-            2);
+  EXPECT_EQ(
+      eval("--gt " + path("gt.txt") + " --est " + path("est.tum") + " --align affine --times " + path("times.txt"),
+           &out),
+      2);
   EXPECT_NE(out.find("--align"), std::string::npos) << out;
 
   {
@@ -201,9 +202,9 @@ TEST_F(EvalTool, OdometryCheckReportsAScaleErrorAndAFrozenStretch) {
   write_tum(path("frozen.tum"), frozen);
 
   std::string out;
-  ASSERT_EQ(eval("--est " + path("scaled.tum") + " --odometry " + path("odometry.tum") + " --json " + path("o.json"),
-                 &out),
-            0)
+  ASSERT_EQ(
+      eval("--est " + path("scaled.tum") + " --odometry " + path("odometry.tum") + " --json " + path("o.json"), &out),
+      0)
       << out;
   EXPECT_EQ(first_line(out).rfind("ODOMETRY_DISTANCE_RATIO 1.05", 0), 0u) << out;
   EXPECT_NE(out.find("OUTSIDE the 3 % tolerance"), std::string::npos) << out;
@@ -235,8 +236,8 @@ TEST_F(EvalTool, OdometryCheckReportsAScaleErrorAndAFrozenStretch) {
 TEST_F(EvalTool, RealKittiGroundTruthAgainstItself) {
   AGVSLAM_REQUIRE_SHARED(kitti, "data/kitti06_f000-050");
   std::string out;
-  ASSERT_EQ(eval("--gt " + kitti + "/poses.txt --est " + kitti + "/poses.txt --gt-format kitti --est-format kitti", &out),
-            0)
+  ASSERT_EQ(
+      eval("--gt " + kitti + "/poses.txt --est " + kitti + "/poses.txt --gt-format kitti --est-format kitti", &out), 0)
       << out;
   EXPECT_LT(ate_from_output(out), 1e-9);
   EXPECT_NE(out.find("51 associated"), std::string::npos) << out;

@@ -23,7 +23,8 @@ struct RunOutput {
 
 RunOutput run_tool(const std::string& args, bool keep_stderr = false) {
   RunOutput r;
-  r.rc = test::run_command("(" + test::tool_path("agvslam-run") + " " + args + (keep_stderr ? " 2>&1)" : " 2>/dev/null)"), &r.text);
+  r.rc = test::run_command(
+      "(" + test::tool_path("agvslam-run") + " " + args + (keep_stderr ? " 2>&1)" : " 2>/dev/null)"), &r.text);
   std::smatch m;
   const std::regex first(R"(^FRAMES (\d+) TRACKED (\d+) KEYFRAMES (\d+) LOST (\d+)\n)");
   if (std::regex_search(r.text, m, first)) {
@@ -50,9 +51,11 @@ std::size_t count_lines(const std::string& path) {
 TEST(RunTool, KittiExcerptMatchesOrbSlam2) {
   AGVSLAM_REQUIRE_SHARED(data, "data/kitti06_f000-050");
   const std::string dir = test::make_temp_dir("agvslam-run-kitti");
-  const RunOutput r = run_tool("--dataset " + data + " --out " + dir + "/traj.txt --format kitti --dynamic off --mapping inline" +
-                               " --params-slam " AGVSLAM_SOURCE_DIR "/params/slam.yaml --params-features " AGVSLAM_SOURCE_DIR
-                               "/params/features_kitti.yaml --json " + dir + "/stats.json");
+  const RunOutput r =
+      run_tool("--dataset " + data + " --out " + dir + "/traj.txt --format kitti --dynamic off --mapping inline" +
+               " --params-slam " AGVSLAM_SOURCE_DIR "/params/slam.yaml --params-features " AGVSLAM_SOURCE_DIR
+               "/params/features_kitti.yaml --json " +
+               dir + "/stats.json");
   ASSERT_EQ(r.rc, 0) << r.text;
   EXPECT_EQ(r.frames, 51);
   EXPECT_EQ(r.tracked, 51);
@@ -63,7 +66,11 @@ TEST(RunTool, KittiExcerptMatchesOrbSlam2) {
   EXPECT_EQ(count_lines(dir + "/traj.txt"), 51u);
   // The trajectory agrees with agvslam-eval's reading of it.
   std::string eval;
-  ASSERT_EQ(test::run_command(test::tool_path("agvslam-eval") + " --gt " + data + "/poses.txt --est " + dir + "/traj.txt 2>/dev/null", &eval), 0) << eval;
+  ASSERT_EQ(test::run_command(
+                test::tool_path("agvslam-eval") + " --gt " + data + "/poses.txt --est " + dir + "/traj.txt 2>/dev/null",
+                &eval),
+            0)
+      << eval;
   std::smatch m;
   ASSERT_TRUE(std::regex_search(eval, m, std::regex(R"(^ATE_RMSE_M ([0-9.]+))")));
   EXPECT_NEAR(std::stod(m[1]), r.ate_m, 1e-4);
@@ -83,7 +90,8 @@ TEST(RunTool, KittiExcerptMatchesOrbSlam2) {
 TEST(RunTool, EurocStillCameraNoDriftNoLossThreadedMapping) {
   AGVSLAM_REQUIRE_SHARED(data, "data/euroc_v101_f000-094");
   const std::string dir = test::make_temp_dir("agvslam-run-euroc");
-  const RunOutput r = run_tool("--dataset " + data + " --out " + dir + "/traj.tum --dynamic off --mapping thread --json " + dir + "/stats.json");
+  const RunOutput r = run_tool("--dataset " + data + " --out " + dir +
+                               "/traj.tum --dynamic off --mapping thread --json " + dir + "/stats.json");
   ASSERT_EQ(r.rc, 0) << r.text;
   EXPECT_EQ(r.frames, 95);
   EXPECT_EQ(r.tracked, 95);
@@ -98,7 +106,8 @@ const std::string& scene3_sequence() {
   static const std::string dir = [] {
     const std::string d = test::make_temp_dir("agvslam-run-sim") + "/scene3";
     std::string out;
-    const int rc = test::run_command(test::tool_path("agvslam-sim") + " --scenario scene3 --seed 7 --squeeze-to 150 --threads 2 --out " + d, &out);
+    const int rc = test::run_command(
+        test::tool_path("agvslam-sim") + " --scenario scene3 --seed 7 --squeeze-to 150 --threads 2 --out " + d, &out);
     EXPECT_EQ(rc, 0) << out;
     return d;
   }();
@@ -152,9 +161,7 @@ TEST(RunTool, BadInputExitsTwoNamingTheOption) {
   r = run_tool("--dataset " + data + " --out " + dir + "/t.txt --format euroc", true);
   EXPECT_EQ(r.rc, 2);
   EXPECT_NE(r.text.find("--format"), std::string::npos) << r.text;
-  {
-    std::ofstream(dir + "/bad.yaml") << "tracking:\n  min_init_featurs: 3\n";
-  }
+  { std::ofstream(dir + "/bad.yaml") << "tracking:\n  min_init_featurs: 3\n"; }
   r = run_tool("--dataset " + data + " --out " + dir + "/t.txt --params-slam " + dir + "/bad.yaml", true);
   EXPECT_EQ(r.rc, 2);
   EXPECT_NE(r.text.find("min_init_featurs"), std::string::npos) << r.text;
@@ -166,7 +173,8 @@ TEST(RunTool, BadInputExitsTwoNamingTheOption) {
 TEST(RunTool, FrameRangeAndFirstLine) {
   AGVSLAM_REQUIRE_SHARED(data, "data/kitti06_f000-050");
   const std::string dir = test::make_temp_dir("agvslam-run-range");
-  const RunOutput r = run_tool("--dataset " + data + " --out " + dir + "/t.txt --dynamic off --mapping inline --frames 10:29");
+  const RunOutput r =
+      run_tool("--dataset " + data + " --out " + dir + "/t.txt --dynamic off --mapping inline --frames 10:29");
   ASSERT_EQ(r.rc, 0) << r.text;
   EXPECT_EQ(r.text.rfind("FRAMES 20 TRACKED ", 0), 0u) << r.text;
   EXPECT_EQ(count_lines(dir + "/t.txt"), static_cast<std::size_t>(r.tracked));

@@ -20,7 +20,8 @@ void BM_DriversCanEncodeClassic(benchmark::State& state) {
   std::array<drv::can::CanFrameBytes, drv::can::kMaxClassicFrames> frames;
   uint8_t counter = 0;
   for (auto _ : state) {
-    const std::size_t n = drv::can::encode_classic_frames(s, counter++, drv::can::FrameLayout{}, true, true, true, frames);
+    const std::size_t n =
+        drv::can::encode_classic_frames(s, counter++, drv::can::FrameLayout{}, true, true, true, frames);
     benchmark::DoNotOptimize(n);
     benchmark::DoNotOptimize(frames.data());
   }

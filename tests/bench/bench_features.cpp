@@ -119,7 +119,8 @@ void BM_FeaturesOrbExtract(benchmark::State& state) {
 }
 BENCHMARK(BM_FeaturesOrbExtract)->Arg(0)->Arg(1)->Arg(2)->Unit(benchmark::kMillisecond);
 
-// The same with a dynamic mask over 13 % of the image (a person-sized block and a disc), dilated by the default mask_dilation_px (8 px) per level.
+// The same with a dynamic mask over 13 % of the image (a person-sized block and a disc), dilated by the default
+// mask_dilation_px (8 px) per level.
 void BM_FeaturesOrbExtractMasked(benchmark::State& state) {
   const BenchPair* p = bench_pair(state, 0);
   if (!p) return;

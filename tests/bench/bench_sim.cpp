@@ -27,8 +27,7 @@ void render_stereo_frame(benchmark::State& state, const Simulator& sim, int fram
     sim.render_frame(frame, out, 1);
     benchmark::DoNotOptimize(out.left.data);
   }
-  state.counters["rays_per_s"] =
-      benchmark::Counter(2.0 * 752 * 480, benchmark::Counter::kIsIterationInvariantRate);
+  state.counters["rays_per_s"] = benchmark::Counter(2.0 * 752 * 480, benchmark::Counter::kIsIterationInvariantRate);
 }
 
 // scene3 frame 150: three people and the forklift in view, looking down the racked aisle.

@@ -128,7 +128,8 @@ void BM_SlamMotionOnlyBa(benchmark::State& state) {
     if (obs.size() % 2 == 0) o.u_right_px = o.uv_px.x() - cam.bf / p_c.z();
     obs.push_back(o);
   }
-  const agvslam::SE3d T0 = agvslam::se3_exp((agvslam::Vector6d() << 0.03, -0.02, 0.03, 0.02, -0.02, 0.01).finished()) * T_true;
+  const agvslam::SE3d T0 =
+      agvslam::se3_exp((agvslam::Vector6d() << 0.03, -0.02, 0.03, 0.02, -0.02, 0.01).finished()) * T_true;
   std::vector<uint8_t> outlier;
   slam::MotionOnlyStats stats;
   for (auto _ : state) {
@@ -157,7 +158,8 @@ void BM_SlamLocalBa(benchmark::State& state) {
   std::uniform_real_distribution<double> unit(0, 1);
   for (int k = 0; k < 12; ++k) {
     const agvslam::SE3d T = st::path_pose(k);
-    base.poses.push_back({k < 2 ? T : agvslam::se3_exp((agvslam::Vector6d() << 0.01, 0, 0.01, 0.002, 0, 0).finished()) * T, k < 2});
+    base.poses.push_back(
+        {k < 2 ? T : agvslam::se3_exp((agvslam::Vector6d() << 0.01, 0, 0.01, 0.002, 0, 0).finished()) * T, k < 2});
     for (std::size_t i = 0; i < world.points_w.size(); ++i) {
       const Eigen::Vector3d p_c = T * world.points_w[i];
       if (p_c.z() < 0.5) continue;
@@ -193,7 +195,8 @@ BENCHMARK(BM_SlamLocalBa)->Arg(1)->Arg(0)->Unit(benchmark::kMillisecond);
 // cycling through the EuRoC excerpt (a still camera: no new keyframes; local mapping inline).
 void BM_SlamTrackStereoEuroc(benchmark::State& state) {
   const char* env = std::getenv("AGVSLAM_SHARED_DIR");
-  const std::string root = (fs::path((env && *env) ? env : AGVSLAM_SHARED_DIR_DEFAULT) / "data" / "euroc_v101_f000-094").string();
+  const std::string root =
+      (fs::path((env && *env) ? env : AGVSLAM_SHARED_DIR_DEFAULT) / "data" / "euroc_v101_f000-094").string();
   if (!fs::exists(root)) {
     state.SkipWithError(("shared data not found: " + root + " (set AGVSLAM_SHARED_DIR)").c_str());
     return;

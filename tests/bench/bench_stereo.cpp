@@ -73,7 +73,8 @@ void BM_StereoSgbmRoi(benchmark::State& state) {
     sgbm.compute_roi(f->left, f->right, roi, disparity_px, max_disparity);
     benchmark::DoNotOptimize(disparity_px.data);
   }
-  state.counters["crop_px"] = static_cast<double>(sgbm.crop_for(roi, f->left.size(), sgbm.roi_num_disparities(max_disparity)).area());
+  state.counters["crop_px"] =
+      static_cast<double>(sgbm.crop_for(roi, f->left.size(), sgbm.roi_num_disparities(max_disparity)).area());
 }
 BENCHMARK(BM_StereoSgbmRoi)->Arg(0)->Arg(31)->Unit(benchmark::kMillisecond);
 

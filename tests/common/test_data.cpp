@@ -1,13 +1,13 @@
 #include "common/test_data.h"
 
+#include <sys/wait.h>
+#include <unistd.h>
 #include <array>
 #include <cstdio>
 #include <cstdlib>
 #include <filesystem>
-#include <random>
 #include <mutex>
-#include <sys/wait.h>
-#include <unistd.h>
+#include <random>
 #include <vector>
 
 namespace agvslam::test {

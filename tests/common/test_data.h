@@ -27,18 +27,18 @@ int run_command(const std::string& cmd, std::string* output = nullptr);
 
 }  // namespace agvslam::test
 
-#define AGVSLAM_REQUIRE_SHARED(var, rel)                                                              \
-  std::string var;                                                                                    \
-  {                                                                                                   \
-    auto agvslam_p_ = ::agvslam::test::shared_path(rel);                                              \
-    if (!agvslam_p_) {                                                                                \
-      if (::agvslam::test::running_in_ci()) {                                                         \
-        FAIL() << "shared data " << (rel) << " is missing under " << ::agvslam::test::shared_dir()    \
-               << " and CI=true: CI must have ../shared beside the checkout";                         \
-      } else {                                                                                        \
+#define AGVSLAM_REQUIRE_SHARED(var, rel)                                                                \
+  std::string var;                                                                                      \
+  {                                                                                                     \
+    auto agvslam_p_ = ::agvslam::test::shared_path(rel);                                                \
+    if (!agvslam_p_) {                                                                                  \
+      if (::agvslam::test::running_in_ci()) {                                                           \
+        FAIL() << "shared data " << (rel) << " is missing under " << ::agvslam::test::shared_dir()      \
+               << " and CI=true: CI must have ../shared beside the checkout";                           \
+      } else {                                                                                          \
         GTEST_SKIP() << "shared data " << (rel) << " not found under " << ::agvslam::test::shared_dir() \
-                     << " (set AGVSLAM_SHARED_DIR to the shared/ folder to run this test)";           \
-      }                                                                                               \
-    }                                                                                                 \
-    var = *agvslam_p_;                                                                                \
+                     << " (set AGVSLAM_SHARED_DIR to the shared/ folder to run this test)";             \
+      }                                                                                                 \
+    }                                                                                                   \
+    var = *agvslam_p_;                                                                                  \
   }

@@ -30,7 +30,8 @@ TEST(ParallelFor, VisitsEveryIndexOnceForAnyThreadCountAndGrain) {
         });
         EXPECT_FALSE(bad_worker.load()) << threads << " threads, n " << n << ", grain " << grain;
         for (std::size_t i = 0; i < n; ++i) {
-          ASSERT_EQ(visits[i].load(), 1) << "index " << i << ", " << threads << " threads, n " << n << ", grain " << grain;
+          ASSERT_EQ(visits[i].load(), 1) << "index " << i << ", " << threads << " threads, n " << n << ", grain "
+                                         << grain;
         }
       }
     }

@@ -42,26 +42,28 @@ const EnumNames<Shape>& shape_names() {
 
 const Table<Inner>& inner_params() {
   static const Table<Inner> table("inner", {
-      {"depth_m", &Inner::depth_m, Range::closed(1, 9), "m"},
-      {"label", &Inner::label, Text::non_empty()},
-  });
+                                               {"depth_m", &Inner::depth_m, Range::closed(1, 9), "m"},
+                                               {"label", &Inner::label, Text::non_empty()},
+                                           });
   return table;
 }
 
 const Table<Sample>& sample_params() {
   static const Table<Sample> table =
-      Table<Sample>("sample", {
-          {"count", &Sample::count, Range::closed(1, 10), "frames", "at least one frame"},
-          {"gain", &Sample::gain, Range::left_open(0, 1)},
-          {"enabled", &Sample::enabled},
-          {"name", &Sample::name, Text::length(1, 5)},
-          {"shape", &Sample::shape, shape_names()},
-          {"id", &Sample::id, Id{0x7FF}},
-          {"seed", &Sample::seed},
-          {"low", &Sample::low, Range::at_least(0)},
-          {"high", &Sample::high, Range::at_least(0)},
-      })
-          .check("high", [](const Sample& s) { return s.high > s.low; }, "more than low")
+      Table<Sample>("sample",
+                    {
+                        {"count", &Sample::count, Range::closed(1, 10), "frames", "at least one frame"},
+                        {"gain", &Sample::gain, Range::left_open(0, 1)},
+                        {"enabled", &Sample::enabled},
+                        {"name", &Sample::name, Text::length(1, 5)},
+                        {"shape", &Sample::shape, shape_names()},
+                        {"id", &Sample::id, Id{0x7FF}},
+                        {"seed", &Sample::seed},
+                        {"low", &Sample::low, Range::at_least(0)},
+                        {"high", &Sample::high, Range::at_least(0)},
+                    })
+          .check(
+              "high", [](const Sample& s) { return s.high > s.low; }, "more than low")
           .include(&Sample::inner, inner_params())
           .summary([](const Sample& s) { return "span " + std::to_string(s.high - s.low); });
   return table;
@@ -74,10 +76,11 @@ struct Seeded {
 };
 
 const Table<Seeded>& seeded_params() {
-  static const Table<Seeded> table("seeded", {
-      {"seed", &Seeded::seed, Range::any()},
-      {"frames", &Seeded::frames, Range::closed(1, 100), "frames", "one at least"},
-  });
+  static const Table<Seeded> table("seeded",
+                                   {
+                                       {"seed", &Seeded::seed, Range::any()},
+                                       {"frames", &Seeded::frames, Range::closed(1, 100), "frames", "one at least"},
+                                   });
   return table;
 }
 
@@ -117,8 +120,9 @@ class ParamsTest : public ::testing::Test {
 };
 
 TEST_F(ParamsTest, ReadsEveryTypeAndKeepsTheDefaultsOfAbsentKeys) {
-  const Sample s = load("sample:\n  count: 7\n  gain: 0.25\n  enabled: no\n  name: hello\n  shape: box\n  id: 0x10\n"
-                        "  seed: 18446744073709551615\n  depth_m: 4\n");
+  const Sample s = load(
+      "sample:\n  count: 7\n  gain: 0.25\n  enabled: no\n  name: hello\n  shape: box\n  id: 0x10\n"
+      "  seed: 18446744073709551615\n  depth_m: 4\n");
   EXPECT_EQ(s.count, 7);
   EXPECT_EQ(s.gain, 0.25);
   EXPECT_FALSE(s.enabled);
@@ -166,7 +170,8 @@ TEST_F(ParamsTest, Unsigned32BitSettingsTakeTheirWholeRangeAndNothingBeyond) {
   EXPECT_NE(what.find("expected an unsigned 32-bit integer, got '4294967296'"), std::string::npos) << what;
   std::tie(where, what) = error_of_seeded("seeded:\n  frames: 0\n");
   EXPECT_EQ(where, "seeded.frames");
-  EXPECT_NE(what.find("expected an unsigned 32-bit integer in [1, 100] frames (one at least), got 0"), std::string::npos)
+  EXPECT_NE(what.find("expected an unsigned 32-bit integer in [1, 100] frames (one at least), got 0"),
+            std::string::npos)
       << what;
   for (const char* text : {"seeded:\n  seed: -1\n", "seeded:\n  seed: 1.5\n", "seeded:\n  seed: one\n"}) {
     EXPECT_EQ(error_of_seeded(text).first, "seeded.seed") << text;
@@ -214,10 +219,10 @@ TEST_F(ParamsTest, WrongTypesNameTheFieldAndWhatWasExpected) {
       << what;
   EXPECT_NE(error_of("sample:\n  count: [2]\n").second.find("got a list"), std::string::npos);
   const std::vector<std::pair<const char*, const char*>> cases = {
-      {"sample:\n  count: 2.5\n", "sample.count"},     {"sample:\n  count:\n", "sample.count"},
-      {"sample:\n  gain: .nan\n", "sample.gain"},      {"sample:\n  gain: .inf\n", "sample.gain"},
+      {"sample:\n  count: 2.5\n", "sample.count"},       {"sample:\n  count:\n", "sample.count"},
+      {"sample:\n  gain: .nan\n", "sample.gain"},        {"sample:\n  gain: .inf\n", "sample.gain"},
       {"sample:\n  enabled: maybe\n", "sample.enabled"}, {"sample:\n  name: {a: 1}\n", "sample.name"},
-      {"sample:\n  seed: -1\n", "sample.seed"},        {"sample:\n  id: [1]\n", "sample.id"},
+      {"sample:\n  seed: -1\n", "sample.seed"},          {"sample:\n  id: [1]\n", "sample.id"},
   };
   for (const auto& [text, field] : cases) EXPECT_EQ(error_of(text).first, field) << text;
 }

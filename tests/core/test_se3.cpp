@@ -20,7 +20,8 @@ TEST(Se3, ExpOfSmallTangentIsNearIdentity) {
 }
 
 TEST(Se3, RotationAngle) {
-  const SE3d T = make_se3(Eigen::Quaterniond(Eigen::AngleAxisd(0.5, Eigen::Vector3d::UnitY())), Eigen::Vector3d(1, 2, 3));
+  const SE3d T =
+      make_se3(Eigen::Quaterniond(Eigen::AngleAxisd(0.5, Eigen::Vector3d::UnitY())), Eigen::Vector3d(1, 2, 3));
   EXPECT_NEAR(rotation_angle_rad(T), 0.5, 1e-12);
 }
 

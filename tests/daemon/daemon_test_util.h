@@ -2,9 +2,9 @@
 // Helpers for the daemon's tests: a short simulator sequence rendered once per build folder, YAML files, child
 // processes with signals, JSON-lines files, and the private network namespace the DDS tests run in.
 
+#include <fcntl.h>
 #include <gtest/gtest.h>
 #include <signal.h>
-#include <fcntl.h>
 #include <spawn.h>
 #include <sys/wait.h>
 #include <unistd.h>
@@ -95,9 +95,9 @@ inline std::string daemon_sim_sequence() {
   fs::create_directories(dir.parent_path());
   const std::string tmp = make_temp_dir("agvslamd-sim");
   std::string out;
-  const int rc = run_command(tool_path("agvslam-sim") + " --scenario scene2 --seed 11 --squeeze-to 80 --threads 2 --out " +
-                                 tmp + "/seq",
-                             &out);
+  const int rc = run_command(
+      tool_path("agvslam-sim") + " --scenario scene2 --seed 11 --squeeze-to 80 --threads 2 --out " + tmp + "/seq",
+      &out);
   if (rc != 0) throw std::runtime_error("agvslam-sim failed: " + out);
   write_text(tmp + "/seq/.complete", "scene2 seed 11 80 frames\n");
   std::error_code ec;

@@ -19,8 +19,8 @@
 #include <filesystem>
 #include <functional>
 #include <mutex>
-#include <thread>
 #include <regex>
+#include <thread>
 
 #include "agvslam/daemon/daemon_config.h"
 #include "agvslam/io/trajectory_io.h"
@@ -71,15 +71,15 @@ int run_with_echo(const std::string& netns, const std::string& dir, const std::s
   const std::string script = "ip link set lo up && (" + test::tool_path("agvslam-echo") +
                              " --json --interface lo --namespace agvslamd_test --timeout 300 > " + dir +
                              "/echo.jsonl 2> " + dir + "/echo.err & e=$!; " + test::tool_path("agvslamd") +
-                             " --config " + daemon_config + " --json " + dir + "/stats.json > " + dir + "/daemon.out 2> " +
-                             dir + "/daemon.err; rc=$?; sleep 1; kill -INT $e; wait $e; exit $rc)";
+                             " --config " + daemon_config + " --json " + dir + "/stats.json > " + dir +
+                             "/daemon.out 2> " + dir + "/daemon.err; rc=$?; sleep 1; kill -INT $e; wait $e; exit $rc)";
   write_text(dir + "/run.sh", script + "\n");
   return test::run_command(netns + " sh " + dir + "/run.sh");
 }
 
 struct Published {
-  std::vector<json> log;                  // the daemon's pose log (every sample)
-  std::vector<json> pose, odom, status;   // what the echo received
+  std::vector<json> log;                 // the daemon's pose log (every sample)
+  std::vector<json> pose, odom, status;  // what the echo received
 };
 
 Published collect(const std::string& dir) {
@@ -117,7 +117,8 @@ void expect_every_sample_received(const Published& p) {
     EXPECT_EQ(pos.at("z").get<double>(), s.at("t").at(2).get<double>());
     EXPECT_EQ(m.at("pose").at("covariance").at(0).get<double>(), s.at("cov_pose").at(0).get<double>());
     EXPECT_EQ(p.odom[k].at("child_frame_id"), "base_link");
-    EXPECT_EQ(p.odom[k].at("twist").at("twist").at("linear").at("x").get<double>(), s.at("v_base_mps").at(0).get<double>());
+    EXPECT_EQ(p.odom[k].at("twist").at("twist").at("linear").at("x").get<double>(),
+              s.at("v_base_mps").at(0).get<double>());
     if (k > 0) {
       EXPECT_GT(stamp_ns(m.at("header")), stamp_ns(p.pose[k - 1].at("header")));
     }
@@ -148,8 +149,8 @@ RunnerResult run_runner(const std::string& seq, const std::string& dir) {
   const json j = json::parse(read_text(dir + "/run.json"));
   for (const json& f : j.at("per_frame")) {
     if (f.at("p_w_c").is_null()) continue;
-    r.p_w_c[f.at("frame").get<int64_t>()] = Eigen::Vector3d(f.at("p_w_c").at(0).get<double>(), f.at("p_w_c").at(1).get<double>(),
-                                                            f.at("p_w_c").at(2).get<double>());
+    r.p_w_c[f.at("frame").get<int64_t>()] = Eigen::Vector3d(
+        f.at("p_w_c").at(0).get<double>(), f.at("p_w_c").at(1).get<double>(), f.at("p_w_c").at(2).get<double>());
   }
   r.trajectory = read_text(dir + "/run.tum");
   return r;
@@ -180,7 +181,8 @@ TEST(Agvslamd, DatasetPlayedLosslesslyPublishesEveryPoseOverDdsAndMatchesTheRunn
                                   "pipeline:\n  mapping: inline\n" + kMount +
                                   "dds:\n  network_interface: lo\n  topic_namespace: agvslamd_test\n"
                                   "  wait_for_subscribers: 1\n  wait_timeout_s: 60\n"
-                                  "trajectory:\n  file: " + dir + "/traj.tum\n  frame: camera\n  final_file: " + dir +
+                                  "trajectory:\n  file: " +
+                                  dir + "/traj.tum\n  frame: camera\n  final_file: " + dir +
                                   "/final.tum\nlog:\n  pose_log: " + dir + "/poses.jsonl\n");
   ASSERT_EQ(run_with_echo(netns, dir, dir + "/d.yaml"), 0) << read_text(dir + "/daemon.err");
   const Published p = collect(dir);
@@ -211,7 +213,8 @@ TEST(Agvslamd, DatasetAtTheCameraRateWithThreadedMappingPublishesEveryProcessedF
   write_text(dir + "/d.yaml", "source:\n  type: dataset\n  dataset: " + seq + "\n  rate: 1\n" + stages_yaml() + kMount +
                                   "dds:\n  network_interface: lo\n  topic_namespace: agvslamd_test\n"
                                   "  wait_for_subscribers: 1\n  wait_timeout_s: 60\n"
-                                  "log:\n  pose_log: " + dir + "/poses.jsonl\n");
+                                  "log:\n  pose_log: " +
+                                  dir + "/poses.jsonl\n");
   ASSERT_EQ(run_with_echo(netns, dir, dir + "/d.yaml"), 0) << read_text(dir + "/daemon.err");
   const Published p = collect(dir);
   expect_every_sample_received(p);
@@ -231,11 +234,12 @@ TEST(Agvslamd, DatasetAtTheCameraRateWithThreadedMappingPublishesEveryProcessedF
   const double worst = max_difference_m(p, runner, &compared);
   EXPECT_GT(compared, 50U);
   EXPECT_LT(worst, 0.05);
-  std::printf("camera rate: %d processed, %d dropped, latency median %.1f p99 %.1f ms, max difference to agvslam-run "
-              "%.4f m over %zu poses\n",
-              stats.at("processed").get<int>(), stats.at("dropped_queue").get<int>(),
-              stats.at("latency_ms").at("median").get<double>(), stats.at("latency_ms").at("p99").get<double>(), worst,
-              compared);
+  std::printf(
+      "camera rate: %d processed, %d dropped, latency median %.1f p99 %.1f ms, max difference to agvslam-run "
+      "%.4f m over %zu poses\n",
+      stats.at("processed").get<int>(), stats.at("dropped_queue").get<int>(),
+      stats.at("latency_ms").at("median").get<double>(), stats.at("latency_ms").at("p99").get<double>(), worst,
+      compared);
   fs::remove_all(dir);
 }
 
@@ -256,14 +260,16 @@ TEST(Agvslamd, BadConfigurationsExitTwoNamingTheFieldAndCheckValidates) {
     std::string out;
     const int rc = test::run_command(test::tool_path("agvslamd") + " --config " + dir + "/bad.yaml", &out);
     EXPECT_EQ(rc, 2) << out;
-    EXPECT_NE(out.find(dir + "/bad.yaml: " + field), std::string::npos) << "expected the field " << field << " in\n" << out;
+    EXPECT_NE(out.find(dir + "/bad.yaml: " + field), std::string::npos) << "expected the field " << field << " in\n"
+                                                                        << out;
     EXPECT_NE(out.find("expected"), std::string::npos) << out;
     EXPECT_EQ(out.find("running"), std::string::npos) << "nothing may start with a bad setting";
   }
   std::string out;
   EXPECT_EQ(test::run_command(test::tool_path("agvslamd") + " --config " + dir + "/absent.yaml", &out), 2) << out;
   EXPECT_EQ(test::run_command(test::tool_path("agvslamd"), &out), 2) << out;  // --config is required
-  EXPECT_EQ(test::run_command(test::tool_path("agvslamd") + " --config " + kParams + "agvslamd.yaml --check", &out), 0) << out;
+  EXPECT_EQ(test::run_command(test::tool_path("agvslamd") + " --config " + kParams + "agvslamd.yaml --check", &out), 0)
+      << out;
   EXPECT_NE(out.find("CONFIG OK"), std::string::npos) << out;
   EXPECT_NE(out.find("calibration 752x480"), std::string::npos) << out;  // the echo of every setting
   fs::remove_all(dir);
@@ -278,8 +284,11 @@ std::string looping_config(const std::string& seq, const std::string& dir, const
 TEST(Agvslamd, SigtermDrainsFlushesTheTrajectoryAndExitsZero) {
   const std::string seq = test::daemon_sim_sequence();
   const std::string dir = test::make_temp_dir("agvslamd-sigterm");
-  write_text(dir + "/d.yaml", looping_config(seq, dir, "trajectory:\n  file: " + dir + "/traj.tum\n  flush_every: 100000\n"
-                                                        "  final_file: " + dir + "/final.tum\n"));
+  write_text(dir + "/d.yaml", looping_config(seq, dir,
+                                             "trajectory:\n  file: " + dir +
+                                                 "/traj.tum\n  flush_every: 100000\n"
+                                                 "  final_file: " +
+                                                 dir + "/final.tum\n"));
   test::ChildProcess d({test::tool_path("agvslamd"), "--config", dir + "/d.yaml", "--json", dir + "/stats.json"},
                        dir + "/out.txt", dir + "/err.txt");
   ASSERT_TRUE(d.started());
@@ -306,19 +315,21 @@ TEST(Agvslamd, SigtermDrainsFlushesTheTrajectoryAndExitsZero) {
 TEST(Agvslamd, SighupReopensTheLogFile) {
   const std::string seq = test::daemon_sim_sequence();
   const std::string dir = test::make_temp_dir("agvslamd-sighup");
-  write_text(dir + "/d.yaml", "source:\n  type: dataset\n  dataset: " + seq + "\n  rate: 1\n  loop: true\n" + stages_yaml() +
-                                  "dds:\n  enabled: false\nlog:\n  file: " + dir + "/agvslamd.log\n  pose_log: " + dir +
-                                  "/poses.jsonl\n  stats_every_s: 0.5\n");
+  write_text(dir + "/d.yaml", "source:\n  type: dataset\n  dataset: " + seq + "\n  rate: 1\n  loop: true\n" +
+                                  stages_yaml() + "dds:\n  enabled: false\nlog:\n  file: " + dir +
+                                  "/agvslamd.log\n  pose_log: " + dir + "/poses.jsonl\n  stats_every_s: 0.5\n");
   test::ChildProcess d({test::tool_path("agvslamd"), "--config", dir + "/d.yaml"}, dir + "/out.txt", dir + "/err.txt");
   ASSERT_TRUE(test::wait_until([&] { return test::count_data_lines(dir + "/poses.jsonl") >= 5; }, 120s))
       << read_text(dir + "/err.txt");
   EXPECT_NE(read_text(dir + "/agvslamd.log").find("configuration"), std::string::npos);
   fs::rename(dir + "/agvslamd.log", dir + "/agvslamd.log.1");  // what logrotate does
   d.signal(SIGHUP);
-  ASSERT_TRUE(test::wait_until([&] { return read_text(dir + "/agvslamd.log").find("reopened") != std::string::npos; }, 30s))
+  ASSERT_TRUE(
+      test::wait_until([&] { return read_text(dir + "/agvslamd.log").find("reopened") != std::string::npos; }, 30s))
       << read_text(dir + "/err.txt");
   // The daemon keeps logging into the new file (status lines every 0.5 s), not into the moved one.
-  ASSERT_TRUE(test::wait_until([&] { return read_text(dir + "/agvslamd.log").find("status:") != std::string::npos; }, 30s));
+  ASSERT_TRUE(
+      test::wait_until([&] { return read_text(dir + "/agvslamd.log").find("status:") != std::string::npos; }, 30s));
   d.signal(SIGTERM);
   ASSERT_EQ(d.wait(30s), 0) << read_text(dir + "/err.txt");
   EXPECT_NE(read_text(dir + "/agvslamd.log").find("stopping (SIGTERM)"), std::string::npos);
@@ -390,7 +401,8 @@ TEST(Agvslamd, SdNotifyReadyAfterTheFirstFrameThenWatchdogStatusAndStopping) {
   };
   test::ChildProcess d({test::tool_path("agvslamd"), "--config", dir + "/d.yaml"}, dir + "/out.txt", dir + "/err.txt",
                        {{"NOTIFY_SOCKET", dir + "/notify"}, {"WATCHDOG_USEC", "2000000"}});
-  ASSERT_TRUE(test::wait_until([&] { return listener.count("WATCHDOG=1") >= 3 && listener.count("STATUS=") >= 2; }, 120s))
+  ASSERT_TRUE(
+      test::wait_until([&] { return listener.count("WATCHDOG=1") >= 3 && listener.count("STATUS=") >= 2; }, 120s))
       << read_text(dir + "/err.txt");
   d.signal(SIGTERM);
   ASSERT_EQ(d.wait(30s), 0) << read_text(dir + "/err.txt");
@@ -408,7 +420,8 @@ TEST(Agvslamd, SdNotifyReadyAfterTheFirstFrameThenWatchdogStatusAndStopping) {
   EXPECT_EQ(messages.back().rfind("STOPPING=1\nSTATUS=stopping: SIGTERM", 0), 0U) << messages.back();
   // STATUS= carries the one-line summary.
   bool summary = false;
-  for (const auto& m : messages) summary = summary || (m.rfind("STATUS=ok", 0) == 0 && m.find("fps") != std::string::npos);
+  for (const auto& m : messages)
+    summary = summary || (m.rfind("STATUS=ok", 0) == 0 && m.find("fps") != std::string::npos);
   EXPECT_TRUE(summary);
   fs::remove_all(dir);
 }
@@ -417,20 +430,27 @@ TEST(Agvslamd, AMissingCameraKeepsTheStatusGoingAndReadyComesAfterTheTimeout) {
   AGVSLAM_REQUIRE_NETNS(netns);
   const std::string dir = test::make_temp_dir("agvslamd-nocamera");
   write_text(dir + "/d.yaml", "source:\n  type: v4l2\n  wait_for_camera: true\ncamera:\n  left_device: " + dir +
-                                  "/video-left\n  right_device: " + dir + "/video-right\n"
-                                  "calibration:\n  file: " + kParams + "agvslamd_calibration_example.yaml\n"
+                                  "/video-left\n  right_device: " + dir +
+                                  "/video-right\n"
+                                  "calibration:\n  file: " +
+                                  kParams +
+                                  "agvslamd_calibration_example.yaml\n"
                                   "pipeline:\n  dynamic: off\n  heartbeat_ms: 200\n"
                                   "dds:\n  network_interface: lo\n  topic_namespace: agvslamd_test\n"
                                   "systemd:\n  ready_timeout_s: 1\n");
   NotifyListener listener(dir + "/notify");
   // The echo takes 5 status samples (about 1 s of heartbeats), then the daemon is stopped.
   const std::string script = "ip link set lo up && (NOTIFY_SOCKET=" + dir + "/notify " + test::tool_path("agvslamd") +
-                             " --config " + dir + "/d.yaml > " + dir + "/daemon.out 2> " + dir + "/daemon.err & d=$!; " +
-                             test::tool_path("agvslam-echo") + " --json --interface lo --namespace agvslamd_test --topic "
-                             "status --count 5 --timeout 60 > " + dir + "/echo.jsonl 2> " + dir + "/echo.err; e=$?; "
+                             " --config " + dir + "/d.yaml > " + dir + "/daemon.out 2> " + dir +
+                             "/daemon.err & d=$!; " + test::tool_path("agvslam-echo") +
+                             " --json --interface lo --namespace agvslamd_test --topic "
+                             "status --count 5 --timeout 60 > " +
+                             dir + "/echo.jsonl 2> " + dir +
+                             "/echo.err; e=$?; "
                              "sleep 1; kill -TERM $d; wait $d; r=$?; [ $e -eq 0 ] && exit $r; exit 10)";
   write_text(dir + "/run.sh", script + "\n");
-  EXPECT_EQ(test::run_command(netns + " sh " + dir + "/run.sh"), 0) << read_text(dir + "/daemon.err") << read_text(dir + "/echo.err");
+  EXPECT_EQ(test::run_command(netns + " sh " + dir + "/run.sh"), 0)
+      << read_text(dir + "/daemon.err") << read_text(dir + "/echo.err");
   std::size_t statuses = 0;
   for (const json& l : read_json_lines(dir + "/echo.jsonl")) {
     if (!l.contains("topic")) continue;
@@ -447,11 +467,12 @@ TEST(Agvslamd, AMissingCameraKeepsTheStatusGoingAndReadyComesAfterTheTimeout) {
   }
   EXPECT_NE(read_text(dir + "/daemon.err").find("video-left"), std::string::npos);  // the log names the device
   // Not waiting for the camera: exit 1, naming the device.
-  write_text(dir + "/d2.yaml", read_text(dir + "/d.yaml").replace(read_text(dir + "/d.yaml").find("wait_for_camera: true"),
-                                                                  21, "wait_for_camera: false"));
+  write_text(dir + "/d2.yaml",
+             read_text(dir + "/d.yaml")
+                 .replace(read_text(dir + "/d.yaml").find("wait_for_camera: true"), 21, "wait_for_camera: false"));
   std::string out;
-  EXPECT_EQ(test::run_command(netns + " sh -c 'ip link set lo up && " + test::tool_path("agvslamd") + " --config " + dir +
-                                  "/d2.yaml'",
+  EXPECT_EQ(test::run_command(netns + " sh -c 'ip link set lo up && " + test::tool_path("agvslamd") + " --config " +
+                                  dir + "/d2.yaml'",
                               &out),
             1)
       << out;
@@ -464,11 +485,12 @@ TEST(Agvslamd, AMissingCameraKeepsTheStatusGoingAndReadyComesAfterTheTimeout) {
 // positions within 5 cm, no alignment) and leaves the file byte-identical; a bit-flipped map or a missing one in
 // localise mode stops the daemon at start-up (exit 2, naming the file / field) and the file is not touched;
 // SIGTERM in mapping mode saves the map.
-std::string map_config(const std::string& seq, const std::string& dir, const std::string& map_file, const std::string& mode,
-                       const std::string& tag) {
-  return "source:\n  type: dataset\n  dataset: " + seq + "\n  rate: 0\n" + stages_yaml() + "pipeline:\n  mapping: inline\n" + kMount + "dds:\n  enabled: false\ntrajectory:\n  file: " + dir +
-         "/" + tag + ".tum\n  frame: camera\nlog:\n  pose_log: " + dir + "/" + tag + ".jsonl\nmap:\n  file: " +
-         map_file + "\n  mode: " + mode + "\n";
+std::string map_config(const std::string& seq, const std::string& dir, const std::string& map_file,
+                       const std::string& mode, const std::string& tag) {
+  return "source:\n  type: dataset\n  dataset: " + seq + "\n  rate: 0\n" + stages_yaml() +
+         "pipeline:\n  mapping: inline\n" + kMount + "dds:\n  enabled: false\ntrajectory:\n  file: " + dir + "/" + tag +
+         ".tum\n  frame: camera\nlog:\n  pose_log: " + dir + "/" + tag + ".jsonl\nmap:\n  file: " + map_file +
+         "\n  mode: " + mode + "\n";
 }
 
 TEST(Agvslamd, SavesTheMapAtTheEndAndALaterRunLocalisesInItsFrame) {
@@ -545,18 +567,20 @@ TEST(Agvslamd, SavesTheMapAtTheEndAndALaterRunLocalisesInItsFrame) {
 TEST(Agvslamd, SigtermSavesTheMapAtomically) {
   const std::string seq = test::daemon_sim_sequence();
   const std::string dir = test::make_temp_dir("agvslamd-map-sigterm");
-  write_text(dir + "/d.yaml", looping_config(seq, dir, "map:\n  file: " + dir + "/m.agvmap\n  mode: map\n") );
+  write_text(dir + "/d.yaml", looping_config(seq, dir, "map:\n  file: " + dir + "/m.agvmap\n  mode: map\n"));
   test::ChildProcess d({test::tool_path("agvslamd"), "--config", dir + "/d.yaml"}, dir + "/out.txt", dir + "/err.txt");
   ASSERT_TRUE(d.started());
   ASSERT_TRUE(test::wait_until([&] { return test::count_data_lines(dir + "/poses.jsonl") >= 40; }, 120s))
       << read_text(dir + "/err.txt");
   d.signal(SIGTERM);
   ASSERT_EQ(d.wait(60s), 0) << read_text(dir + "/err.txt");
-  EXPECT_NE(read_text(dir + "/out.txt").find("MAP_SAVED " + dir + "/m.agvmap"), std::string::npos) << read_text(dir + "/err.txt");
+  EXPECT_NE(read_text(dir + "/out.txt").find("MAP_SAVED " + dir + "/m.agvmap"), std::string::npos)
+      << read_text(dir + "/err.txt");
   EXPECT_TRUE(fs::exists(dir + "/m.agvmap"));
   // Nothing but the map is left in its folder (the temporary file was renamed, the write probe removed).
   std::size_t files = 0;
-  for (const auto& e : fs::directory_iterator(dir)) files += e.path().filename().string().rfind("m.agvmap", 0) == 0 ? 1 : 0;
+  for (const auto& e : fs::directory_iterator(dir))
+    files += e.path().filename().string().rfind("m.agvmap", 0) == 0 ? 1 : 0;
   EXPECT_EQ(files, 1U);
   fs::remove_all(dir);
 }
@@ -574,8 +598,8 @@ TEST(DeployFiles, SystemdUnitVerifiesAndIsSandboxed) {
   std::string out;
   EXPECT_EQ(test::run_command("systemd-analyze verify " + dir + "/agvslamd.service", &out), 0) << out;
   EXPECT_EQ(out.find("agvslamd.service"), std::string::npos) << "warnings from systemd-analyze verify:\n" << out;
-  for (const char* key : {"Type=notify", "WatchdogSec=", "User=agvslam", "SupplementaryGroups=video", "ProtectSystem=strict",
-                          "ProtectHome=yes", "PrivateTmp=yes", "NoNewPrivileges=yes",
+  for (const char* key : {"Type=notify", "WatchdogSec=", "User=agvslam", "SupplementaryGroups=video",
+                          "ProtectSystem=strict", "ProtectHome=yes", "PrivateTmp=yes", "NoNewPrivileges=yes",
                           "RestrictAddressFamilies=AF_UNIX AF_INET AF_INET6 AF_CAN AF_NETLINK",
                           "DeviceAllow=char-video4linux rw", "StateDirectory=agvslam", "ExecReload=/bin/kill -HUP"}) {
     EXPECT_NE(unit.find(key), std::string::npos) << key;
@@ -583,7 +607,8 @@ TEST(DeployFiles, SystemdUnitVerifiesAndIsSandboxed) {
   // systemd's own exposure score of the sandboxing (0 = locked down, 10 = none): "OK" or better.
   test::run_command("systemd-analyze security --offline=yes --no-pager " + dir + "/agvslamd.service", &out);
   std::smatch m;
-  ASSERT_TRUE(std::regex_search(out, m, std::regex(R"(Overall exposure level for agvslamd.service: ([0-9.]+))"))) << out;
+  ASSERT_TRUE(std::regex_search(out, m, std::regex(R"(Overall exposure level for agvslamd.service: ([0-9.]+))")))
+      << out;
   EXPECT_LE(std::stod(m[1]), 3.0) << out;
   std::printf("systemd-analyze security: exposure %s\n", m[1].str().c_str());
   fs::remove_all(dir);
@@ -591,8 +616,8 @@ TEST(DeployFiles, SystemdUnitVerifiesAndIsSandboxed) {
 
 TEST(DeployFiles, InstallScriptStagesBinariesConfigurationUnitAndKeepsEditedConfiguration) {
   const std::string dir = test::make_temp_dir("agvslamd-install");
-  const std::string cmd = "bash " + std::string(AGVSLAM_SOURCE_DIR) + "/deploy/install.sh --build " + test::binary_dir() +
-                          " --destdir " + dir + " --prefix /opt/agvslam";
+  const std::string cmd = "bash " + std::string(AGVSLAM_SOURCE_DIR) + "/deploy/install.sh --build " +
+                          test::binary_dir() + " --destdir " + dir + " --prefix /opt/agvslam";
   std::string out;
   ASSERT_EQ(test::run_command(cmd, &out), 0) << out;
   for (const char* f : {"/opt/agvslam/bin/agvslamd", "/opt/agvslam/bin/agvslam-echo", "/etc/agvslam/agvslamd.yaml",
@@ -601,13 +626,16 @@ TEST(DeployFiles, InstallScriptStagesBinariesConfigurationUnitAndKeepsEditedConf
                         "/etc/systemd/system/agvslamd.service"}) {
     EXPECT_TRUE(fs::exists(dir + f)) << f;
   }
-  EXPECT_NE(read_text(dir + "/etc/systemd/system/agvslamd.service").find("ExecStart=/opt/agvslam/bin/agvslamd --config"),
-            std::string::npos);
+  EXPECT_NE(
+      read_text(dir + "/etc/systemd/system/agvslamd.service").find("ExecStart=/opt/agvslam/bin/agvslamd --config"),
+      std::string::npos);
   // The installed configuration names the installed CAN DBC (the shipped one names it in the source tree).
   EXPECT_NE(read_text(dir + "/etc/agvslam/agvslamd.yaml").find("dbc: /opt/agvslam/share/agvslam/agvslam.dbc"),
             std::string::npos);
   // The installed configuration passes --check with the installed binary.
-  EXPECT_EQ(test::run_command(dir + "/opt/agvslam/bin/agvslamd --config " + dir + "/etc/agvslam/agvslamd.yaml --check", &out), 0)
+  EXPECT_EQ(
+      test::run_command(dir + "/opt/agvslam/bin/agvslamd --config " + dir + "/etc/agvslam/agvslamd.yaml --check", &out),
+      0)
       << out;
   // A configuration edited on the vehicle survives a second install; the new version lands beside it.
   write_text(dir + "/etc/agvslam/agvslamd.yaml", read_text(dir + "/etc/agvslam/agvslamd.yaml") + "# edited\n");

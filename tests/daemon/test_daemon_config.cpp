@@ -36,9 +36,9 @@ TEST(DaemonConfig, ShippedVehicleConfigLoadsWithTheStageFiles) {
   // Every section is echoed.
   std::string all;
   for (const auto& line : c.describe()) all += line + "\n";
-  for (const char* what : {"source: type=v4l2", "camera:", "calibration:", "stages:", "vocabulary:", "map:",
-                           "pipeline:", "base_link:", "covariance:", "dds:", "can:", "trajectory:", "log:", "systemd:",
-                           "tracking:", "orb:", "sgbm:"}) {
+  for (const char* what :
+       {"source: type=v4l2", "camera:", "calibration:", "stages:", "vocabulary:", "map:", "pipeline:", "base_link:",
+        "covariance:", "dds:", "can:", "trajectory:", "log:", "systemd:", "tracking:", "orb:", "sgbm:"}) {
     EXPECT_NE(all.find(what), std::string::npos) << what << " missing from\n" << all;
   }
 }
@@ -74,16 +74,16 @@ TEST(DaemonConfig, EveryKindOfBadSettingNamesTheFileAndTheField) {
   const std::string dir = test::make_temp_dir("agvslamd-config-bad");
   const std::string ok_source = "source:\n  type: dataset\n  dataset: /x\n";
   const std::vector<BadCase> cases = {
-      {"sources:\n  type: dataset\n", "sources"},                                 // unknown section
-      {"source:\n  type: dataset\n  datset: /x\n", "source.datset"},              // typo in a key
-      {"source:\n  type: usb\n", "source.type"},                                  // bad enum
-      {"source:\n  type: dataset\n", "source.dataset"},                           // required for dataset
-      {"source:\n  type: dataset\n  dataset: /x\n  rate: -1\n", "source.rate"},   // out of range
+      {"sources:\n  type: dataset\n", "sources"},                                       // unknown section
+      {"source:\n  type: dataset\n  datset: /x\n", "source.datset"},                    // typo in a key
+      {"source:\n  type: usb\n", "source.type"},                                        // bad enum
+      {"source:\n  type: dataset\n", "source.dataset"},                                 // required for dataset
+      {"source:\n  type: dataset\n  dataset: /x\n  rate: -1\n", "source.rate"},         // out of range
       {"source:\n  type: dataset\n  dataset: /x\n  loop: sometimes\n", "source.loop"},  // bad bool
-      {"source:\n  type: v4l2\n", "camera"},                                      // the camera section is required
-      {"source:\n  type: v4l2\ncamera:\n  width: 752\n", "calibration.file"},     // and a calibration
+      {"source:\n  type: v4l2\n", "camera"},                                   // the camera section is required
+      {"source:\n  type: v4l2\ncamera:\n  width: 752\n", "calibration.file"},  // and a calibration
       {"source:\n  type: v4l2\ncalibration:\n  file: c.yaml\ncamera:\n  width: -5\n", "camera.width"},
-      {"pipeline:\n  capture_queue: many\n", "pipeline.capture_queue"},           // bad type
+      {"pipeline:\n  capture_queue: many\n", "pipeline.capture_queue"},  // bad type
       {"pipeline:\n  capture_queue: 0\n", "pipeline.capture_queue"},
       {"pipeline:\n  dynamic: gt\n", "pipeline.dynamic"},
       {"pipeline:\n  mapping: later\n", "pipeline.mapping"},
@@ -112,15 +112,17 @@ TEST(DaemonConfig, EveryKindOfBadSettingNamesTheFileAndTheField) {
       {"trajectory:\n  file: /tmp/a\nlog:\n  pose_log: /tmp/a\n", "log.pose_log"},  // one file for two outputs
       {"log:\n  level: loud\n", "log.level"},
       {"systemd:\n  ready: never\n", "systemd.ready"},
-      {"stages:\n  slam: /nonexistent/slam.yaml\n", "/nonexistent/slam.yaml"},    // a stage file that is missing
-      {"source: [1, 2\n", "line"},                                                // YAML syntax
+      {"stages:\n  slam: /nonexistent/slam.yaml\n", "/nonexistent/slam.yaml"},  // a stage file that is missing
+      {"source: [1, 2\n", "line"},                                              // YAML syntax
   };
   for (const BadCase& bc : cases) {
     const std::string path = dir + "/bad.yaml";
-    const bool has_source = std::string(bc.yaml).rfind("source", 0) == 0 || std::string(bc.yaml).rfind("sources", 0) == 0;
+    const bool has_source =
+        std::string(bc.yaml).rfind("source", 0) == 0 || std::string(bc.yaml).rfind("sources", 0) == 0;
     std::string yaml = bc.yaml;
     const std::size_t dbc = yaml.find("dbc: DBC");
-    if (dbc != std::string::npos) yaml.replace(dbc, 8, "dbc: " + std::string(AGVSLAM_SOURCE_DIR) + "/deploy/agvslam.dbc");
+    if (dbc != std::string::npos)
+      yaml.replace(dbc, 8, "dbc: " + std::string(AGVSLAM_SOURCE_DIR) + "/deploy/agvslam.dbc");
     write_text(path, (has_source ? "" : ok_source) + yaml);
     try {
       load_daemon_config(path);
@@ -139,9 +141,10 @@ TEST(DaemonConfig, EveryKindOfBadSettingNamesTheFileAndTheField) {
 
 TEST(DaemonConfig, CanOdometryFromTheShippedDbc) {
   const std::string dir = test::make_temp_dir("agvslamd-config-odometry");
-  write_text(dir + "/o.yaml", "source:\n  type: dataset\n  dataset: /x\ncan:\n  enabled: true\n  base_id: 0x400\n"
-                              "odometry:\n  source: can\n  window_s: 8\ncan_odometry:\n  dbc: " +
-                                  std::string(AGVSLAM_SOURCE_DIR) + "/deploy/agvslam.dbc\n");
+  write_text(dir + "/o.yaml",
+             "source:\n  type: dataset\n  dataset: /x\ncan:\n  enabled: true\n  base_id: 0x400\n"
+             "odometry:\n  source: can\n  window_s: 8\ncan_odometry:\n  dbc: " +
+                 std::string(AGVSLAM_SOURCE_DIR) + "/deploy/agvslam.dbc\n");
   const DaemonConfig c = load_daemon_config(dir + "/o.yaml");
   EXPECT_EQ(c.odometry.source, OdometrySource::kCan);
   EXPECT_DOUBLE_EQ(c.odometry.check.window_s, 8.0);
@@ -154,14 +157,16 @@ TEST(DaemonConfig, CanOdometryFromTheShippedDbc) {
   // The shipped vehicle file reads no odometry (the outputs stay as they were) and echoes no can_odometry.
   const DaemonConfig shipped = load_daemon_config(params("agvslamd.yaml"));
   EXPECT_EQ(shipped.odometry.source, OdometrySource::kNone);
-  EXPECT_EQ(shipped.odometry.can.dbc, fs::path(std::string(AGVSLAM_SOURCE_DIR) + "/deploy/agvslam.dbc").lexically_normal().string());
+  EXPECT_EQ(shipped.odometry.can.dbc,
+            fs::path(std::string(AGVSLAM_SOURCE_DIR) + "/deploy/agvslam.dbc").lexically_normal().string());
   fs::remove_all(dir);
 }
 
 TEST(DaemonConfig, DdsAndCanSectionsLoadAlone) {
   const std::string dir = test::make_temp_dir("agvslamd-config-sections");
-  write_text(dir + "/o.yaml", "dds:\n  domain_id: 42\n  topic_namespace: robot1/slam\ncan:\n  interface: vcan3\n"
-                              "  base_id: 0x400\n  fd: true\n  rate_hz: 10\n");
+  write_text(dir + "/o.yaml",
+             "dds:\n  domain_id: 42\n  topic_namespace: robot1/slam\ncan:\n  interface: vcan3\n"
+             "  base_id: 0x400\n  fd: true\n  rate_hz: 10\n");
   const auto d = load_dds_config(dir + "/o.yaml");
   EXPECT_EQ(d.domain_id, 42);
   EXPECT_EQ(d.pose_topic(), "rt/robot1/slam/pose");

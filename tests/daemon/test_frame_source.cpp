@@ -97,7 +97,8 @@ TEST(DatasetSource, ReleasesFramesOnAnAbsoluteScheduleAndReturnsWithinTheTimeout
   }
   EXPECT_GT(no_frame, 0);
   // Frame k is released no earlier than k periods after the first (a loaded machine only delays it).
-  for (std::size_t k = 1; k < stamps.size(); ++k) EXPECT_GE(stamps[k] - stamps[0], static_cast<int64_t>(k) * 40000000LL - 1000000);
+  for (std::size_t k = 1; k < stamps.size(); ++k)
+    EXPECT_GE(stamps[k] - stamps[0], static_cast<int64_t>(k) * 40000000LL - 1000000);
   fs::remove_all(dir);
 }
 

@@ -23,7 +23,7 @@ constexpr int64_t kMs = 1000000;
 
 struct Drive {
   double speed_mps = 1.0;
-  double slam_scale = 1.0;           // SLAM path length / true path length
+  double slam_scale = 1.0;  // SLAM path length / true path length
   double slam_heading_drift_degps = 0;
   bool odometry = true;
   int64_t odometry_stops_at_ms = -1;  // -1: never
@@ -49,8 +49,9 @@ OdometryCheck run(OdometryMonitor& m, const Drive& d, int64_t duration_ms, int64
     if (ms % 50 == 0) {
       const double slam_yaw = yaw + d.slam_heading_drift_degps * t_s * M_PI / 180.0;
       const double drift_x = d.slam_moves_while_standing ? 0.5 * t_s : 0.0;
-      poses.emplace_back(t_ns, agvslam::make_se3(Eigen::Quaterniond(Eigen::AngleAxisd(slam_yaw, Eigen::Vector3d::UnitZ())),
-                                                 Eigen::Vector3d(d.slam_scale * x + drift_x, d.slam_scale * y, 0.0)));
+      poses.emplace_back(t_ns,
+                         agvslam::make_se3(Eigen::Quaterniond(Eigen::AngleAxisd(slam_yaw, Eigen::Vector3d::UnitZ())),
+                                           Eigen::Vector3d(d.slam_scale * x + drift_x, d.slam_scale * y, 0.0)));
     }
     x += d.speed_mps * std::cos(yaw) * 1e-3;
     y += d.speed_mps * std::sin(yaw) * 1e-3;
@@ -59,7 +60,8 @@ OdometryCheck run(OdometryMonitor& m, const Drive& d, int64_t duration_ms, int64
   OdometryCheck last;
   std::size_t next = 0;
   for (const auto& [t_ns, T] : poses) {
-    while (next < odometry.size() && odometry[next].t_ns <= t_ns + odometry_lead_ms * kMs) m.add_odometry(odometry[next++]);
+    while (next < odometry.size() && odometry[next].t_ns <= t_ns + odometry_lead_ms * kMs)
+      m.add_odometry(odometry[next++]);
     last = m.add_pose(t_ns, T, true);
   }
   return last;

@@ -43,8 +43,8 @@ TEST(PoseSampleBuilder, TheMapFrameIsBaseLinkAtTheFirstKeyframe) {
   const double yaw = 30 * M_PI / 180;
   builder.build(tracked(camera_pose(Eigen::Vector3d(0, 0, 2), yaw)), kT0 + kDt, s);
   EXPECT_NEAR(drivers::yaw_rad(s.T_map_base), yaw, 1e-12);
-  const Eigen::Vector3d expected = Eigen::Vector3d(0.3 + 2.0, 0, 0) - Eigen::AngleAxisd(yaw, Eigen::Vector3d::UnitZ()) *
-                                                                          Eigen::Vector3d(0.3, 0, 0);
+  const Eigen::Vector3d expected =
+      Eigen::Vector3d(0.3 + 2.0, 0, 0) - Eigen::AngleAxisd(yaw, Eigen::Vector3d::UnitZ()) * Eigen::Vector3d(0.3, 0, 0);
   EXPECT_TRUE(s.T_map_base.translation().isApprox(expected, 1e-12)) << s.T_map_base.translation().transpose();
   EXPECT_NEAR(s.T_map_base.translation().z(), 0.0, 1e-12);  // stays on the floor
   // Round trip.
@@ -60,7 +60,8 @@ TEST(PoseSampleBuilder, TwistIsTheFiniteDifferenceInBaseLinkAxes) {
   EXPECT_EQ(s.cov_twist(0, 0), kUnknownVariance);  // no previous pose: unknown
   const SE3d T_map_base0 = s.T_map_base;
   // Base pose wanted: T_map_base0 * (forward 5 cm, turn 0.01 rad).
-  const SE3d step = make_se3(Eigen::Matrix3d(Eigen::AngleAxisd(0.01, Eigen::Vector3d::UnitZ())), Eigen::Vector3d(0.05, 0, 0));
+  const SE3d step =
+      make_se3(Eigen::Matrix3d(Eigen::AngleAxisd(0.01, Eigen::Vector3d::UnitZ())), Eigen::Vector3d(0.05, 0, 0));
   const SE3d T_map_base1 = T_map_base0 * step;
   builder.build(tracked(builder.to_camera(T_map_base1)), kT0 + kDt, s);
   EXPECT_TRUE(s.v_base_mps.isApprox(Eigen::Vector3d(1.0, 0, 0), 1e-9)) << s.v_base_mps.transpose();
@@ -79,7 +80,7 @@ TEST(PoseSampleBuilder, CovarianceHeuristicScalesWithTheInliers) {
   EXPECT_EQ(s.cov_pose(0, 1), 0.0);
   builder.build(tracked(SE3d::Identity(), c.reference_inliers / 4), kT0 + kDt, s);
   EXPECT_NEAR(s.cov_pose(1, 1), 4 * c.position_sd_m * c.position_sd_m, 1e-15);  // a quarter of the inliers: sd x 2
-  builder.build(tracked(SE3d::Identity(), 0), kT0 + 2 * kDt, s);                 // floored at min_inliers
+  builder.build(tracked(SE3d::Identity(), 0), kT0 + 2 * kDt, s);                // floored at min_inliers
   EXPECT_NEAR(s.cov_pose(2, 2), c.position_sd_m * c.position_sd_m * c.reference_inliers / c.min_inliers, 1e-12);
 }
 

@@ -46,9 +46,9 @@ TEST(PoseOutputs, PoseOnlyWhileTrackingStatusAlwaysFilesAsPublished) {
   ASSERT_TRUE(out.wait_for_subscribers(1, std::chrono::seconds(10)));
 
   const int64_t t0 = dds::realtime_now_ns() - 1000000000LL;  // captured a second ago
-  std::vector<drivers::TrackingState> states = {drivers::TrackingState::kNotInitialized, drivers::TrackingState::kTracking,
-                                                drivers::TrackingState::kTracking, drivers::TrackingState::kLost,
-                                                drivers::TrackingState::kTracking};
+  std::vector<drivers::TrackingState> states = {drivers::TrackingState::kNotInitialized,
+                                                drivers::TrackingState::kTracking, drivers::TrackingState::kTracking,
+                                                drivers::TrackingState::kLost, drivers::TrackingState::kTracking};
   for (std::size_t i = 0; i < states.size(); ++i) {
     OutputItem item;
     item.sample = drivers::synthetic_pose_sample(i, t0 + static_cast<int64_t>(i) * 50000000LL);

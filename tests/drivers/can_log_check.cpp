@@ -64,10 +64,11 @@ int main(int argc, char** argv) {
       if (!line.empty()) sent.push_back(nlohmann::json::parse(line));
     }
     const auto res = agvslam::test::check_can_log(dbc, sent, log, base_id);
-    std::printf("can_log_check: %d samples, %d cycles sent (%d whole), %d cycles in the log (%d frames), %d values "
-                "checked, %d unsent, %d sent after the first unsent, %d lost at an outage\n",
-                res.samples, res.expected_cycles, res.whole_cycles, res.log_cycles, res.frames, res.values_checked,
-                res.unsent_samples, res.sent_after_unsent, res.lost_at_outage);
+    std::printf(
+        "can_log_check: %d samples, %d cycles sent (%d whole), %d cycles in the log (%d frames), %d values "
+        "checked, %d unsent, %d sent after the first unsent, %d lost at an outage\n",
+        res.samples, res.expected_cycles, res.whole_cycles, res.log_cycles, res.frames, res.values_checked,
+        res.unsent_samples, res.sent_after_unsent, res.lost_at_outage);
     bool ok = res.ok;
     for (const auto& f : res.failures) std::fprintf(stderr, "can_log_check: FAIL: %s\n", f.c_str());
     if (expect_outage && (res.unsent_samples == 0 || res.sent_after_unsent == 0)) {

@@ -23,9 +23,9 @@ struct CanCheckResult {
   int log_cycles = 0;                 // cycles found in the log
   int frames = 0;                     // agvslam frames in the log
   int values_checked = 0;
-  int unsent_samples = 0;         // due samples the driver could not send (interface down)
-  int sent_after_unsent = 0;      // whole cycles sent after the first unsent one (resumed)
-  int lost_at_outage = 0;         // cycles sent just before an outage that did not reach the bus (allowed)
+  int unsent_samples = 0;     // due samples the driver could not send (interface down)
+  int sent_after_unsent = 0;  // whole cycles sent after the first unsent one (resumed)
+  int lost_at_outage = 0;     // cycles sent just before an outage that did not reach the bus (allowed)
 };
 
 // `sent`: the JSON lines of agvslam-pose-replay --json (lines without "i" are ignored). `log`: candump -L lines.

@@ -51,8 +51,8 @@ std::vector<OdometryRate> rates_from_poses(const agvslam::Trajectory& poses, agv
 }
 
 OdometryRate at(const std::vector<OdometryRate>& rates, int64_t t_ns) {
-  auto it = std::lower_bound(rates.begin(), rates.end(), t_ns,
-                             [](const OdometryRate& r, int64_t t) { return r.t_ns < t; });
+  auto it =
+      std::lower_bound(rates.begin(), rates.end(), t_ns, [](const OdometryRate& r, int64_t t) { return r.t_ns < t; });
   if (it == rates.begin()) return *it;
   if (it == rates.end()) return rates.back();
   const OdometryRate& a = *(it - 1);
@@ -97,13 +97,13 @@ int main(int argc, char** argv) {
   try {
     can::CanOdometryConfig config;
     config.dbc = dbc_path;
-    const can::CanOdometryDecoder codec(config, can::FrameLayout{static_cast<uint32_t>(std::stoul(base_id_text, nullptr, 0)), false},
-                                        "can_odometry_send");
+    const can::CanOdometryDecoder codec(
+        config, can::FrameLayout{static_cast<uint32_t>(std::stoul(base_id_text, nullptr, 0)), false},
+        "can_odometry_send");
     const std::vector<OdometryRate> rates =
         agvslam::io::looks_like_odometry_csv(odometry_path)
             ? agvslam::io::read_odometry_csv(odometry_path)
-            : rates_from_poses(agvslam::io::read_tum(odometry_path),
-                               agvslam::eval::parse_body_axes(axes, "--axes"));
+            : rates_from_poses(agvslam::io::read_tum(odometry_path), agvslam::eval::parse_body_axes(axes, "--axes"));
     if (rates.size() < 2) throw agvslam::InputError(odometry_path, "file", "expected at least 3 poses");
     can::CanSocket socket;
     std::string error;

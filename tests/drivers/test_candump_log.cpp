@@ -52,8 +52,8 @@ TEST(CandumpLog, FormatAndParseAgree) {
 }
 
 TEST(CandumpLog, RejectsMalformedLines) {
-  for (const char* bad : {"vcan0 123#00", "(1.0) vcan0 12#00", "(1.0) vcan0 123#0", "(1.0) vcan0 123#00112233445566778899",
-                          "(x.0) vcan0 123#00"}) {
+  for (const char* bad : {"vcan0 123#00", "(1.0) vcan0 12#00", "(1.0) vcan0 123#0",
+                          "(1.0) vcan0 123#00112233445566778899", "(x.0) vcan0 123#00"}) {
     try {
       parse_candump_line(bad, "dump.log", 7);
       ADD_FAILURE() << "accepted: " << bad;

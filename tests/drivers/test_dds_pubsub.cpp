@@ -113,12 +113,12 @@ std::string netns_prefix() {
   return "";
 }
 
-#define REQUIRE_NETNS(prefix)                                                                             \
-  const std::string prefix = netns_prefix();                                                              \
-  if (prefix.empty()) {                                                                                   \
-    if (agvslam::test::running_in_ci()) FAIL() << "unshare -n is not permitted here and CI=true";         \
+#define REQUIRE_NETNS(prefix)                                                                               \
+  const std::string prefix = netns_prefix();                                                                \
+  if (prefix.empty()) {                                                                                     \
+    if (agvslam::test::running_in_ci()) FAIL() << "unshare -n is not permitted here and CI=true";           \
     GTEST_SKIP() << "unshare -n (a private network namespace) is not permitted here; run as root or where " \
-                    "unprivileged user namespaces are enabled";                                           \
+                    "unprivileged user namespaces are enabled";                                             \
   }
 
 std::vector<nlohmann::json> read_json_lines(const std::string& path) {
@@ -137,9 +137,12 @@ TEST(DdsTwoProcess, EverySamplePublishedArrivesInOrderWithExactValues) {
   const int n = 200;
   const std::string script =
       "ip link set lo up && "
-      "(" + agvslam::test::tool_path("agvslam-echo") + " --json --interface lo --count " + std::to_string(3 * n) +
-      " --timeout 60 > " + dir + "/echo.jsonl 2> " + dir + "/echo.err & "
-      "" + agvslam::test::tool_path("agvslam-pose-replay") + " --synthetic " + std::to_string(n) +
+      "(" +
+      agvslam::test::tool_path("agvslam-echo") + " --json --interface lo --count " + std::to_string(3 * n) +
+      " --timeout 60 > " + dir + "/echo.jsonl 2> " + dir +
+      "/echo.err & "
+      "" +
+      agvslam::test::tool_path("agvslam-pose-replay") + " --synthetic " + std::to_string(n) +
       " --rate 100 --dds --interface lo --wait-subscribers 1 --wait-timeout 30 --json > " + dir + "/sent.jsonl 2> " +
       dir + "/sent.err; echo replay=$?; wait $!; echo echo=$?)";
   std::string out;
@@ -180,10 +183,10 @@ TEST(DdsTwoProcess, EverySamplePublishedArrivesInOrderWithExactValues) {
 TEST(DdsTwoProcess, EchoTimesOutWithStatusOneWhenNothingArrives) {
   REQUIRE_NETNS(ns);
   std::string out;
-  const int rc = agvslam::test::run_command(
-      ns + " sh -c 'ip link set lo up && " + agvslam::test::tool_path("agvslam-echo") +
-          " --interface lo --domain 7 --count 1 --timeout 1'",
-      &out);
+  const int rc =
+      agvslam::test::run_command(ns + " sh -c 'ip link set lo up && " + agvslam::test::tool_path("agvslam-echo") +
+                                     " --interface lo --domain 7 --count 1 --timeout 1'",
+                                 &out);
   EXPECT_EQ(rc, 1) << out;
   EXPECT_NE(out.find("timed out"), std::string::npos) << out;
 }

@@ -23,7 +23,8 @@ uint8_t reference_crc(const std::vector<uint8_t>& bytes) {
   uint8_t crc = 0xFF;
   for (uint8_t b : bytes) {
     crc ^= b;
-    for (int i = 0; i < 8; ++i) crc = (crc & 0x80) ? static_cast<uint8_t>((crc << 1) ^ 0x1D) : static_cast<uint8_t>(crc << 1);
+    for (int i = 0; i < 8; ++i)
+      crc = (crc & 0x80) ? static_cast<uint8_t>((crc << 1) ^ 0x1D) : static_cast<uint8_t>(crc << 1);
   }
   return static_cast<uint8_t>(crc ^ 0xFF);
 }
@@ -97,8 +98,8 @@ TEST(PoseFrames, ExtendedIdsAndBase) {
 TEST(PoseFrames, OdometryCheckFrameAgainstTheDbc) {
   OdometryCheck check;
   check.state = OdometryCheckState::kDisagrees;
-  check.distance_ratio = 1.2504;  // 1250 = 0x04E2
-  check.speed_rmse_mps = 0.0456;  // 46 = 0x002E
+  check.distance_ratio = 1.2504;           // 1250 = 0x04E2
+  check.speed_rmse_mps = 0.0456;           // 46 = 0x002E
   check.heading_difference_deg = -12.344;  // -1234 = 0xFB2E
   const CanFrameBytes f = encode_odometry_check_frame(check, 7, FrameLayout{});
   EXPECT_EQ(f.id, 0x305U);
@@ -144,7 +145,8 @@ void round_trip(bool fd) {
       frames.push_back(encode_fd_frame(s, counter, FrameLayout{}));
     } else {
       std::array<CanFrameBytes, kMaxClassicFrames> f;
-      frames.assign(f.begin(), f.begin() + static_cast<long>(encode_classic_frames(s, counter, FrameLayout{}, true, true, true, f)));
+      frames.assign(f.begin(), f.begin() + static_cast<long>(
+                                               encode_classic_frames(s, counter, FrameLayout{}, true, true, true, f)));
     }
     for (const auto& frame : frames) {
       const std::string text = format_candump_line(frame, "vcan0", s.t_ns);

@@ -159,7 +159,8 @@ TEST(TimestampPairer, EurocStampsPairLikeTheDatasetReader) {
       const std::string name = line.substr(line.find(',') + 1);
       std::string trimmed = name;
       trimmed.erase(std::remove_if(trimmed.begin(), trimmed.end(), ::isspace), trimmed.end());
-      if (std::filesystem::exists(root + "/mav0/" + cam + "/data/" + trimmed)) t.push_back(std::stoll(line.substr(0, line.find(','))));
+      if (std::filesystem::exists(root + "/mav0/" + cam + "/data/" + trimmed))
+        t.push_back(std::stoll(line.substr(0, line.find(','))));
     }
     return t;
   };

@@ -13,7 +13,7 @@ TEST(PixelConvert, YuyvTakesLumaWithRowPadding) {
   for (int y = 0; y < h; ++y)
     for (int x = 0; x < w; ++x) {
       yuyv[y * bpl + 2 * x] = static_cast<uint8_t>(10 * y + x);  // Y
-      yuyv[y * bpl + 2 * x + 1] = 200;                            // U or V
+      yuyv[y * bpl + 2 * x + 1] = 200;                           // U or V
     }
   cv::Mat grey(h, w, CV_8UC1);
   v4l2::yuyv_to_grey(yuyv.data(), bpl, grey);
@@ -73,7 +73,8 @@ TEST(MjpegDecoder, DecodesARealFrameWithinJpegLoss) {
   // A different frame is far off: the check the VM case relies on can tell frames apart.
   const cv::Mat other = cv::imread(path.substr(0, path.size() - 10) + "000005.png", cv::IMREAD_GRAYSCALE);
   ASSERT_FALSE(other.empty());
-  EXPECT_GT(cv::norm(out, other(cv::Rect(0, 0, out.cols, out.rows)), cv::NORM_L1) / static_cast<double>(grey.total()), 10.0);
+  EXPECT_GT(cv::norm(out, other(cv::Rect(0, 0, out.cols, out.rows)), cv::NORM_L1) / static_cast<double>(grey.total()),
+            10.0);
   // Garbage is refused with a message, not a crash.
   std::vector<uint8_t> broken(jpeg.begin(), jpeg.begin() + 200);
   EXPECT_FALSE(dec.decode(broken.data(), broken.size(), out));

@@ -43,13 +43,13 @@ struct TexturedRect {
   double width_m = 1, height_m = 1;
   cv::Mat texture;  // CV_8UC1, repeated
   double metres_per_texel = 0.01;
-  int id = 0;       // written to the id image (0 = static background)
+  int id = 0;  // written to the id image (0 = static background)
 };
 
 struct RenderOutput {
-  cv::Mat grey;      // CV_8UC1
-  cv::Mat depth_m;   // CV_32FC1, 0 = nothing
-  cv::Mat id;        // CV_32SC1, -1 = nothing
+  cv::Mat grey;     // CV_8UC1
+  cv::Mat depth_m;  // CV_32FC1, 0 = nothing
+  cv::Mat id;       // CV_32SC1, -1 = nothing
 };
 
 inline double sample_bilinear(const cv::Mat& tex, double x, double y) {

@@ -35,16 +35,20 @@ TEST(BandSegmenter, StaticSegmentOfAPointWithoutDepth) {
   // A standing camera, or one turning on the spot: every depth lands on the same previous pixel.
   EXPECT_NEAR(band.static_segment_length(cam, bf(), SE3d::Identity(), 10, 200), 0.0, 1e-9);
   const Eigen::Matrix3d yaw = Eigen::AngleAxisd(2.0 * M_PI / 180.0, Eigen::Vector3d::UnitY()).toRotationMatrix();
-  EXPECT_NEAR(band.static_segment_length(cam, bf(), motion_from_prev_cur(yaw, Eigen::Vector3d::Zero()), 10, 200), 0.0, 1e-9);
+  EXPECT_NEAR(band.static_segment_length(cam, bf(), motion_from_prev_cur(yaw, Eigen::Vector3d::Zero()), 10, 200), 0.0,
+              1e-9);
   // 1 cm sideways: disparities 0..64 spread over fx * 64 * 0.01 / bf = 5.33 px.
   const SE3d sideways = motion_from_prev_cur(Eigen::Matrix3d::Identity(), Eigen::Vector3d(0.01, 0, 0));
   EXPECT_NEAR(band.static_segment_length(cam, bf(), sideways, 10, 200), 460.0 * 64 * 0.01 / bf(), 1e-6);
   // On the segment (disparity 32: half way) the distance is 0; 2 px across it, 2 px; 3 px beyond its end, 3 px.
   const double half = 460.0 * 32 * 0.01 / bf();
-  EXPECT_NEAR(band.static_segment_distance(cam, bf(), sideways, {10, 200}, {static_cast<float>(10 + half), 200}), 0.0, 1e-4);
-  EXPECT_NEAR(band.static_segment_distance(cam, bf(), sideways, {10, 200}, {static_cast<float>(10 + half), 202}), 2.0, 1e-4);
+  EXPECT_NEAR(band.static_segment_distance(cam, bf(), sideways, {10, 200}, {static_cast<float>(10 + half), 200}), 0.0,
+              1e-4);
+  EXPECT_NEAR(band.static_segment_distance(cam, bf(), sideways, {10, 200}, {static_cast<float>(10 + half), 202}), 2.0,
+              1e-4);
   const double end = 460.0 * 64 * 0.01 / bf();
-  EXPECT_NEAR(band.static_segment_distance(cam, bf(), sideways, {10, 200}, {static_cast<float>(10 + end + 3), 200}), 3.0, 1e-3);
+  EXPECT_NEAR(band.static_segment_distance(cam, bf(), sideways, {10, 200}, {static_cast<float>(10 + end + 3), 200}),
+              3.0, 1e-3);
 }
 
 // The corridor's left image with its box (0.5 m wide, 2.5 m ahead) whose right side is at image column right_px;

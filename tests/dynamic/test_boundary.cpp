@@ -19,7 +19,8 @@ struct Pair {
   template <typename F>
   void fill(F disparity_of_global_xy) {
     for (int y = 0; y < 20; ++y) {
-      for (int x = 0; x < 40; ++x) disparity.at<float>(y, x) = static_cast<float>(disparity_of_global_xy(x + origin.x, y + origin.y, x < 20));
+      for (int x = 0; x < 40; ++x)
+        disparity.at<float>(y, x) = static_cast<float>(disparity_of_global_xy(x + origin.x, y + origin.y, x < 20));
     }
   }
   SuperpixelBoundary label() const {
@@ -111,7 +112,8 @@ TEST(BoundaryEnergy, MatchesTheDefinitionsOnExplicitSets) {
     sq_u += diff * diff;
   }
   const BoundaryConfig cfg;
-  EXPECT_NEAR(boundary_energy(BoundaryType::kCoplanar, pi, pj, boundary, uni, cfg), sq_u / static_cast<double>(upts.size()), 1e-9);
+  EXPECT_NEAR(boundary_energy(BoundaryType::kCoplanar, pi, pj, boundary, uni, cfg),
+              sq_u / static_cast<double>(upts.size()), 1e-9);
   EXPECT_NEAR(boundary_energy(BoundaryType::kHinge, pi, pj, boundary, uni, cfg),
               sq_b / static_cast<double>(bpts.size()) + cfg.lambda_hinge, 1e-9);
   ASSERT_NE(sum_b, 0.0);

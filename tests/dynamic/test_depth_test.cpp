@@ -126,7 +126,8 @@ TEST(DepthTest, AMotionPriorReplacesRansacOnlyWhenMostTracksAgreeWithIt) {
   // (as RANSAC does without the prior).
   SE3d near_truth = s.T_cur_prev;
   near_truth.translation() += Eigen::Vector3d(0.01, 0, 0);
-  near_truth.linear() = Eigen::AngleAxisd(0.1 * M_PI / 180, Eigen::Vector3d::UnitX()).toRotationMatrix() * near_truth.linear();
+  near_truth.linear() =
+      Eigen::AngleAxisd(0.1 * M_PI / 180, Eigen::Vector3d::UnitX()).toRotationMatrix() * near_truth.linear();
   DepthTestResult with_prior, without;
   test.run(s.cam, s.bf, s.prev, s.d_prev, s.cur, s.d_cur, s.usable, with_prior, &near_truth);
   test.run(s.cam, s.bf, s.prev, s.d_prev, s.cur, s.d_cur, s.usable, without);

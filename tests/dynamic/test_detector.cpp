@@ -42,10 +42,10 @@ std::string summary(const DetectorResult& r) {
   std::string s = buf;
   for (const auto& roi : r.rois) {
     char b2[200];
-    std::snprintf(b2, sizeof(b2), "\n  ROI (%d,%d %dx%d) %zu points, %d superpixels, region (%d,%d %dx%d) from %d points",
-                  roi.roi.x, roi.roi.y, roi.roi.width, roi.roi.height, roi.points.size(), roi.superpixels,
-                  roi.region.rectangle.x, roi.region.rectangle.y, roi.region.rectangle.width,
-                  roi.region.rectangle.height, roi.region.started_points);
+    std::snprintf(
+        b2, sizeof(b2), "\n  ROI (%d,%d %dx%d) %zu points, %d superpixels, region (%d,%d %dx%d) from %d points",
+        roi.roi.x, roi.roi.y, roi.roi.width, roi.roi.height, roi.points.size(), roi.superpixels, roi.region.rectangle.x,
+        roi.region.rectangle.y, roi.region.rectangle.width, roi.region.rectangle.height, roi.region.started_points);
     s += b2;
   }
   return s;
@@ -178,7 +178,8 @@ TEST(DynamicDetector, SmallFarObjectIsFoundThroughDensification) {
       run_two_frames(sparse, camera_pose(0.0, 0, 0.08), Eigen::Vector3d(-0.12, -0.06, 0), true, scene);
   DynamicDetectorConfig dense = per_frame();
   dense.features.target_count = 120;
-  const RunOutcome with = run_two_frames(dense, camera_pose(0.0, 0, 0.08), Eigen::Vector3d(-0.12, -0.06, 0), true, scene);
+  const RunOutcome with =
+      run_two_frames(dense, camera_pose(0.0, 0, 0.08), Eigen::Vector3d(-0.12, -0.06, 0), true, scene);
   int densified = 0;
   for (const auto& p : with.result.points) densified += p.densified && p.dynamic;
   EXPECT_GE(densified, 3) << summary(with.result);
@@ -258,7 +259,7 @@ TEST(DynamicDetector, MultiFrameTestFindsABoxKeepingItsDistanceAhead) {
 // A box 3 m ahead crosses sideways (5 cm per frame) while the camera drives on (4 cm per frame), then stops at
 // frame `stop`. With `config`, returns each frame's result.
 std::vector<DetectorResult> box_crossing_then_stopping(const DynamicDetectorConfig& config, int frames, int stop,
-                                                      std::vector<cv::Mat>* gt_masks = nullptr) {
+                                                       std::vector<cv::Mat>* gt_masks = nullptr) {
   CorridorScene scene;
   scene.box.origin = {-0.6, -1.1, 3.0};
   DynamicDetector detector(scene.calibration(), config);
@@ -324,8 +325,10 @@ TEST(DynamicDetector, DensifiedPointsAroundASlowMoverAreTestedAgainstTheMultiFra
   EXPECT_EQ(on.off_box, 0);
   // With them the box has enough dynamic points for a ROI (grouping.min_points) in more frames (7 against 4).
   EXPECT_GE(on.roi_frames, off.roi_frames + 3);
-  std::printf("densified %d, multi-frame dynamic on the box %d, off it %d; frames with >= 5 dynamic points on the box "
-              "%d (%d without)\n", on.densified, on.on_box, on.off_box, on.roi_frames, off.roi_frames);
+  std::printf(
+      "densified %d, multi-frame dynamic on the box %d, off it %d; frames with >= 5 dynamic points on the box "
+      "%d (%d without)\n",
+      on.densified, on.on_box, on.off_box, on.roi_frames, off.roi_frames);
 }
 
 TEST(DynamicDetector, AnObjectIsReportedOnceTheNextFrameConfirmsIt) {
@@ -497,8 +500,8 @@ TEST(DynamicDetector, BoxAtTheLeftBorderIsCompletedIntoTheUnmatchedBand) {
 // A 0.5 m wide box 2.5 m away (d = 22 px) moving sideways by `step_m` per frame (negative: to the left) in front of
 // the corridor's left wall, the camera driving on by 2 cm per frame; its left edge starts at image x = `x0_px`.
 // Returns each frame's result and ground truth.
-std::vector<DetectorResult> box_sideways_at_left_border(const DynamicDetectorConfig& config, double x0_px, double step_m,
-                                                        int frames, std::vector<cv::Mat>& gt_masks) {
+std::vector<DetectorResult> box_sideways_at_left_border(const DynamicDetectorConfig& config, double x0_px,
+                                                        double step_m, int frames, std::vector<cv::Mat>& gt_masks) {
   CorridorScene scene;
   const double z = 2.5;
   scene.box.origin = {(x0_px - scene.camera.cx) * z / scene.camera.fx, -1.1, z};
@@ -557,9 +560,10 @@ TEST(DynamicDetector, ABoxLeavingToTheLeftIsCarriedIntoTheUnmatchedBand) {
   // depth-test seeds of densification, 4.x % before): far below the 96 % carried.
   EXPECT_LT(without_band, gt_band * 8 / 100) << summary(without.back());
   EXPECT_GT(iou_with, iou_without + 0.05 * frames_in_band);
-  std::printf("box leaving to the left, %d frames in the band: %d / %d band px carried (%d false), mean IoU %.3f "
-              "carried, %.3f not\n",
-              frames_in_band, with_band, gt_band, with_false, iou_with / frames_in_band, iou_without / frames_in_band);
+  std::printf(
+      "box leaving to the left, %d frames in the band: %d / %d band px carried (%d false), mean IoU %.3f "
+      "carried, %.3f not\n",
+      frames_in_band, with_band, gt_band, with_false, iou_with / frames_in_band, iou_without / frames_in_band);
 }
 
 TEST(DynamicDetector, ABoxEnteringFromTheLeftCarriesNoWallIntoTheBand) {
@@ -613,8 +617,10 @@ TEST(DynamicDetector, ABoxEnteringFromTheLeftWhileDrivingGetsTheBandsDrivingSeed
     iou_with += iou(with[i].mask.image, gt[i]);
     iou_without += iou(without[i].mask.image, gt[i]);
   }
-  std::printf("box entering while driving: %d candidates, %d flagged, %d of %d strip seeds on the box; IoU sum %.2f "
-              "with, %.2f without\n", candidates, flagged, seeds_on_box, seeds, iou_with, iou_without);
+  std::printf(
+      "box entering while driving: %d candidates, %d flagged, %d of %d strip seeds on the box; IoU sum %.2f "
+      "with, %.2f without\n",
+      candidates, flagged, seeds_on_box, seeds, iou_with, iou_without);
   EXPECT_EQ(without_candidates, 0);
   EXPECT_GT(flagged, 20);
   EXPECT_GE(seeds, flagged);
@@ -636,8 +642,8 @@ std::vector<DetectorResult> box_stepping_in_before_a_standing_camera(const Dynam
   gt_masks.clear();
   for (int k = 0; k < frames; ++k) {
     cv::Mat gt;
-    const StereoFrame f = scene.render_frame(SE3d::Identity(), Eigen::Vector3d(0.04 * k, 0, 0), true,
-                                             static_cast<std::size_t>(k), &gt);
+    const StereoFrame f =
+        scene.render_frame(SE3d::Identity(), Eigen::Vector3d(0.04 * k, 0, 0), true, static_cast<std::size_t>(k), &gt);
     detector.detect(f, results[static_cast<std::size_t>(k)]);
     gt_masks.push_back(gt);
   }
@@ -678,8 +684,10 @@ TEST(DynamicDetector, ABoxSteppingIntoTheBandIsFoundWhileTheCameraStands) {
   // Without it, nothing while the box lies wholly in the band, and a part of it once it reaches past x = d.
   EXPECT_EQ(off_in_band, 0);
   EXPECT_LT(off_true, on_true / 2);
-  std::printf("box stepping in before a standing camera (%d frames): %d / %d box px masked, %d false px; without the "
-              "band segmenter %d px\n", frames_in_band, on_true, gt_px, on_false, off_true);
+  std::printf(
+      "box stepping in before a standing camera (%d frames): %d / %d box px masked, %d false px; without the "
+      "band segmenter %d px\n",
+      frames_in_band, on_true, gt_px, on_false, off_true);
 }
 
 TEST(DynamicDetector, OutlineCutByTheRoiSideIsWidened) {
@@ -757,12 +765,13 @@ TEST(DynamicDetector, AnOutlineOffTheMultiFrameReferenceMovesTogether) {
   // stopped), the aggregate rule drops the outline.
   for (const auto& [fraction, floor_px] : {std::pair{0.0, 0.2}, std::pair{0.5, 1.5}}) {
     const DetectorResult without = run(fraction, floor_px);
-    EXPECT_EQ(without.mask.pixel_count(), 0) << "fraction " << fraction << " floor " << floor_px << ": " << summary(without);
+    EXPECT_EQ(without.mask.pixel_count(), 0)
+        << "fraction " << fraction << " floor " << floor_px << ": " << summary(without);
   }
-  std::printf("box moving along ahead: %d of %d tracks off the multi-frame reference, per-frame median %.2f px, IoU %.3f\n",
-              box->multiframe_dynamic_inside, box->multiframe_tested_inside, box->median_offset_px, overlap);
+  std::printf(
+      "box moving along ahead: %d of %d tracks off the multi-frame reference, per-frame median %.2f px, IoU %.3f\n",
+      box->multiframe_dynamic_inside, box->multiframe_tested_inside, box->median_offset_px, overlap);
 }
 
 }  // namespace
 }  // namespace agvslam::dynamic
-

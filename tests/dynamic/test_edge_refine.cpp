@@ -15,7 +15,7 @@ namespace {
 constexpr int kW = 240, kH = 140;
 constexpr int kBoardX0 = 100, kBoardX1 = 140;  // board columns [x0, x1) in the left image
 constexpr int kBoardY0 = 30, kBoardY1 = 110;
-const cv::Rect kRoi(60, 20, 130, 100);           // where outline and disparity lie
+const cv::Rect kRoi(60, 20, 130, 100);  // where outline and disparity lie
 
 // Smooth random texture (blurred noise), wider than the image so that shifted reads stay inside.
 cv::Mat texture(unsigned seed, int width) {

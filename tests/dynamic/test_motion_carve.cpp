@@ -41,7 +41,8 @@ struct Scene {
     outline = cv::Mat::zeros(roi.size(), CV_8UC1);
     outline(flooded - roi.tl()).setTo(255);
     for (int y = object.y + 8; y < object.br().y - 8; y += 11) {
-      for (int x = object.x + 8; x < object.br().x - 8; x += 11) object_points.emplace_back(static_cast<float>(x), static_cast<float>(y));
+      for (int x = object.x + 8; x < object.br().x - 8; x += 11)
+        object_points.emplace_back(static_cast<float>(x), static_cast<float>(y));
     }
   }
   MotionCarveStats carve(const MotionCarveConfig& config, cv::Point2f motion = {6, 0}, double separation = 8.0) {
@@ -66,7 +67,8 @@ TEST(MotionCarve, BackgroundFloodedAtTheObjectsDepthIsCarvedAndTheObjectStays) {
   // What is left of the background: only blocks straddling the object's edge (within one block of it).
   EXPECT_LT(s.off_object(), flooded_off_object / 4) << "off " << s.off_object() << " of " << flooded_off_object;
   cv::Mat far_from_object = s.outline.clone();
-  const cv::Rect near = cv::Rect(s.object.x - 12, s.object.y - 12, s.object.width + 24, s.object.height + 24) - s.roi.tl();
+  const cv::Rect near =
+      cv::Rect(s.object.x - 12, s.object.y - 12, s.object.width + 24, s.object.height + 24) - s.roi.tl();
   far_from_object(near).setTo(0);
   EXPECT_EQ(cv::countNonZero(far_from_object), 0);
   EXPECT_EQ(st.pixels_removed, s.flooded.area() - cv::countNonZero(s.outline));

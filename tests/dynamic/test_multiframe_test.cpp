@@ -122,7 +122,8 @@ struct WalkerRun {
       return X.z() > 0.5 && u >= 20 && v >= 20 && u < cam.width - 20 && v < cam.height - 20;
     };
     for (std::size_t i = 0; i < candidates.size(); ++i) {
-      const Eigen::Vector3d last = candidates[i] - Eigen::Vector3d(0, 0, candidate_on_box[i] ? 0.0 : kStep * (kFrames - 1));
+      const Eigen::Vector3d last =
+          candidates[i] - Eigen::Vector3d(0, 0, candidate_on_box[i] ? 0.0 : kStep * (kFrames - 1));
       if (!in_view(candidates[i]) || !in_view(last)) continue;
       points_w.push_back(candidates[i]);
       on_box.push_back(candidate_on_box[i]);
@@ -205,7 +206,7 @@ TEST(TrackHistory, CountsStepsTheDepthTestPassedApartFromStepsOnlyTheStereoAgree
   const std::vector<float> d = {5.0f, 6.0f};
   constexpr uint8_t ok = TrackHistory::kStepConsistent, stereo = TrackHistory::kStepStereoOnly;
   h.next_frame(px, d, {ok, ok});
-  h.next_frame(px, d, {stereo, ok});  // track 0: the per-frame test flagged it, its stereo agreed
+  h.next_frame(px, d, {stereo, ok});                     // track 0: the per-frame test flagged it, its stereo agreed
   h.next_frame(px, d, {ok, TrackHistory::kStepBroken});  // track 1: a stereo mismatch
   EXPECT_EQ(h.consistent_steps(0), 3);
   EXPECT_EQ(h.consistent_steps_strict(0), 1);
@@ -323,7 +324,7 @@ TEST(MultiFrameTest, StandingStillUsesTheOldestFrame) {
 // textured patch is well conditioned (-1: the whole offset counts).
 TEST(MultiFrameTest, ApertureCheckKeepsOnlyTheOffsetAcrossAnEdge) {
   cv::Mat image(120, 160, CV_8UC1, cv::Scalar(60));
-  image.rowRange(60, 120).setTo(180);                      // horizontal edge at y = 60 for x < 80
+  image.rowRange(60, 120).setTo(180);  // horizontal edge at y = 60 for x < 80
   cv::Mat textured = image.colRange(80, 160);
   cv::randu(textured, cv::Scalar(0), cv::Scalar(255));     // x >= 80: random texture
   const PinholeCamera camera{400, 400, 80, 60, 160, 120};  // fx, fy, cx, cy, width, height
@@ -331,16 +332,20 @@ TEST(MultiFrameTest, ApertureCheckKeepsOnlyTheOffsetAcrossAnEdge) {
   const SE3d still = SE3d::Identity();
   const cv::Point2f on_edge(40, 60);
   // Slid 4 px along the edge: nothing across it.
-  EXPECT_NEAR(offset_across_edge(image, on_edge, 5, camera, bf, still, on_edge + cv::Point2f(4, 0), 8.0f, 0.15), 0.0, 1e-6);
+  EXPECT_NEAR(offset_across_edge(image, on_edge, 5, camera, bf, still, on_edge + cv::Point2f(4, 0), 8.0f, 0.15), 0.0,
+              1e-6);
   // 3 px across and 4 px along: the 3 px count.
-  EXPECT_NEAR(offset_across_edge(image, on_edge, 5, camera, bf, still, on_edge + cv::Point2f(4, 3), 8.0f, 0.15), 3.0, 1e-6);
+  EXPECT_NEAR(offset_across_edge(image, on_edge, 5, camera, bf, still, on_edge + cv::Point2f(4, 3), 8.0f, 0.15), 3.0,
+              1e-6);
   // A textured patch and a flat one: not edge-like, the whole offset counts.
-  EXPECT_EQ(offset_across_edge(image, cv::Point2f(120, 60), 5, camera, bf, still, cv::Point2f(124, 60), 8.0f, 0.15), -1);
+  EXPECT_EQ(offset_across_edge(image, cv::Point2f(120, 60), 5, camera, bf, still, cv::Point2f(124, 60), 8.0f, 0.15),
+            -1);
   EXPECT_EQ(offset_across_edge(image, cv::Point2f(40, 20), 5, camera, bf, still, cv::Point2f(44, 20), 8.0f, 0.15), -1);
   // The prediction moves with the camera: 0.1 m to the right makes a point at 5 m (d = 8 px) appear 8 px left.
   SE3d right = SE3d::Identity();
   right.translation() = Eigen::Vector3d(-0.1, 0, 0);
-  EXPECT_NEAR(offset_across_edge(image, on_edge, 5, camera, bf, right, on_edge + cv::Point2f(8, 2), 8.0f, 0.15), 2.0, 1e-6);
+  EXPECT_NEAR(offset_across_edge(image, on_edge, 5, camera, bf, right, on_edge + cv::Point2f(8, 2), 8.0f, 0.15), 2.0,
+              1e-6);
   // Too close to the border to sample the patch.
   EXPECT_EQ(offset_across_edge(image, cv::Point2f(3, 60), 5, camera, bf, still, cv::Point2f(7, 60), 8.0f, 0.15), -1);
 }

@@ -34,7 +34,9 @@ struct Scene {
     }
     disparity(person).setTo(10.0f);
   }
-  cv::Point2f image_point(int x, int y) const { return {static_cast<float>(x + origin.x), static_cast<float>(y + origin.y)}; }
+  cv::Point2f image_point(int x, int y) const {
+    return {static_cast<float>(x + origin.x), static_cast<float>(y + origin.y)};
+  }
 };
 
 // The flood itself: no erosion (tested separately).
@@ -93,12 +95,14 @@ TEST(ObjectOutline, SeedsNeedAgreeingDisparityAndTheDepthBandCutsSlopes) {
   ObjectOutliner outliner(exact());
   cv::Mat mask;
   // A point whose disparity matches nothing within seed_radius_px starts nothing.
-  OutlineStats st = outliner.outline(s.disparity, s.origin, {s.image_point(70, 60)}, {14.0f}, {}, {}, nullptr, kBf, mask);
+  OutlineStats st =
+      outliner.outline(s.disparity, s.origin, {s.image_point(70, 60)}, {14.0f}, {}, {}, nullptr, kBf, mask);
   EXPECT_EQ(st.object_seeds, 0);
   EXPECT_EQ(cv::countNonZero(mask), 0);
   // A ramp of disparity 10 -> 20 across the person's width in 0.5 px steps (smooth): only the part within
   // depth_band_m of the seed's depth joins.
-  for (int x = 0; x < s.person.width; ++x) s.disparity(cv::Rect(s.person.x + x, s.person.y, 1, s.person.height)).setTo(10.0f + 0.5f * x);
+  for (int x = 0; x < s.person.width; ++x)
+    s.disparity(cv::Rect(s.person.x + x, s.person.y, 1, s.person.height)).setTo(10.0f + 0.5f * x);
   OutlineConfig c = exact();
   c.depth_band_m = 0.6;
   ObjectOutliner narrow(c);
@@ -155,7 +159,7 @@ TEST(ObjectOutline, TracksMovingTogetherBelowTheirOwnThresholds) {
   EXPECT_FALSE(tracks_move_together(0.3, 0.0, c));
   EXPECT_TRUE(tracks_move_together(0.45, 0.0, c));
   EXPECT_FALSE(tracks_move_together(-1, 0.15, c));  // no offset measured
-  c.aggregate_ratio = 0;                              // off
+  c.aggregate_ratio = 0;                            // off
   EXPECT_FALSE(tracks_move_together(0.94, 0.15, c));
 }
 
@@ -170,9 +174,9 @@ TEST(ObjectOutline, TracksMovingTogetherByTheMultiFrameTest) {
   EXPECT_FALSE(tracks_move_together_multiframe(10, 4, 0.77, c));  // fewer than half flagged
   // A person who has just stopped: still off the reference, frame to frame at the static tracks' 0.11 px.
   EXPECT_FALSE(tracks_move_together_multiframe(34, 31, 0.11, c));
-  EXPECT_FALSE(tracks_move_together_multiframe(4, 4, 0.77, c));   // fewer than aggregate_min_tracks tested
+  EXPECT_FALSE(tracks_move_together_multiframe(4, 4, 0.77, c));  // fewer than aggregate_min_tracks tested
   EXPECT_FALSE(tracks_move_together_multiframe(0, 0, 0.77, c));
-  EXPECT_FALSE(tracks_move_together_multiframe(41, 30, -1, c));   // no per-frame offset measured
+  EXPECT_FALSE(tracks_move_together_multiframe(41, 30, -1, c));  // no per-frame offset measured
   c.aggregate_min_tracks = 0;
   EXPECT_TRUE(tracks_move_together_multiframe(2, 2, 0.5, c));
   EXPECT_FALSE(tracks_move_together_multiframe(0, 0, 0.5, c));

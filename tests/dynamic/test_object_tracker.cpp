@@ -13,7 +13,8 @@ namespace {
 const cv::Size kImage(640, 480);
 
 // A frame whose mask holds one kept region of `object_id` (its whole rectangle) at `median_disparity_px`.
-DetectorResult frame_with_object(const cv::Rect& rect, int object_id, double median_disparity_px, FrameRegions& regions) {
+DetectorResult frame_with_object(const cv::Rect& rect, int object_id, double median_disparity_px,
+                                 FrameRegions& regions) {
   DetectorResult r;
   r.has_previous = true;
   r.mask.instances = cv::Mat::zeros(kImage, CV_8UC1);
@@ -80,8 +81,8 @@ TEST(ObjectTracker, SmallGroupsContinueTheirObject) {
   ObjectTracker tracker(ObjectTrackerOptions{}, true);
   FrameRegions regions;
   // Tracks 0-2 and 5-7 lie on object 7, tracks 3-4 on nothing.
-  const std::vector<cv::Point2f> tracks = {{210, 120}, {220, 150}, {230, 180}, {400, 300}, {410, 310},
-                                           {212, 130}, {222, 160}, {232, 170}};
+  const std::vector<cv::Point2f> tracks = {{210, 120}, {220, 150}, {230, 180}, {400, 300},
+                                           {410, 310}, {212, 130}, {222, 160}, {232, 170}};
   keep_object(tracker, cv::Rect(200, 100, 40, 100), 1, tracks, regions);
   DynamicPoints dynamic;
   for (std::size_t i = 0; i < tracks.size(); ++i) dynamic.add(track(tracks[i], {3, 0}, 20, true), static_cast<int>(i));
@@ -180,7 +181,8 @@ TEST(ObjectTracker, AnOutlineThatSuddenlyGrewIsCutToItsLastPixels) {
   EXPECT_EQ(cv::countNonZero(seg.outline(object_now)), object_now.area());
   // Grown by 0.08 of its size + 2 px: (5, 10) px.
   const cv::Rect allowed(object_now.x - 5, object_now.y - 10, object_now.width + 10, object_now.height + 20);
-  EXPECT_EQ(seg.outline_stats.object_pixels, cv::countNonZero(seg.outline(allowed & cv::Rect(cv::Point(), seg.roi.size()))));
+  EXPECT_EQ(seg.outline_stats.object_pixels,
+            cv::countNonZero(seg.outline(allowed & cv::Rect(cv::Point(), seg.roi.size()))));
   // A coasted outline is not cut.
   RoiSegmentation coasted;
   coasted.roi = seg.roi;

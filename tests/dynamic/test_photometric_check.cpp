@@ -59,7 +59,8 @@ TEST(PhotometricCheck, StaticSurfaceUnderKnownEgoMotionMovesWithTheBackground) {
     EXPECT_TRUE(motion[static_cast<std::size_t>(k)].moves_with_background) << k;
   }
   // With the wrong ego-motion (identity) the static surface does not match either.
-  check_superpixel_motion(cur, prev, s.camera, s.bf, SE3d::Identity(), s.labels, cv::Point(0, 0), s.planes, cfg, motion);
+  check_superpixel_motion(cur, prev, s.camera, s.bf, SE3d::Identity(), s.labels, cv::Point(0, 0), s.planes, cfg,
+                          motion);
   EXPECT_FALSE(motion[11].moves_with_background);
 }
 
@@ -78,9 +79,9 @@ TEST(PhotometricCheck, ExposureChangeAndWeakTextureAndMissingPlanes) {
                           PhotometricCheckConfig{}, motion);
   EXPECT_TRUE(motion[12].moves_with_background);  // the offset is removed
   EXPECT_LT(motion[12].apparent_motion_px, 0.2);
-  EXPECT_EQ(motion[5].samples, 0);                // no plane: not measured
+  EXPECT_EQ(motion[5].samples, 0);  // no plane: not measured
   EXPECT_LT(motion[5].apparent_motion_px, 0);
-  EXPECT_LT(motion[57].apparent_motion_px, 0);    // undecided without texture
+  EXPECT_LT(motion[57].apparent_motion_px, 0);  // undecided without texture
   EXPECT_FALSE(motion[57].moves_with_background);
 }
 

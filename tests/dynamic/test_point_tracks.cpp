@@ -21,7 +21,8 @@ struct TrackedPair {
   std::size_t started = 0;  // tracks started on frame 0
 };
 
-void track_pair(PointTracks& tracks, const CorridorScene& scene, const Eigen::Vector3d& box_motion_m, TrackedPair& out) {
+void track_pair(PointTracks& tracks, const CorridorScene& scene, const Eigen::Vector3d& box_motion_m,
+                TrackedPair& out) {
   out.f0 = scene.render_frame(SE3d::Identity(), Eigen::Vector3d::Zero(), true, 0);
   DetectorResult first;
   tracks.build_pyramid(out.f0.left, first.timings);
@@ -111,8 +112,10 @@ TEST(PointTracks, TestsAndAppendsAPointAddedBesideTheTracks) {
   EXPECT_TRUE(moved.dynamic_depth);
   EXPECT_TRUE(moved.dynamic);
   // The multi-frame verdict comes from the caller.
-  EXPECT_TRUE(tracks.test_new_point(r, still->prev_px, still->cur_px, still->prev_disparity_px,
-                                    still->cur_disparity_px, 2.5, true).dynamic);
+  EXPECT_TRUE(tracks
+                  .test_new_point(r, still->prev_px, still->cur_px, still->prev_disparity_px, still->cur_disparity_px,
+                                  2.5, true)
+                  .dynamic);
   const std::size_t rows = r.points.size(), dynamic = pair.dynamic.size();
   tracks.append_new_point(moved, r, pair.dynamic);
   EXPECT_EQ(r.points.size(), rows + 1);

@@ -7,8 +7,8 @@
 
 #include "agvslam/core/error.h"
 #include "agvslam/dynamic/quadtree_fast.h"
-#include "synthetic_scene.h"
 #include "common/test_data.h"
+#include "synthetic_scene.h"
 
 namespace agvslam::dynamic {
 namespace {
@@ -19,8 +19,8 @@ TEST(QuadtreeDistribution, OneStrongestCornerPerQuadrant) {
   const cv::Point2f centres[4] = {{10, 10}, {50, 12}, {12, 50}, {48, 52}};
   for (int q = 0; q < 4; ++q) {
     for (int i = 0; i < 5; ++i) {
-      c.push_back({centres[q] + cv::Point2f(static_cast<float>(i), static_cast<float>(i % 2)),
-                   static_cast<float>(10 * q + i)});
+      c.push_back(
+          {centres[q] + cv::Point2f(static_cast<float>(i), static_cast<float>(i % 2)), static_cast<float>(10 * q + i)});
     }
   }
   std::vector<cv::Rect2f> nodes;
@@ -28,7 +28,8 @@ TEST(QuadtreeDistribution, OneStrongestCornerPerQuadrant) {
   ASSERT_EQ(out.size(), 4u);
   ASSERT_EQ(nodes.size(), 4u);
   // Sorted by response: the strongest of each cluster is response 10 q + 4.
-  for (int k = 0; k < 4; ++k) EXPECT_EQ(out[static_cast<std::size_t>(k)].response, static_cast<float>(10 * (3 - k) + 4));
+  for (int k = 0; k < 4; ++k)
+    EXPECT_EQ(out[static_cast<std::size_t>(k)].response, static_cast<float>(10 * (3 - k) + 4));
   for (std::size_t k = 0; k < out.size(); ++k) EXPECT_TRUE(nodes[k].contains(out[k].pt));
 }
 
@@ -71,8 +72,8 @@ TEST(QuadtreeDistribution, FewerCandidatesThanNReturnsAll) {
 }
 
 cv::Mat textured_image(cv::Size size, double contrast, int seed) {
-  return testing::make_texture(std::max(size.width, size.height), 128, contrast, static_cast<uint64_t>(seed))(
-             cv::Rect(cv::Point(0, 0), size))
+  return testing::make_texture(std::max(size.width, size.height), 128, contrast,
+                               static_cast<uint64_t>(seed))(cv::Rect(cv::Point(0, 0), size))
       .clone();
 }
 
@@ -99,7 +100,8 @@ TEST(QuadtreeFast, UniformOnATexturedImageAndExactlyN) {
   for (int y = b; y + 90 <= 480 - b; y += 90) {
     for (int x = b; x + 90 <= 752 - b; x += 90) {
       int n = 0;
-      for (const Corner& c : corners) n += cv::Rect(x, y, 90, 90).contains(cv::Point(static_cast<int>(c.pt.x), static_cast<int>(c.pt.y)));
+      for (const Corner& c : corners)
+        n += cv::Rect(x, y, 90, 90).contains(cv::Point(static_cast<int>(c.pt.x), static_cast<int>(c.pt.y)));
       EXPECT_GE(n, 1) << "empty cell at " << x << "," << y;
     }
   }
@@ -123,7 +125,8 @@ TEST(QuadtreeFast, NoCornersOnFlatPartsAndNoEmptyTexturedCell) {
   for (int y = 16; y + 90 <= 464; y += 90) {
     for (int x = 16; x + 90 <= 376; x += 90) {
       int n = 0;
-      for (const Corner& c : corners) n += cv::Rect(x, y, 90, 90).contains(cv::Point(static_cast<int>(c.pt.x), static_cast<int>(c.pt.y)));
+      for (const Corner& c : corners)
+        n += cv::Rect(x, y, 90, 90).contains(cv::Point(static_cast<int>(c.pt.x), static_cast<int>(c.pt.y)));
       EXPECT_GE(n, 1) << "empty textured cell at " << x << "," << y;
     }
   }
@@ -187,7 +190,8 @@ TEST(QuadtreeFast, TwoPassExtractionFindsTheSinglePassCorners) {
     std::vector<cv::String> files;
     cv::glob(dir + "/*.png", files);
     ASSERT_GE(files.size(), 40u) << dir;
-    for (std::size_t i = 0; i < files.size(); i += 10) expect_same_extraction(cv::imread(files[i], cv::IMREAD_GRAYSCALE), files[i]);
+    for (std::size_t i = 0; i < files.size(); i += 10)
+      expect_same_extraction(cv::imread(files[i], cv::IMREAD_GRAYSCALE), files[i]);
   }
 }
 

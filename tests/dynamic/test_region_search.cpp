@@ -90,8 +90,8 @@ TEST(RegionSearch, StartSuperpixelMustAgreeWithThePointDisparity) {
   // A disparity that matches nothing nearby: no start.
   EXPECT_EQ(choose_start_superpixel(g.labels, g.origin, g.planes, cv::Point2f(50.f + 45, 40.f + 33), 14.f, cfg), -1);
   EXPECT_EQ(choose_start_superpixel(g.labels, g.origin, g.planes, cv::Point2f(50.f + 45, 40.f + 33), 0.f, cfg), -1);
-  const DynamicRegion none = find_dynamic_region(g.labels, g.origin, g.graph, g.planes, {cv::Point2f(95, 73)},
-                                                 std::vector<float>{14.f}, cfg);
+  const DynamicRegion none =
+      find_dynamic_region(g.labels, g.origin, g.graph, g.planes, {cv::Point2f(95, 73)}, std::vector<float>{14.f}, cfg);
   EXPECT_EQ(none.started_points, 0);
   EXPECT_TRUE(none.rectangle.empty());
 }
@@ -136,7 +136,8 @@ TEST(RegionSearch, GroundVetoKeepsTheFloorUnderTheObjectOut) {
   const std::vector<float> d = {20.f, 20.f, 20.f};
   RegionSearchConfig no_veto;
   no_veto.ground_veto = false;
-  const DynamicRegion leaky = find_dynamic_region(g.labels, g.origin, g.graph, g.planes, pts, d, no_veto, {}, {}, &ground);
+  const DynamicRegion leaky =
+      find_dynamic_region(g.labels, g.origin, g.graph, g.planes, pts, d, no_veto, {}, {}, &ground);
   EXPECT_GT(leaky.rectangle.br().y, 40 + 60);  // the floor row in the band joins
   RegionSearchConfig veto;
   const DynamicRegion tight = find_dynamic_region(g.labels, g.origin, g.graph, g.planes, pts, d, veto, {}, {}, &ground);
@@ -214,7 +215,8 @@ TEST(RegionSearch, StaticVetoKeepsStaticSuperpixelsOut) {
       static_d.push_back(20.f);
     }
   }
-  const DynamicRegion split = find_dynamic_region(g.labels, g.origin, g.graph, g.planes, pts, d, cfg, statics, static_d);
+  const DynamicRegion split =
+      find_dynamic_region(g.labels, g.origin, g.graph, g.planes, pts, d, cfg, statics, static_d);
   EXPECT_EQ(split.vetoed_superpixels.size(), 8u);
   EXPECT_EQ(split.rectangle, cv::Rect(50 + 30, 40 + 20, 40, 40));
   for (int k : split.superpixels) EXPECT_TRUE(Grid::in_object(k));

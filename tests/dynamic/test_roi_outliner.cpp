@@ -51,8 +51,8 @@ TEST(RoiOutliner, AGroupOnABoxBecomesARegionOfTheMask) {
   const DynamicDetectorConfig c;
   const CorridorScene scene;
   BoxFrame b = box_frame(true);
-  const std::vector<DynamicGroup> groups = group_dynamic_points(b.dynamic.px, b.dynamic.disparity_px, b.frame.left.size(),
-                                                                c.grouping, scene.baseline_m);
+  const std::vector<DynamicGroup> groups =
+      group_dynamic_points(b.dynamic.px, b.dynamic.disparity_px, b.frame.left.size(), c.grouping, scene.baseline_m);
   ASSERT_EQ(groups.size(), 1u);
   RoiOutliner outliner(c.roi, roi_outliner_context(c), scene.calibration(), stereo::SgbmConfig{});
   ObjectTracker objects(c.objects, true);
@@ -83,8 +83,8 @@ TEST(RoiOutliner, AnOutlineOfStaticTracksIsNotKept) {
   const DynamicDetectorConfig c;
   const CorridorScene scene;
   BoxFrame b = box_frame(true);
-  const std::vector<DynamicGroup> groups = group_dynamic_points(b.dynamic.px, b.dynamic.disparity_px, b.frame.left.size(),
-                                                                c.grouping, scene.baseline_m);
+  const std::vector<DynamicGroup> groups =
+      group_dynamic_points(b.dynamic.px, b.dynamic.disparity_px, b.frame.left.size(), c.grouping, scene.baseline_m);
   ASSERT_EQ(groups.size(), 1u);
   int made_static = 0;
   for (TrackedPoint& p : b.result.points) {

@@ -82,7 +82,8 @@ TEST(Slic, IncrementalAgreesWithPlainAndDoesLessWork) {
   // matching label (majority overlap) of the plain result for each incremental label.
   std::vector<std::map<int, int>> overlap(static_cast<std::size_t>(ni));
   for (int y = 0; y < crop.rows; ++y) {
-    for (int x = 0; x < crop.cols; ++x) ++overlap[static_cast<std::size_t>(incremental.at<int32_t>(y, x))][plain.at<int32_t>(y, x)];
+    for (int x = 0; x < crop.cols; ++x)
+      ++overlap[static_cast<std::size_t>(incremental.at<int32_t>(y, x))][plain.at<int32_t>(y, x)];
   }
   long agree = 0;
   for (const auto& m : overlap) {
@@ -116,10 +117,12 @@ TEST(Slic, SuperpixelsFollowAStrongEdge) {
     // No superpixel straddles the edge.
     std::vector<int> left(static_cast<std::size_t>(n), 0), right(static_cast<std::size_t>(n), 0);
     for (int y = 0; y < labels.rows; ++y) {
-      for (int x = 0; x < labels.cols; ++x) (x < 53 ? left : right)[static_cast<std::size_t>(labels.at<int32_t>(y, x))]++;
+      for (int x = 0; x < labels.cols; ++x)
+        (x < 53 ? left : right)[static_cast<std::size_t>(labels.at<int32_t>(y, x))]++;
     }
     int straddling = 0;
-    for (int k = 0; k < n; ++k) straddling += std::min(left[static_cast<std::size_t>(k)], right[static_cast<std::size_t>(k)]);
+    for (int k = 0; k < n; ++k)
+      straddling += std::min(left[static_cast<std::size_t>(k)], right[static_cast<std::size_t>(k)]);
     EXPECT_EQ(straddling, 0) << (incremental ? "incremental" : "plain");
   }
 }

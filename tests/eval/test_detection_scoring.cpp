@@ -24,13 +24,13 @@ TEST(DetectionScoring, ExactDetectionIsATruePositiveWithIouOne) {
 
 TEST(DetectionScoring, IouBelowHalfIsAFalsePositiveAndAFalseNegative) {
   cv::Mat gt = blank(), det = blank();
-  gt(cv::Rect(0, 0, 100, 100)).setTo(255);    // 10000 px
-  det(cv::Rect(0, 0, 100, 45)).setTo(255);    // 4500 px inside: IoU 0.45
+  gt(cv::Rect(0, 0, 100, 100)).setTo(255);  // 10000 px
+  det(cv::Rect(0, 0, 100, 45)).setTo(255);  // 4500 px inside: IoU 0.45
   auto s = score_detections(det, gt, {{1, cv::Rect(0, 0, 100, 100)}});
   EXPECT_EQ(s.true_positives, 0);
   EXPECT_EQ(s.false_positives, 1);
   EXPECT_EQ(s.false_negatives, 1);
-  det(cv::Rect(0, 0, 100, 55)).setTo(255);    // IoU 0.55
+  det(cv::Rect(0, 0, 100, 55)).setTo(255);  // IoU 0.55
   s = score_detections(det, gt, {{1, cv::Rect(0, 0, 100, 100)}});
   EXPECT_EQ(s.true_positives, 1);
   EXPECT_NEAR(s.matched_iou[0], 0.55, 1e-12);
@@ -122,7 +122,7 @@ TEST(DetectionScoring, WithoutObjectListTheMaskComponentsAreTheObjects) {
 TEST(DetectionScoring, InstancesInPiecesCountAsOneDetection) {
   cv::Mat gt = blank(), instances = blank();
   gt(cv::Rect(10, 10, 40, 100)).setTo(255);
-  instances(cv::Rect(10, 10, 40, 48)).setTo(1);   // one region, outline in two pieces
+  instances(cv::Rect(10, 10, 40, 48)).setTo(1);  // one region, outline in two pieces
   instances(cv::Rect(10, 62, 40, 48)).setTo(1);
   instances(cv::Rect(200, 10, 20, 20)).setTo(2);  // a second region on static background
   const auto s = score_detection_instances(instances, gt, {{3, cv::Rect(10, 10, 40, 100)}});

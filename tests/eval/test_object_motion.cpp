@@ -33,8 +33,8 @@ TEST(ObjectMotion, AStaticObjectHasNoOffsetWhateverTheCameraDoes) {
   Pair p;
   draw(p.inst_then, p.disp_then, 3, cv::Rect(300, 150, 40, 120), 20.0f);
   draw(p.inst_now, p.disp_now, 3, cv::Rect(290, 150, 40, 120), 20.0f);
-  const ObjectImageMotion m =
-      ground_truth_image_motion(p.inst_then, p.disp_then, p.inst_now, p.disp_now, 3, camera(), kBf, camera_moves_right());
+  const ObjectImageMotion m = ground_truth_image_motion(p.inst_then, p.disp_then, p.inst_now, p.disp_now, 3, camera(),
+                                                        kBf, camera_moves_right());
   ASSERT_TRUE(m.valid);
   EXPECT_NEAR(m.offset_px, 0.0, 1e-6);
   EXPECT_DOUBLE_EQ(m.visible_ratio, 1.0);
@@ -48,8 +48,8 @@ TEST(ObjectMotion, AMovingObjectIsOffByItsOwnMotion) {
   draw(p.inst_now, p.disp_now, 3, cv::Rect(297, 153, 40, 120), 20.0f);
   // Another object does not count.
   draw(p.inst_now, p.disp_now, 5, cv::Rect(500, 150, 40, 120), 10.0f);
-  const ObjectImageMotion m =
-      ground_truth_image_motion(p.inst_then, p.disp_then, p.inst_now, p.disp_now, 3, camera(), kBf, camera_moves_right());
+  const ObjectImageMotion m = ground_truth_image_motion(p.inst_then, p.disp_then, p.inst_now, p.disp_now, 3, camera(),
+                                                        kBf, camera_moves_right());
   ASSERT_TRUE(m.valid);
   EXPECT_NEAR(m.offset_px, std::hypot(7.0, 3.0), 1e-6);
 }
@@ -58,8 +58,8 @@ TEST(ObjectMotion, AnObjectWhoseVisiblePartChangedIsNotMeasured) {
   Pair p;
   draw(p.inst_then, p.disp_then, 3, cv::Rect(300, 150, 40, 120), 20.0f);
   draw(p.inst_now, p.disp_now, 3, cv::Rect(290, 150, 20, 120), 20.0f);  // half of it now hidden: centroid shifts 10 px
-  const ObjectImageMotion m =
-      ground_truth_image_motion(p.inst_then, p.disp_then, p.inst_now, p.disp_now, 3, camera(), kBf, camera_moves_right());
+  const ObjectImageMotion m = ground_truth_image_motion(p.inst_then, p.disp_then, p.inst_now, p.disp_now, 3, camera(),
+                                                        kBf, camera_moves_right());
   EXPECT_FALSE(m.valid);
   EXPECT_DOUBLE_EQ(m.visible_ratio, 0.5);
   EXPECT_NEAR(m.offset_px, 10.0, 1e-6);
@@ -70,13 +70,16 @@ TEST(ObjectMotion, TooFewPixelsOrAMissingObjectIsNotMeasured) {
   draw(p.inst_then, p.disp_then, 3, cv::Rect(300, 150, 10, 10), 20.0f);  // 100 px < 200
   draw(p.inst_now, p.disp_now, 3, cv::Rect(290, 150, 10, 10), 20.0f);
   EXPECT_FALSE(ground_truth_image_motion(p.inst_then, p.disp_then, p.inst_now, p.disp_now, 3, camera(), kBf,
-                                         camera_moves_right()).valid);
+                                         camera_moves_right())
+                   .valid);
   EXPECT_FALSE(ground_truth_image_motion(p.inst_then, p.disp_then, p.inst_now, p.disp_now, 4, camera(), kBf,
-                                         camera_moves_right()).valid);
+                                         camera_moves_right())
+                   .valid);
   ObjectMotionConfig fewer;
   fewer.min_pixels = 50;
   EXPECT_TRUE(ground_truth_image_motion(p.inst_then, p.disp_then, p.inst_now, p.disp_now, 3, camera(), kBf,
-                                        camera_moves_right(), fewer).valid);
+                                        camera_moves_right(), fewer)
+                  .valid);
 }
 
 TEST(ObjectMotion, PixelsWithoutDisparityAreLeftOut) {
@@ -85,8 +88,8 @@ TEST(ObjectMotion, PixelsWithoutDisparityAreLeftOut) {
   draw(p.inst_now, p.disp_now, 3, cv::Rect(290, 150, 40, 120), 20.0f);
   p.disp_then(cv::Rect(300, 150, 40, 60)).setTo(0.0f);  // top half unmatched then: its centroid is the bottom half's
   p.disp_now(cv::Rect(290, 150, 40, 60)).setTo(0.0f);
-  const ObjectImageMotion m =
-      ground_truth_image_motion(p.inst_then, p.disp_then, p.inst_now, p.disp_now, 3, camera(), kBf, camera_moves_right());
+  const ObjectImageMotion m = ground_truth_image_motion(p.inst_then, p.disp_then, p.inst_now, p.disp_now, 3, camera(),
+                                                        kBf, camera_moves_right());
   ASSERT_TRUE(m.valid);
   EXPECT_EQ(m.pixels_then, 40 * 60);
   EXPECT_NEAR(m.offset_px, 0.0, 1e-6);

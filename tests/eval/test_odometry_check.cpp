@@ -43,7 +43,8 @@ Drive drive(int frames, Speed speed, YawRate yaw_rate) {
 }
 
 Drive s_curve() {
-  return drive(400, [](double t) { return t < 1 ? t : 1.0; }, [](double t) { return 0.4 * std::sin(0.5 * t); });
+  return drive(
+      400, [](double t) { return t < 1 ? t : 1.0; }, [](double t) { return 0.4 * std::sin(0.5 * t); });
 }
 
 TEST(OdometryCheck, AgreesWithTheOdometryItWasDrivenBy) {
@@ -81,14 +82,15 @@ TEST(OdometryCheck, FlagsTheFramesOfAJumpAndOfAPoseStuckWhileTheWheelsTurn) {
   bool covers_freeze = false;
   for (const auto& g : r.disagreements) {
     if (g.first_frame <= 205 && g.last_frame >= 215) covers_freeze = true;
-    EXPECT_GE(g.last_frame, 195u);  // nothing flagged before it
+    EXPECT_GE(g.last_frame, 195u);   // nothing flagged before it
     EXPECT_LE(g.first_frame, 225u);  // nor long after it
   }
   EXPECT_TRUE(covers_freeze);
 }
 
 TEST(OdometryCheck, AStandingVehicleWithJitterDisagreesNowhere) {
-  Drive d = drive(200, [](double) { return 0.0; }, [](double) { return 0.0; });
+  Drive d = drive(
+      200, [](double) { return 0.0; }, [](double) { return 0.0; });
   std::mt19937 rng(3);
   std::normal_distribution<double> jitter_m(0, 0.001);
   for (auto& pose : d.camera) pose.T_w_c.translation() += Eigen::Vector3d(jitter_m(rng), jitter_m(rng), jitter_m(rng));
@@ -103,7 +105,8 @@ TEST(OdometryCheck, BaseAxesReadTheSameMotion) {
   Eigen::Matrix3d R_base_cam;
   R_base_cam << 0, 0, 1, -1, 0, 0, 0, -1, 0;
   Trajectory base;
-  for (const auto& pose : d.camera) base.push_back({pose.t_ns, pose.T_w_c * make_se3(R_base_cam.transpose(), Eigen::Vector3d::Zero())});
+  for (const auto& pose : d.camera)
+    base.push_back({pose.t_ns, pose.T_w_c * make_se3(R_base_cam.transpose(), Eigen::Vector3d::Zero())});
   const OdometryCheckResult a = check_against_odometry(d.camera, BodyAxes::kCamera, planar_track(d.rates));
   const OdometryCheckResult b = check_against_odometry(base, BodyAxes::kBase, planar_track(d.rates));
   EXPECT_NEAR(a.distance_ratio, b.distance_ratio, 1e-9);
@@ -120,7 +123,8 @@ TEST(OdometryCheck, SimulatorGroundTruthAgainstItsWheelOdometryShowsTheOdometryB
   const Trajectory gt = simulator.ground_truth();
   const sim::WheelOdometryConfig odometry_config;
   const Trajectory odometry = sim::simulate_wheel_odometry(gt, odometry_config, scenario.seed);
-  const OdometryCheckResult r = check_against_odometry(gt, BodyAxes::kCamera, planar_track(odometry, BodyAxes::kCamera));
+  const OdometryCheckResult r =
+      check_against_odometry(gt, BodyAxes::kCamera, planar_track(odometry, BodyAxes::kCamera));
   RecordProperty("gt_distance_ratio", std::to_string(r.distance_ratio));
   RecordProperty("gt_speed_rmse_mps", std::to_string(r.speed_rmse_mps));
   RecordProperty("gt_heading_difference_deg", std::to_string(r.heading_difference_deg));
@@ -131,7 +135,8 @@ TEST(OdometryCheck, SimulatorGroundTruthAgainstItsWheelOdometryShowsTheOdometryB
   // A SLAM result 5 % too large is reported.
   Trajectory scaled = gt;
   for (auto& pose : scaled) pose.T_w_c.translation() *= 1.05;
-  const OdometryCheckResult s = check_against_odometry(scaled, BodyAxes::kCamera, planar_track(odometry, BodyAxes::kCamera));
+  const OdometryCheckResult s =
+      check_against_odometry(scaled, BodyAxes::kCamera, planar_track(odometry, BodyAxes::kCamera));
   RecordProperty("scaled_distance_ratio", std::to_string(s.distance_ratio));
   EXPECT_NEAR(s.distance_ratio, 1.05 / 1.01, 0.005);
   EXPECT_FALSE(s.distance_within_tolerance);

@@ -24,10 +24,14 @@ TEST(Plot, DrawsBothTrajectoriesInTheFloorPlane) {
   for (int i = 0; i < 320; ++i) {
     const double s = i / 10.0;
     Eigen::Vector3d p;
-    if (s < 10) p = {s, 0, 0};
-    else if (s < 16) p = {10, 0, s - 10};
-    else if (s < 26) p = {26 - s, 0, 6};
-    else p = {0, 0, 32 - s};
+    if (s < 10)
+      p = {s, 0, 0};
+    else if (s < 16)
+      p = {10, 0, s - 10};
+    else if (s < 26)
+      p = {26 - s, 0, 6};
+    else
+      p = {0, 0, 32 - s};
     p.y() = 0.01 * std::sin(s);
     gt.push_back(p);
     est.push_back(p + Eigen::Vector3d(0.5, 0, 0.5));

@@ -41,8 +41,9 @@ TEST(FeaturesConfig, ShippedParamsFileLoadsAndMatchesTheDefaults) {
 }
 
 TEST(FeaturesConfig, OverridesKeepTheOtherDefaults) {
-  TempYaml f("orb:\n  n_features: 2000\n  level_allocation: side\nstereo_matching:\n  method: descriptor\n"
-             "  max_depth_m: 20\n");
+  TempYaml f(
+      "orb:\n  n_features: 2000\n  level_allocation: side\nstereo_matching:\n  method: descriptor\n"
+      "  max_depth_m: 20\n");
   const FeaturesConfig c = load_features_config(f.path());
   EXPECT_EQ(c.orb.n_features, 2000);
   EXPECT_EQ(c.orb.level_allocation, LevelAllocation::kSide);
@@ -53,10 +54,10 @@ TEST(FeaturesConfig, OverridesKeepTheOtherDefaults) {
 }
 
 TEST(FeaturesConfig, ErrorsNameTheFileAndTheField) {
-  expect_error("orb:\n  n_featurs: 1000\n", "orb.n_featurs");                 // typo
-  expect_error("orbs:\n  n_features: 1000\n", "orbs");                        // unknown section
-  expect_error("orb:\n  n_features: many\n", "orb.n_features");               // wrong type
-  expect_error("orb:\n  n_features: 0\n", "orb.n_features");                  // out of range
+  expect_error("orb:\n  n_featurs: 1000\n", "orb.n_featurs");    // typo
+  expect_error("orbs:\n  n_features: 1000\n", "orbs");           // unknown section
+  expect_error("orb:\n  n_features: many\n", "orb.n_features");  // wrong type
+  expect_error("orb:\n  n_features: 0\n", "orb.n_features");     // out of range
   expect_error("orb:\n  scale_factor: 1.0\n", "orb.scale_factor");
   expect_error("orb:\n  n_levels: 0\n", "orb.n_levels");
   expect_error("orb:\n  min_fast_threshold: 30\n", "orb.min_fast_threshold");  // above ini_fast_threshold

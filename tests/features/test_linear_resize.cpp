@@ -44,13 +44,13 @@ TEST(LinearResize, EqualsOpenCvOnThePyramidSizes) {
 }
 
 TEST(LinearResize, EqualsOpenCvForOtherFactorsAndFallsBackOutsideItsScheme) {
-  expect_equal_to_opencv({753, 481}, {500, 321}, true, 1);  // 1.5
-  expect_equal_to_opencv({101, 37}, {99, 36}, true, 2);     // barely smaller
-  expect_equal_to_opencv({64, 20}, {33, 11}, true, 3);      // almost 2x
-  expect_equal_to_opencv({17, 9}, {13, 7}, true, 4);        // narrower than one block of 8 outputs... and wider
-  expect_equal_to_opencv({752, 480}, {376, 240}, false, 5); // exact halving: OpenCV averages areas
-  expect_equal_to_opencv({100, 50}, {40, 20}, false, 6);    // 2.5x
-  expect_equal_to_opencv({100, 50}, {120, 60}, false, 7);   // upscaling
+  expect_equal_to_opencv({753, 481}, {500, 321}, true, 1);   // 1.5
+  expect_equal_to_opencv({101, 37}, {99, 36}, true, 2);      // barely smaller
+  expect_equal_to_opencv({64, 20}, {33, 11}, true, 3);       // almost 2x
+  expect_equal_to_opencv({17, 9}, {13, 7}, true, 4);         // narrower than one block of 8 outputs... and wider
+  expect_equal_to_opencv({752, 480}, {376, 240}, false, 5);  // exact halving: OpenCV averages areas
+  expect_equal_to_opencv({100, 50}, {40, 20}, false, 6);     // 2.5x
+  expect_equal_to_opencv({100, 50}, {120, 60}, false, 7);    // upscaling
 }
 
 }  // namespace

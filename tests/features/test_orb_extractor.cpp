@@ -199,7 +199,8 @@ TEST(OrbExtractor, DescriptorsEqualOpenCvForAnyAngle) {
   for (std::size_t i = 0; i < set.keypoints.size() && j < cv_keypoints.size(); ++i) {
     if (set.keypoints[i].pt != cv_keypoints[j].pt) continue;
     ++compared;
-    differing += descriptor_distance(ours.ptr<uint8_t>(static_cast<int>(i)), theirs.ptr<uint8_t>(static_cast<int>(j))) != 0;
+    differing +=
+        descriptor_distance(ours.ptr<uint8_t>(static_cast<int>(i)), theirs.ptr<uint8_t>(static_cast<int>(j))) != 0;
     ++j;
   }
   EXPECT_GT(compared, 1000);

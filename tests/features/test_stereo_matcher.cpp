@@ -31,10 +31,11 @@ struct Score {
   double rate() const { return with_truth > 0 ? static_cast<double>(matched_with_truth) / with_truth : 0; }
   double frac(int n) const { return matched_with_truth > 0 ? static_cast<double>(n) / matched_with_truth : 0; }
   void print(const char* what) const {
-    std::printf("%s: %d keypoints, %d with ground truth, %d matched (%.1f %% of those with truth); within 1 px "
-                "%.1f %%, within 1 px (+-1) %.1f %%, within 2 px %.1f %%, KITTI D1 bad %.1f %%\n",
-                what, keypoints, with_truth, matched, 100 * rate(), 100 * frac(within_1), 100 * frac(within_1_nbhd),
-                100 * frac(within_2), 100 * frac(kitti_bad));
+    std::printf(
+        "%s: %d keypoints, %d with ground truth, %d matched (%.1f %% of those with truth); within 1 px "
+        "%.1f %%, within 1 px (+-1) %.1f %%, within 2 px %.1f %%, KITTI D1 bad %.1f %%\n",
+        what, keypoints, with_truth, matched, 100 * rate(), 100 * frac(within_1), 100 * frac(within_1_nbhd),
+        100 * frac(within_2), 100 * frac(kitti_bad));
   }
 };
 
@@ -81,7 +82,8 @@ Score score(const cv::Mat& left, const cv::Mat& right, const cv::Mat& truth_px, 
     s.within_1 += err <= 1.0f;
     s.within_2 += err <= 2.0f;
     s.kitti_bad += err > 3.0f && err > 0.05f * t;
-    const int r = std::max(1, static_cast<int>(std::ceil(0.5f * ex.scale_factors()[static_cast<std::size_t>(k.octave)])));
+    const int r =
+        std::max(1, static_cast<int>(std::ceil(0.5f * ex.scale_factors()[static_cast<std::size_t>(k.octave)])));
     float best = err;
     for (int dy = -r; dy <= r; ++dy) {
       for (int dx = -r; dx <= r; ++dx) {
@@ -135,8 +137,8 @@ TEST(StereoMatcher, RecoversAFractionalShiftOnEveryLevel) {
       const double tol = 0.25 * ex.scale_factors()[static_cast<std::size_t>(set.keypoints[i].octave)];
       good += std::abs(d - d_true) <= tol;
     }
-    std::printf("%s: %d of %d matched, %d within 0.25 level px of %.1f\n", to_string(method), matched, eligible,
-                good, d_true);
+    std::printf("%s: %d of %d matched, %d within 0.25 level px of %.1f\n", to_string(method), matched, eligible, good,
+                d_true);
     const bool bm = method == StereoMethod::kBlockMatching;
     EXPECT_GE(matched, (bm ? 0.95 : 0.4) * eligible) << to_string(method);
     EXPECT_GE(good, (bm ? 0.97 : 0.8) * matched) << to_string(method);
@@ -233,7 +235,7 @@ TEST(StereoMatcher, EurocAgreesWithWholeFrameSgbm) {
   s.print("EuRoC V1_01 #40 against SGBM");
   EXPECT_GE(s.matched, 400);
   EXPECT_GE(s.frac(s.within_1_nbhd), 0.80);  // measured 0.85 (0.77 without the curvature test)
-  EXPECT_GE(s.frac(s.within_2), 0.90);  // measured 0.93 (0.88 without the curvature test)
+  EXPECT_GE(s.frac(s.within_2), 0.90);       // measured 0.93 (0.88 without the curvature test)
 }
 
 TEST(StereoMatcher, BlockMatchingMatchesMoreThanTheDescriptorMethodAtLeastAsAccurately) {

@@ -15,16 +15,40 @@ using testing::TempDir;
 // EuRoC MAV VI-sensor calibration (the values of mav0/cam0|cam1/sensor.yaml in every EuRoC sequence).
 constexpr double kCam0Intrinsics[4] = {458.654, 457.296, 367.215, 248.375};
 constexpr double kCam0Distortion[4] = {-0.28340811, 0.07395907, 0.00019359, 1.76187114e-05};
-constexpr double kCam0T_BS[16] = {0.0148655429818,  -0.999880929698, 0.00414029679422, -0.0216401454975,
-                                  0.999557249008,   0.0149672133247, 0.025715529948,   -0.064676986768,
-                                  -0.0257744366974, 0.00375618835797, 0.999660727178,  0.00981073058949,
-                                  0.0,              0.0,             0.0,              1.0};
+constexpr double kCam0T_BS[16] = {0.0148655429818,
+                                  -0.999880929698,
+                                  0.00414029679422,
+                                  -0.0216401454975,
+                                  0.999557249008,
+                                  0.0149672133247,
+                                  0.025715529948,
+                                  -0.064676986768,
+                                  -0.0257744366974,
+                                  0.00375618835797,
+                                  0.999660727178,
+                                  0.00981073058949,
+                                  0.0,
+                                  0.0,
+                                  0.0,
+                                  1.0};
 constexpr double kCam1Intrinsics[4] = {457.587, 456.134, 379.999, 255.238};
 constexpr double kCam1Distortion[4] = {-0.28368365, 0.07451284, -0.00010473, -3.55590700e-05};
-constexpr double kCam1T_BS[16] = {0.0125552670891,  -0.999755099723, 0.0182237714554, -0.0198435579556,
-                                  0.999598781151,   0.0130119051815, 0.0251588363115, 0.0453689425024,
-                                  -0.0253898008918, 0.0179005838253, 0.999517347078,  0.00786212447038,
-                                  0.0,              0.0,             0.0,             1.0};
+constexpr double kCam1T_BS[16] = {0.0125552670891,
+                                  -0.999755099723,
+                                  0.0182237714554,
+                                  -0.0198435579556,
+                                  0.999598781151,
+                                  0.0130119051815,
+                                  0.0251588363115,
+                                  0.0453689425024,
+                                  -0.0253898008918,
+                                  0.0179005838253,
+                                  0.999517347078,
+                                  0.00786212447038,
+                                  0.0,
+                                  0.0,
+                                  0.0,
+                                  1.0};
 
 std::string list(const double* values, int n) {
   std::string out = "[";
@@ -44,13 +68,18 @@ std::string euroc_sensor_yaml(const double* intrinsics, const double* distortion
          "T_BS:\n"
          "  cols: 4\n"
          "  rows: 4\n"
-         "  data: " + list(T_BS, 16) + "\n"
+         "  data: " +
+         list(T_BS, 16) +
+         "\n"
          "rate_hz: 20\n"
          "resolution: [752, 480]\n"
          "camera_model: pinhole\n"
-         "intrinsics: " + list(intrinsics, 4) + " #fu, fv, cu, cv\n"
+         "intrinsics: " +
+         list(intrinsics, 4) +
+         " #fu, fv, cu, cv\n"
          "distortion_model: radial-tangential\n"
-         "distortion_coefficients: " + list(distortion, 4) + "\n";
+         "distortion_coefficients: " +
+         list(distortion, 4) + "\n";
 }
 
 struct EurocFiles {
@@ -66,11 +95,16 @@ std::string kalibr_camera(const std::string& name, const double* intrinsics, con
                           const std::string& extra) {
   return name + ":\n" + extra +
          "  camera_model: pinhole\n"
-         "  intrinsics: " + list(intrinsics, 4) + "\n"
+         "  intrinsics: " +
+         list(intrinsics, 4) +
+         "\n"
          "  distortion_model: radtan\n"
-         "  distortion_coeffs: " + list(distortion, 4) + "\n"
+         "  distortion_coeffs: " +
+         list(distortion, 4) +
+         "\n"
          "  resolution: [752, 480]\n"
-         "  rostopic: /" + name + "/image_raw\n";
+         "  rostopic: /" +
+         name + "/image_raw\n";
 }
 
 std::string matrix_rows(const SE3d& T) {
@@ -134,7 +168,8 @@ double bilinear(const cv::Mat& map, double x, double y) {
   const int x0 = static_cast<int>(std::floor(x)), y0 = static_cast<int>(std::floor(y));
   const double ax = x - x0, ay = y - y0;
   auto at = [&](int r, int c) { return static_cast<double>(map.at<float>(r, c)); };
-  return (1 - ay) * ((1 - ax) * at(y0, x0) + ax * at(y0, x0 + 1)) + ay * ((1 - ax) * at(y0 + 1, x0) + ax * at(y0 + 1, x0 + 1));
+  return (1 - ay) * ((1 - ax) * at(y0, x0) + ax * at(y0, x0 + 1)) +
+         ay * ((1 - ax) * at(y0 + 1, x0) + ax * at(y0 + 1, x0 + 1));
 }
 
 Eigen::Vector2d project_raw(const RawCamera& cam, const Eigen::Vector3d& p) {
@@ -208,9 +243,9 @@ void expect_kitti06(const StereoCalibration& c) {
 TEST(CalibrationIo, KittiCalibLabelledAndUnlabelled) {
   TempDir dir;
   const cv::Size size(1226, 370);
-  const std::string labelled = dir.write("labelled.txt", std::string("P0: ") + kKitti06P0 + "\nP1: " + kKitti06P1 +
-                                                             "\nP2: " + kKitti06P0 + "\nP3: " + kKitti06P1 +
-                                                             "\nTr: 1 0 0 0 0 1 0 0 0 0 1 0\n");
+  const std::string labelled =
+      dir.write("labelled.txt", std::string("P0: ") + kKitti06P0 + "\nP1: " + kKitti06P1 + "\nP2: " + kKitti06P0 +
+                                    "\nP3: " + kKitti06P1 + "\nTr: 1 0 0 0 0 1 0 0 0 0 1 0\n");
   expect_kitti06(load_kitti_calib(labelled, size));
   const std::string bare = dir.write("bare.txt", std::string(kKitti06P0) + "\n" + kKitti06P1);  // no final newline
   expect_kitti06(load_kitti_calib(bare, size));
@@ -257,14 +292,16 @@ TEST(CalibrationIo, KittiCalibErrorsNameFileLineAndExpectation) {
   const std::string short_bare = dir.write("b.txt", std::string(kKitti06P0) + "\n" + p1_short + "\n");
   expect_input_error([&] { load_kitti_calib(short_bare, size); },
                      {short_bare, "line 2", "expected 12 numbers", "P1", "found 11"});
-  const std::string word = dir.write("c.txt", std::string("P0: ") + kKitti06P0 + "\nP1: 7.07e+02 x 0 0 0 0 0 0 0 0 1 0\n");
+  const std::string word =
+      dir.write("c.txt", std::string("P0: ") + kKitti06P0 + "\nP1: 7.07e+02 x 0 0 0 0 0 0 0 0 1 0\n");
   expect_input_error([&] { load_kitti_calib(word, size); }, {word, "line 2", "found 'x'"});
-  const std::string with_nan = dir.write("d.txt", "P0: nan 0 601 0 0 707 183 0 0 0 1 0\nP1: " + std::string(kKitti06P1));
+  const std::string with_nan =
+      dir.write("d.txt", "P0: nan 0 601 0 0 707 183 0 0 0 1 0\nP1: " + std::string(kKitti06P1));
   expect_input_error([&] { load_kitti_calib(with_nan, size); }, {with_nan, "line 1", "NaN in P0"});
   const std::string only_p0 = dir.write("e.txt", std::string("P0: ") + kKitti06P0 + "\n");
   expect_input_error([&] { load_kitti_calib(only_p0, size); }, {only_p0, "P1", "found none"});
-  const std::string left_of_p0 = dir.write("f.txt", std::string(kKitti06P0) + "\n" +
-                                                        "707.0912 0 601.8873 379.8145 0 707.0912 183.1104 0 0 0 1 0\n");
+  const std::string left_of_p0 = dir.write(
+      "f.txt", std::string(kKitti06P0) + "\n" + "707.0912 0 601.8873 379.8145 0 707.0912 183.1104 0 0 0 1 0\n");
   expect_input_error([&] { load_kitti_calib(left_of_p0, size); }, {left_of_p0, "positive baseline"});
   expect_input_error([&] { load_kitti_calib(dir.file("none.txt"), size); }, {dir.file("none.txt"), "file not found"});
   const std::string bare = dir.write("g.txt", std::string(kKitti06P0) + "\n" + kKitti06P1 + "\n");
@@ -417,7 +454,8 @@ TEST(CalibrationIo, KalibrErrorsNameField) {
   equi.replace(equi.find("distortion_model: radtan"), std::string("distortion_model: radtan").size(),
                "distortion_model: equidistant");
   const std::string equi_path = dir.write("equi.yaml", equi);
-  expect_input_error([&] { load_kalibr_camchain(equi_path); }, {equi_path, "field 'cam0.distortion_model'", "equidistant"});
+  expect_input_error([&] { load_kalibr_camchain(equi_path); },
+                     {equi_path, "field 'cam0.distortion_model'", "equidistant"});
 
   const SE3d swapped = make_se3(Eigen::Matrix3d::Identity(), Eigen::Vector3d(0.11, 0, 0));
   const std::string swapped_path = dir.write("swapped.yaml", kalibr_camchain(swapped));
@@ -449,7 +487,8 @@ TEST(CalibrationIo, OrbSlamErrorsNameField) {
   const std::size_t end_at = bad_p.find(']', data_at);
   bad_p.replace(data_at, end_at - data_at + 1, "data: [435, 0, 367, 0, 435, 252, 0, 0, 1]");
   const std::string p_path = dir.write("p.yaml", bad_p);
-  expect_input_error([&] { load_orbslam_yaml(p_path); }, {p_path, "field 'LEFT.P'", "expected a 3x4 matrix", "found 3x3"});
+  expect_input_error([&] { load_orbslam_yaml(p_path); },
+                     {p_path, "field 'LEFT.P'", "expected a 3x4 matrix", "found 3x3"});
 
   std::string no_right = orbslam_yaml_for(load_euroc_calibration(files.cam0, files.cam1), &rig);
   no_right.replace(no_right.find("RIGHT.R"), 7, "RIGHT.X");

@@ -3,9 +3,9 @@
 #include <algorithm>
 #include <cstdio>
 #include <filesystem>
+#include <opencv2/imgcodecs.hpp>
 #include <opencv2/imgproc.hpp>
 #include <opencv2/video/tracking.hpp>
-#include <opencv2/imgcodecs.hpp>
 #include <random>
 
 #include "agvslam/io/calibration_io.h"
@@ -203,9 +203,10 @@ TEST(Dataset, EurocGroundTruthInterpolatesToImageTimes) {
     return make_se3(R, Eigen::Vector3d(1.0 + 0.4 * s, 2.0 - 0.1 * s, 0.9 + 0.05 * s));
   };
   const int64_t gt_first = t0 + 1'000'000'000 + 1'300'000, gt_last = t0 + 4'000'000'000;
-  std::string csv = "#timestamp,p_RS_R_x [m],p_RS_R_y [m],p_RS_R_z [m],q_RS_w [],q_RS_x [],q_RS_y [],q_RS_z [],"
-                    "v_RS_R_x [m s^-1],v_RS_R_y [m s^-1],v_RS_R_z [m s^-1],b_w_RS_S_x,b_w_RS_S_y,b_w_RS_S_z,"
-                    "b_a_RS_S_x,b_a_RS_S_y,b_a_RS_S_z\n";
+  std::string csv =
+      "#timestamp,p_RS_R_x [m],p_RS_R_y [m],p_RS_R_z [m],q_RS_w [],q_RS_x [],q_RS_y [],q_RS_z [],"
+      "v_RS_R_x [m s^-1],v_RS_R_y [m s^-1],v_RS_R_z [m s^-1],b_w_RS_S_x,b_w_RS_S_y,b_w_RS_S_z,"
+      "b_a_RS_S_x,b_a_RS_S_y,b_a_RS_S_z\n";
   char buf[400];
   int64_t gt_last_sample = gt_first;
   for (int64_t t = gt_first; t <= gt_last; t += 5'000'000) {
@@ -290,7 +291,8 @@ void write_sim_sequence(const TempDir& dir, std::size_t frames) {
     instances(cv::Rect(2, 30, 8, 8)).setTo(7);  // a parked object
     cv::imwrite(dir.file(std::string("instance_0/") + name), instances);
     times_ns.push_back(1'000'000'000 + static_cast<int64_t>(i) * 33'333'333);
-    poses.push_back({times_ns.back(), make_se3(Eigen::Matrix3d::Identity(), Eigen::Vector3d(0, 0, 0.1 * static_cast<double>(i)))});
+    poses.push_back(
+        {times_ns.back(), make_se3(Eigen::Matrix3d::Identity(), Eigen::Vector3d(0, 0, 0.1 * static_cast<double>(i)))});
   }
   write_kitti_calib(dir.file("calib.txt"), small_calibration());
   write_kitti_times(dir.file("times.txt"), times_ns);

@@ -46,7 +46,7 @@ TEST(TrajectoryIo, TumRoundTripKeepsNanosecondsAndPoses) {
   TempDir dir;
   Trajectory trajectory = random_trajectory(200, 1);
   trajectory.push_back({0, SE3d::Identity()});
-  trajectory.push_back({-1, SE3d::Identity()});          // negative times survive too
+  trajectory.push_back({-1, SE3d::Identity()});  // negative times survive too
   trajectory.push_back({999'999'999, SE3d::Identity()});
   const std::string path = dir.file("traj_tum.txt");
   write_tum(path, trajectory);
@@ -67,7 +67,8 @@ TEST(TrajectoryIo, KittiRoundTripWithTimes) {
   EXPECT_EQ(read_kitti_times(dir.file("times.txt")), times_ns);
   const Trajectory back = read_kitti_poses(dir.file("poses.txt"), &times_ns);
   expect_same_poses(trajectory, back, 1e-9, true);
-  const Trajectory via_generic = read_trajectory(dir.file("poses.txt"), TrajectoryFormat::kKitti, dir.file("times.txt"));
+  const Trajectory via_generic =
+      read_trajectory(dir.file("poses.txt"), TrajectoryFormat::kKitti, dir.file("times.txt"));
   expect_same_poses(trajectory, via_generic, 1e-9, true);
 
   // Without times: 10 Hz from zero.
@@ -144,8 +145,7 @@ TEST(TrajectoryIo, BadTumFilesNameFileLineAndExpectation) {
 
 TEST(TrajectoryIo, BadKittiFilesNameFileLineAndExpectation) {
   TempDir dir;
-  const std::string short_line =
-      dir.write("short.txt", "1 0 0 0 0 1 0 0 0 0 1 0\n1 0 0 0 0 1 0 0 0 0 1\n");
+  const std::string short_line = dir.write("short.txt", "1 0 0 0 0 1 0 0 0 0 1 0\n1 0 0 0 0 1 0 0 0 0 1\n");
   expect_input_error([&] { read_kitti_poses(short_line); }, {short_line, "line 2", "expected 12 numbers", "found 11"});
 
   const std::string scaled = dir.write("scaled.txt", "2 0 0 0 0 2 0 0 0 0 2 0\n");

@@ -35,12 +35,12 @@ TEST(FeatureVector, CommonNodesInAscendingOrder) {
   b.features = {5, 0, 2, 1};
   std::vector<NodeId> seen;
   std::vector<std::pair<uint32_t, uint32_t>> pairs;
-  for_each_common_node(a, b, [&](NodeId n, const uint32_t* a0, const uint32_t* a1, const uint32_t* b0,
-                                 const uint32_t* b1) {
-    seen.push_back(n);
-    for (auto i = a0; i != a1; ++i)
-      for (auto j = b0; j != b1; ++j) pairs.emplace_back(*i, *j);
-  });
+  for_each_common_node(a, b,
+                       [&](NodeId n, const uint32_t* a0, const uint32_t* a1, const uint32_t* b0, const uint32_t* b1) {
+                         seen.push_back(n);
+                         for (auto i = a0; i != a1; ++i)
+                           for (auto j = b0; j != b1; ++j) pairs.emplace_back(*i, *j);
+                       });
   EXPECT_EQ(seen, (std::vector<NodeId>{7, 12}));
   EXPECT_EQ(pairs, (std::vector<std::pair<uint32_t, uint32_t>>{{1, 5}, {2, 0}, {2, 2}, {3, 0}, {3, 2}}));
 }

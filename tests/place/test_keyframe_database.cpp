@@ -41,7 +41,9 @@ TEST(KeyframeDatabase, ScoresAndCommonWordsEqualTheDirectComputation) {
     const auto& k = kfs[cands[i].id - 1000];
     EXPECT_NEAR(cands[i].score, l1_score(q, k), 1e-5);
     EXPECT_EQ(cands[i].common_words, common_words(q, k));
-    if (i > 0) { EXPECT_GE(cands[i - 1].score, cands[i].score); }
+    if (i > 0) {
+      EXPECT_GE(cands[i - 1].score, cands[i].score);
+    }
   }
   // A stored keyframe queried with its own vector is the best candidate with score 1.
   const auto self = db.query(kfs[17], {});
@@ -81,8 +83,7 @@ TEST(KeyframeDatabase, FiltersAndLimits) {
     EXPECT_NE(c.id % 7, 3u);
   }
   std::size_t expected = 0;
-  for (const auto& c : all)
-    expected += c.id != all[0].id && c.id != all[2].id && c.id < 40 && c.id % 7 != 3;
+  for (const auto& c : all) expected += c.id != all[0].id && c.id != all[2].id && c.id < 40 && c.id % 7 != 3;
   EXPECT_EQ(r.size(), expected);
 
   o = {};
@@ -178,8 +179,8 @@ TEST(KeyframeDatabase, ConcurrentQueriesWhileKeyframesAreAddedAndErased) {
 
 TEST(GroupCandidates, AccumulatesCovisibleCandidatesAsOrbSlam2) {
   // Candidates 1, 2, 3 are covisible with each other; 10 stands alone; 20's neighbour 21 is not a candidate.
-  const std::vector<Candidate> cands = {{1, 20, 0.30f}, {2, 20, 0.20f}, {3, 18, 0.10f}, {10, 20, 0.35f},
-                                        {20, 19, 0.25f}};
+  const std::vector<Candidate> cands = {
+      {1, 20, 0.30f}, {2, 20, 0.20f}, {3, 18, 0.10f}, {10, 20, 0.35f}, {20, 19, 0.25f}};
   auto neighbours = [](KeyframeId id, std::vector<KeyframeId>& out) {
     if (id <= 3) out = {1, 2, 3};
     if (id == 20) out = {21};

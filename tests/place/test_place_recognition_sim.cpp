@@ -4,7 +4,6 @@
 // rendering is the slow part).
 #include <gtest/gtest.h>
 
-
 #include "agvslam/features/orb_extractor.h"
 #include "agvslam/place/place_config.h"
 #include "agvslam/place/revisit_evaluation.h"

@@ -26,7 +26,8 @@ const std::string& loop_sequence() {
       const std::string tmp = test::make_temp_dir("agvslam-vocab-tool-render") + "/static_s61";
       std::string out;
       const int rc = test::run_command(
-          test::tool_path("agvslam-sim") + " --scenario static --seed 61 --squeeze-to 40 --threads 2 --out " + tmp, &out);
+          test::tool_path("agvslam-sim") + " --scenario static --seed 61 --squeeze-to 40 --threads 2 --out " + tmp,
+          &out);
       EXPECT_EQ(rc, 0) << out;
       std::error_code ec;
       fs::rename(tmp, d, ec);  // fails harmlessly when another test process got there first

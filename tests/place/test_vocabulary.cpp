@@ -22,7 +22,8 @@ struct Labelled {
 };
 
 // `clusters` random centres; `per_cluster` members each, `noise_bits` bits flipped per member.
-Labelled flat_clusters(int clusters, int per_cluster, int noise_bits, uint64_t seed, std::vector<Descriptor>* centres_out) {
+Labelled flat_clusters(int clusters, int per_cluster, int noise_bits, uint64_t seed,
+                       std::vector<Descriptor>* centres_out) {
   std::mt19937_64 rng(seed);
   std::vector<Descriptor> centres;
   for (int c = 0; c < clusters; ++c) centres.push_back(test::random_descriptor(rng));
@@ -275,7 +276,8 @@ TEST(DirectIndex, EveryFeatureOnceUnderTheAncestorOfItsWordAtTheLevel) {
   };
   std::mt19937_64 rng(3);
   std::vector<Descriptor> img;
-  for (int i = 0; i < 500; ++i) img.push_back(i % 2 ? test::random_descriptor(rng) : train.descriptors[std::size_t(i) * 7]);
+  for (int i = 0; i < 500; ++i)
+    img.push_back(i % 2 ? test::random_descriptor(rng) : train.descriptors[std::size_t(i) * 7]);
   const cv::Mat m = test::to_mat(img);
   for (int level = 1; level <= 4; ++level) {
     BowVector bow, plain;
@@ -292,9 +294,13 @@ TEST(DirectIndex, EveryFeatureOnceUnderTheAncestorOfItsWordAtTheLevel) {
     ASSERT_EQ(fv.features.size(), img.size());
     std::vector<int> seen(img.size(), 0);
     for (std::size_t k = 0; k < fv.size(); ++k) {
-      if (k > 0) { EXPECT_LT(fv.nodes[k - 1], fv.nodes[k]); }
+      if (k > 0) {
+        EXPECT_LT(fv.nodes[k - 1], fv.nodes[k]);
+      }
       for (const uint32_t* f = fv.features_begin(k); f != fv.features_end(k); ++f) {
-        if (f != fv.features_begin(k)) { EXPECT_LT(*(f - 1), *f); }
+        if (f != fv.features_begin(k)) {
+          EXPECT_LT(*(f - 1), *f);
+        }
         ++seen[*f];
         // The node is the word's ancestor at `level`, or the word itself when it lies higher.
         NodeId node_at_level = 0;
@@ -322,21 +328,21 @@ TEST(DirectIndex, CommonNodesPairFeaturesOfTheSameNode) {
   v.transform(test::to_mat(a), ba, fa, 2);
   v.transform(test::to_mat(b), bb, fb, 2);
   int nodes = 0, pairs_same_descriptor = 0;
-  for_each_common_node(fa, fb, [&](NodeId node, const uint32_t* a0, const uint32_t* a1, const uint32_t* b0,
-                                   const uint32_t* b1) {
-    ++nodes;
-    for (const uint32_t* i = a0; i != a1; ++i) {
-      NodeId n = 0;
-      v.word(a[*i].data(), 2, n);
-      EXPECT_EQ(n, node);
-      for (const uint32_t* j = b0; j != b1; ++j) pairs_same_descriptor += a[*i] == b[*j];
-    }
-    for (const uint32_t* j = b0; j != b1; ++j) {
-      NodeId n = 0;
-      v.word(b[*j].data(), 2, n);
-      EXPECT_EQ(n, node);
-    }
-  });
+  for_each_common_node(
+      fa, fb, [&](NodeId node, const uint32_t* a0, const uint32_t* a1, const uint32_t* b0, const uint32_t* b1) {
+        ++nodes;
+        for (const uint32_t* i = a0; i != a1; ++i) {
+          NodeId n = 0;
+          v.word(a[*i].data(), 2, n);
+          EXPECT_EQ(n, node);
+          for (const uint32_t* j = b0; j != b1; ++j) pairs_same_descriptor += a[*i] == b[*j];
+        }
+        for (const uint32_t* j = b0; j != b1; ++j) {
+          NodeId n = 0;
+          v.word(b[*j].data(), 2, n);
+          EXPECT_EQ(n, node);
+        }
+      });
   EXPECT_GT(nodes, 0);
   EXPECT_EQ(pairs_same_descriptor, 60);  // the 60 shared descriptors always meet under their node
 }

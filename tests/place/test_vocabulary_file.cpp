@@ -124,8 +124,8 @@ TEST_F(VocabularyFile, IdentityFollowsTheTreeNotTheDescription) {
 }
 
 TEST_F(VocabularyFile, TruncatedFilesAreRejected) {
-  for (std::size_t n : {std::size_t(0), std::size_t(7), std::size_t(127), std::size_t(128), bytes.size() / 2,
-                        bytes.size() - 1}) {
+  for (std::size_t n :
+       {std::size_t(0), std::size_t(7), std::size_t(127), std::size_t(128), bytes.size() / 2, bytes.size() - 1}) {
     const std::string where = load_error(bytes.substr(0, n));
     EXPECT_TRUE(where == "header" || where == "size") << n << " bytes: " << where;
   }

@@ -12,9 +12,9 @@ namespace agvslam::semantic {
 namespace {
 
 struct Carried {
-  double iou_chained = 0;  // carried frame by frame
-  double iou_one_step = 0; // carried in one LK step (a late result)
-  double iou_stale = 0;    // the segmentation left where it was
+  double iou_chained = 0;   // carried frame by frame
+  double iou_one_step = 0;  // carried in one LK step (a late result)
+  double iou_stale = 0;     // the segmentation left where it was
 };
 
 // The person segmented (from the ground truth) at `first`, carried to `first + gap`; IoU against the ground truth
@@ -45,8 +45,8 @@ Carried carry(test::SimSequence& seq, int first, int gap) {
   c.iou_chained = chained.empty() ? 0 : mask_iou(chained.front().mask, truth);
   c.iou_one_step = one_step.empty() ? 0 : mask_iou(one_step.front().mask, truth);
   c.iou_stale = mask_iou(stale, truth);
-  std::printf("frames %d -> %d: IoU chained %.3f, one step %.3f, not carried %.3f\n", first, first + gap,
-              c.iou_chained, c.iou_one_step, c.iou_stale);
+  std::printf("frames %d -> %d: IoU chained %.3f, one step %.3f, not carried %.3f\n", first, first + gap, c.iou_chained,
+              c.iou_one_step, c.iou_stale);
   return c;
 }
 

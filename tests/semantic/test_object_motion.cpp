@@ -52,7 +52,8 @@ TEST(ObjectMotion, WalkingPersonIsMaskedStandingPersonKeepsItsFeatures) {
   const cv::Rect walker_box(100, 150, 60, 180), stander_box(500, 150, 60, 180);
   std::vector<SemanticObject> walker{person(walker_box)}, stander{person(stander_box)};
   for (int frame = 0; frame < 10; ++frame) {
-    const auto w = test.update(frame_points(rng, walker_box, 12, 4.0), nullptr, walker);  // a 4 px step against the static
+    const auto w =
+        test.update(frame_points(rng, walker_box, 12, 4.0), nullptr, walker);  // a 4 px step against the static
     const auto s = test.update(frame_points(rng, stander_box, 12, 0.0), nullptr, stander);
     ASSERT_EQ(w.size(), 1u);
     EXPECT_TRUE(w[0].measured);

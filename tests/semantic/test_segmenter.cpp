@@ -38,7 +38,8 @@ void expect_load_error(const ModelConfig& config, const std::vector<std::string>
     ADD_FAILURE() << config.path << " loaded";
   } catch (const InputError& e) {
     EXPECT_EQ(e.source(), config.path) << e.what();
-    for (const std::string& w : words) EXPECT_NE(std::string(e.what()).find(w), std::string::npos) << w << ": " << e.what();
+    for (const std::string& w : words)
+      EXPECT_NE(std::string(e.what()).find(w), std::string::npos) << w << ": " << e.what();
   }
 }
 

@@ -53,11 +53,12 @@ MaskerRun run(test::SimSequence& seq, SemanticConfig config, std::chrono::millis
   }
   r.stats = masker.stats();
   r.mean_iou = r.frames_with_objects ? iou_sum / r.frames_with_objects : 0;
-  std::printf("delay %d ms: requests %lu, segmented %lu, late %lu, stale %lu, frames with objects %d, mean IoU %.3f, "
-              "max process %.1f ms\n",
-              static_cast<int>(delay.count()), static_cast<unsigned long>(r.stats.requests),
-              static_cast<unsigned long>(r.stats.segmented), static_cast<unsigned long>(r.stats.late_results),
-              static_cast<unsigned long>(r.stats.stale_results), r.frames_with_objects, r.mean_iou, r.max_process_ms);
+  std::printf(
+      "delay %d ms: requests %lu, segmented %lu, late %lu, stale %lu, frames with objects %d, mean IoU %.3f, "
+      "max process %.1f ms\n",
+      static_cast<int>(delay.count()), static_cast<unsigned long>(r.stats.requests),
+      static_cast<unsigned long>(r.stats.segmented), static_cast<unsigned long>(r.stats.late_results),
+      static_cast<unsigned long>(r.stats.stale_results), r.frames_with_objects, r.mean_iou, r.max_process_ms);
   return r;
 }
 

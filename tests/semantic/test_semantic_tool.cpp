@@ -19,8 +19,8 @@ const std::string& sequence() {
     const std::string d = test::make_temp_dir("agvslam-semantic-tool") + "/scene1";
     std::string out;
     // Frames 110-117 of scene1: the person walks in front of the stationary AGV.
-    const int rc = test::run_command(test::tool_path("agvslam-sim") + " --scenario scene1 --seed 1 --frames 118 " +
-                                         "--threads 2 --out " + d, &out);
+    const int rc = test::run_command(
+        test::tool_path("agvslam-sim") + " --scenario scene1 --seed 1 --frames 118 " + "--threads 2 --out " + d, &out);
     EXPECT_EQ(rc, 0) << out;
     return d;
   }();

@@ -35,7 +35,8 @@ std::array<int, kSemanticClassCount> check_frame(const SimFrame& f, const std::s
       }
       ++counts[static_cast<std::size_t>(c)];
       const auto sc = static_cast<SemanticClass>(c);
-      const bool actor_class = sc == SemanticClass::kPerson || sc == SemanticClass::kForklift || sc == SemanticClass::kAgv;
+      const bool actor_class =
+          sc == SemanticClass::kPerson || sc == SemanticClass::kForklift || sc == SemanticClass::kAgv;
       if (id > 0) {
         // An actor's pixel: its own class, pallet/box where it carries goods, person for a forklift's driver.
         const auto cls = static_cast<ActorClass>(cls_of_id[static_cast<std::size_t>(id)]);
@@ -63,12 +64,13 @@ TEST(ClassLabels, EveryPixelLabelledAndActorsAgreeWithTheInstances) {
       s.render_frame(k, f, 2);
       const auto counts = check_frame(f, std::string(name) + " frame " + std::to_string(k));
       if (HasFailure()) return;
-      for (int i = 0; i < kSemanticClassCount; ++i) seen[static_cast<std::size_t>(i)] += counts[static_cast<std::size_t>(i)];
+      for (int i = 0; i < kSemanticClassCount; ++i)
+        seen[static_cast<std::size_t>(i)] += counts[static_cast<std::size_t>(i)];
     }
   }
   for (int i = 0; i < kSemanticClassCount; ++i)
-    EXPECT_GT(seen[static_cast<std::size_t>(i)], 0) << semantic_class_name(static_cast<SemanticClass>(i))
-                                                     << " never seen";
+    EXPECT_GT(seen[static_cast<std::size_t>(i)], 0)
+        << semantic_class_name(static_cast<SemanticClass>(i)) << " never seen";
 }
 
 TEST(ClassLabels, StaticLabelsFollowTheGeometry) {

@@ -15,8 +15,8 @@ namespace agvslam::sim {
 namespace {
 
 struct Corners {
-  int on_person = 0;    // FAST corners inside the person's silhouette (not on its outline)
-  int person_px = 0;    // pixels of that inner region
+  int on_person = 0;  // FAST corners inside the person's silhouette (not on its outline)
+  int person_px = 0;  // pixels of that inner region
 };
 
 // Renders `look` standing `distance_m` in front of the camera of `sim`'s first frame, facing it (front) or

@@ -101,9 +101,9 @@ TEST(GroundTruth, RasterisedVisibilityEqualsRayCastingEveryPixel) {
     for (int v = 0; v < cam.height; ++v)
       for (int u = 0; u < cam.width; ++u) {
         const Eigen::Vector3d d = T.linear() * Eigen::Vector3d((u - cam.cx) / cam.fx, (v - cam.cy) / cam.fy, 1.0);
-        const RayHit hit = sim.renderer().cast(Ray(origin, V3(static_cast<float>(d.x()), static_cast<float>(d.y()),
-                                                              static_cast<float>(d.z()))),
-                                               f.posed_objects);
+        const RayHit hit = sim.renderer().cast(
+            Ray(origin, V3(static_cast<float>(d.x()), static_cast<float>(d.y()), static_cast<float>(d.z()))),
+            f.posed_objects);
         const float z = f.left_render.depth_m.at<float>(v, u);
         if (std::fabs(hit.t - z) > 1e-4f * z + 1e-4f) ++differ;
       }
@@ -195,9 +195,10 @@ TEST(GroundTruth, SgbmOnTheRenderedPairMatchesTheDisparity) {
     EXPECT_LT(p90, 1.0) << name;
     EXPECT_LT(static_cast<double>(gross) / errors.size(), 0.05) << name;  // occlusions, repetitive racking
     RecordProperty(std::string(name) + "_sgbm_median_abs_err_px", std::to_string(median));
-    std::printf("%s: SGBM vs ground truth on %zu textured pixels: valid %.1f %%, median %.3f px, p90 %.3f px, "
-                "> 3 px %.2f %%\n",
-                name, errors.size(), 100 * valid_ratio, median, p90, 100.0 * gross / errors.size());
+    std::printf(
+        "%s: SGBM vs ground truth on %zu textured pixels: valid %.1f %%, median %.3f px, p90 %.3f px, "
+        "> 3 px %.2f %%\n",
+        name, errors.size(), 100 * valid_ratio, median, p90, 100.0 * gross / errors.size());
   }
 }
 
@@ -218,7 +219,8 @@ TEST(GroundTruth, ImagesHaveCornersAllOverForFeatureTrackers) {
       // Coverage: corners in most cells of an 8 x 6 grid.
       bool cell[6][8] = {};
       for (const auto& kp : corners)
-        cell[std::min(5, static_cast<int>(kp.pt.y * 6 / f.left.rows))][std::min(7, static_cast<int>(kp.pt.x * 8 / f.left.cols))] = true;
+        cell[std::min(5, static_cast<int>(kp.pt.y * 6 / f.left.rows))]
+            [std::min(7, static_cast<int>(kp.pt.x * 8 / f.left.cols))] = true;
       int covered = 0;
       for (const auto& row : cell)
         for (bool c : row) covered += c ? 1 : 0;

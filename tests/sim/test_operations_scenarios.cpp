@@ -51,7 +51,8 @@ TEST(Follow, TheLeaderStaysTwoToFourMetresAheadAndFillsMuchOfTheView) {
     const Actor& leader = sc.actors[0];
     ASSERT_TRUE(leader.cls == ActorClass::kAgv || leader.cls == ActorClass::kForklift);
     // The leader's rear: a tugger's last cart, a forklift's counterweight.
-    const double rear_m = leader.vehicle.tugger_carts > 0 ? trailer_offset_m(leader.vehicle.tugger_carts - 1) + 0.8 : 1.18;
+    const double rear_m =
+        leader.vehicle.tugger_carts > 0 ? trailer_offset_m(leader.vehicle.tugger_carts - 1) + 0.8 : 1.18;
     int both_moving = 0;
     double gap_min = 1e9, gap_max = 0, lateral_max = 0;
     for (int k = 0; k < s.frame_count(); ++k) {
@@ -173,7 +174,8 @@ TEST(Pallet, TheMappedPalletStandsThenMovesAndLeavesAnotherIsSetDown) {
     s.render_frame(first_move - 40, f, 2);
     EXPECT_GT(share_of(f, picked.id), 0.02) << "seed " << seed;
     EXPECT_EQ(cv::countNonZero((f.instances == picked.id) & (f.mask > 0)), 0);
-    EXPECT_EQ(cv::countNonZero((f.instances == picked.id) & (f.classes != static_cast<int>(SemanticClass::kPalletBox))), 0);
+    EXPECT_EQ(cv::countNonZero((f.instances == picked.id) & (f.classes != static_cast<int>(SemanticClass::kPalletBox))),
+              0);
     s.render_frame(first_move + 20, f, 2);
     EXPECT_GT(cv::countNonZero((f.instances == picked.id) & (f.mask > 0)), 0) << "seed " << seed << ": lifted";
     s.render_frame(s.frame_count() - 1, f, 2);

@@ -21,12 +21,18 @@ cv::Mat test_image(int type, uint64_t seed) {
   for (int v = 0; v < m.rows; ++v)
     for (int u = 0; u < m.cols; ++u) {
       double x;
-      if (v < 10) x = rng.uniform(0.0, max_value);                         // noise
-      else if (v < 20) x = (u * 1237.0 + v * 311.0) / (53 * 1237.0) * max_value;  // ramps
-      else if (v < 30) x = (u / 8) % 2 ? max_value : 0.0;                  // runs of extremes
-      else x = max_value * 0.5;                                             // flat
-      if (type == CV_16UC1) m.at<uint16_t>(v, u) = static_cast<uint16_t>(x);
-      else m.at<uint8_t>(v, u) = static_cast<uint8_t>(x);
+      if (v < 10)
+        x = rng.uniform(0.0, max_value);  // noise
+      else if (v < 20)
+        x = (u * 1237.0 + v * 311.0) / (53 * 1237.0) * max_value;  // ramps
+      else if (v < 30)
+        x = (u / 8) % 2 ? max_value : 0.0;  // runs of extremes
+      else
+        x = max_value * 0.5;  // flat
+      if (type == CV_16UC1)
+        m.at<uint16_t>(v, u) = static_cast<uint16_t>(x);
+      else
+        m.at<uint8_t>(v, u) = static_cast<uint8_t>(x);
     }
   return m;
 }
@@ -34,7 +40,8 @@ cv::Mat test_image(int type, uint64_t seed) {
 TEST(PngWriter, EveryFilterAndLevelRoundTripsExactly) {
   for (int type : {CV_8UC1, CV_16UC1})
     for (int level : {0, 1, 6})
-      for (PngFilter filter : {PngFilter::kNone, PngFilter::kSub, PngFilter::kUp, PngFilter::kAverage, PngFilter::kPaeth}) {
+      for (PngFilter filter :
+           {PngFilter::kNone, PngFilter::kSub, PngFilter::kUp, PngFilter::kAverage, PngFilter::kPaeth}) {
         const cv::Mat image = test_image(type, 7 + static_cast<uint64_t>(level));
         PngWriter writer(level);
         const std::vector<uint8_t>& bytes = writer.encode(image, filter);

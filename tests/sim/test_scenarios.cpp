@@ -34,7 +34,6 @@ bool in_image(const Simulator& s, const std::optional<Eigen::Vector2d>& uv, doub
   return uv && uv->x() >= margin && uv->x() <= cam.width - 1 - margin && uv->y() >= 0 && uv->y() <= cam.height - 1;
 }
 
-
 // Share of the left image covered by moving actors (the motion mask), rendered at a reduced scale every `step`
 // frames: mean over the frames where some moving actor is visible, the largest share, and how many frames
 // show one.
@@ -382,8 +381,8 @@ TEST(Actors, GivenHeadingsTurnLinearlyAndLiftingOrTurningInPlaceIsMoving) {
   Actor a;
   a.cls = ActorClass::kForklift;
   const double nan = std::numeric_limits<double>::quiet_NaN();
-  a.path = {{0.0, 0.0, 0.0, -kPi / 2, 0.0},  {2.0, 0.0, 2.0, -kPi / 2, 0.0}, {4.0, 0.0, 2.0, kPi, 0.0},
-            {6.0, 0.0, 2.0, kPi, 0.3},       {8.0, 0.0, 2.0, kPi, 0.3},     {9.0, -1.0, 2.0, nan, 0.3}};
+  a.path = {{0.0, 0.0, 0.0, -kPi / 2, 0.0}, {2.0, 0.0, 2.0, -kPi / 2, 0.0}, {4.0, 0.0, 2.0, kPi, 0.0},
+            {6.0, 0.0, 2.0, kPi, 0.3},      {8.0, 0.0, 2.0, kPi, 0.3},      {9.0, -1.0, 2.0, nan, 0.3}};
   prepare_actor(a);
   const ActorState reversing = actor_state(a, 1.0);
   EXPECT_TRUE(reversing.moving);
@@ -407,7 +406,7 @@ TEST(Actors, GivenHeadingsTurnLinearlyAndLiftingOrTurningInPlaceIsMoving) {
   DynamicObject low, high;
   pose_actor(a, actor_state(a, 0.5), low);
   pose_actor(a, parked, high);
-  EXPECT_NEAR(high.hi.z - low.hi.z, 0.0, 1e-6);      // the mast does not grow
+  EXPECT_NEAR(high.hi.z - low.hi.z, 0.0, 1e-6);  // the mast does not grow
   float fork_low = 0, fork_high = 0;
   for (const auto& p : low.primitives)
     if (p.part == 8) fork_low = p.a.z;

@@ -247,9 +247,7 @@ class Tool : public ::testing::Test {
   void TearDown() override {
     if (!dir_.empty()) fs::remove_all(dir_);
   }
-  int run(const std::string& args, std::string* output) {
-    return test::run_command("'" + tool_ + "' " + args, output);
-  }
+  int run(const std::string& args, std::string* output) { return test::run_command("'" + tool_ + "' " + args, output); }
   std::string tool_, dir_, params_;
 };
 
@@ -287,10 +285,10 @@ TEST_F(Tool, FramesCutsTheTimelineAndSqueezeToPlaysItOverFewerFrames) {
   std::string out;
   ASSERT_EQ(run("--scenario scene2 --frames 6 --seed 3 --params " + params_ + " --out " + dir_ + "/cut", &out), 0)
       << out;
-  ASSERT_EQ(run("--scenario scene2 --squeeze-to 40 --frames 6 --seed 3 --params " + params_ + " --out " + dir_ +
-                    "/fast",
-                &out),
-            0)
+  ASSERT_EQ(
+      run("--scenario scene2 --squeeze-to 40 --frames 6 --seed 3 --params " + params_ + " --out " + dir_ + "/fast",
+          &out),
+      0)
       << out;
   const auto cut = lines_of(read_text(fs::path(dir_) / "cut" / "poses.txt"));
   const auto fast = lines_of(read_text(fs::path(dir_) / "fast" / "poses.txt"));
@@ -325,9 +323,9 @@ TEST_F(Tool, WritesTheSameSequenceWithOneOrTwoThreads) {
       << out2;
   EXPECT_NE(out1.find("AGV speed"), std::string::npos) << out1;
   EXPECT_NE(out1.find("baseline_m=0.12,"), std::string::npos) << "the settings are echoed at start-up:\n" << out1;
-  for (const char* file : {"calib.txt", "times.txt", "poses.txt", "objects.txt", "image_0/000003.png",
-                           "image_1/000003.png", "disp_0/000003.png", "mask_0/000003.png", "instance_0/000003.png",
-                           "class_0/000003.png"}) {
+  for (const char* file :
+       {"calib.txt", "times.txt", "poses.txt", "objects.txt", "image_0/000003.png", "image_1/000003.png",
+        "disp_0/000003.png", "mask_0/000003.png", "instance_0/000003.png", "class_0/000003.png"}) {
     const std::string a = read_text(fs::path(dir_) / "t1" / file), b = read_text(fs::path(dir_) / "t2" / file);
     EXPECT_FALSE(a.empty()) << file;
     EXPECT_EQ(a, b) << file << " differs between --threads 1 and 2";

@@ -53,7 +53,8 @@ TEST(SimConfig, ShippedParamsFileLoadsToTheDefaults) {
 }
 
 TEST(SimConfig, PartialFileOverridesOnlyItsKeys) {
-  const std::string path = write_temp_yaml("sim.yaml", "camera:\n  width: 376\n  fx: 230\nsensor:\n  noise_sigma_dn: 0\n");
+  const std::string path =
+      write_temp_yaml("sim.yaml", "camera:\n  width: 376\n  fx: 230\nsensor:\n  noise_sigma_dn: 0\n");
   const SimConfig c = load_sim_config(path);
   EXPECT_EQ(c.width, 376);
   EXPECT_EQ(c.height, 480);
@@ -107,7 +108,7 @@ TEST(SimConfig, ScaledKeepsTheFieldOfView) {
 
 TEST(ScenarioCatalogue, ListsTheScenariosWithRealisticDefaults) {
   const auto& cat = scenario_catalogue();
-  const char* names[] = {"static", "scene1", "scene2", "scene3", "scene4", "scene5",
+  const char* names[] = {"static", "scene1", "scene2", "scene3", "scene4",  "scene5",
                          "scene6", "follow", "crowd",  "pallet", "oncoming"};
   ASSERT_EQ(cat.size(), std::size(names));
   for (std::size_t i = 0; i < cat.size(); ++i) {

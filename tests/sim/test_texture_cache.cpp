@@ -119,7 +119,8 @@ TEST(TextureCache, ResultsDoNotDependOnHistoryOrThreads) {
     std::vector<std::thread> threads;
     for (std::size_t k = 0; k < results.size(); ++k)
       threads.emplace_back([&, k] {
-        for (const Lookup& q : lookups) results[k].push_back(cache.sample(0, 4.0f, 4.0f, q.u, q.v, q.footprint, source));
+        for (const Lookup& q : lookups)
+          results[k].push_back(cache.sample(0, 4.0f, 4.0f, q.u, q.v, q.footprint, source));
       });
     for (auto& t : threads) t.join();
     for (const auto& r : results) EXPECT_EQ(r, reference);

@@ -72,7 +72,8 @@ inline void make_frame(const World& world, const SE3d& T_c_w, const FrameGeometr
     point_of_keypoint.push_back(static_cast<int>(i));
   }
   cv::Mat d(static_cast<int>(descs.size()), 32, CV_8UC1);
-  for (std::size_t k = 0; k < descs.size(); ++k) std::copy(descs[k].begin(), descs[k].end(), d.ptr<uint8_t>(static_cast<int>(k)));
+  for (std::size_t k = 0; k < descs.size(); ++k)
+    std::copy(descs[k].begin(), descs[k].end(), d.ptr<uint8_t>(static_cast<int>(k)));
   frame.assign(id, static_cast<int64_t>(id) * 50'000'000, g, kps, d, u_right, depth);
   frame.set_pose(T_c_w);
 }

@@ -86,7 +86,8 @@ TEST(KeyframeWorker, DropOldestKeepsTheNewest) {
 }
 
 TEST(KeyframeWorker, ZeroCapacityIsRejected) {
-  EXPECT_THROW(KeyframeWorker(0, KeyframeWorker::WhenFull::kRefuseNew, [](const KeyFramePtr&) {}), std::invalid_argument);
+  EXPECT_THROW(KeyframeWorker(0, KeyframeWorker::WhenFull::kRefuseNew, [](const KeyFramePtr&) {}),
+               std::invalid_argument);
 }
 
 TEST(KeyframeWorker, ClearDropsTheQueuedOnes) {
@@ -112,7 +113,8 @@ TEST(KeyframeWorker, TheThreadProcessesEveryKeyframeAndWaitUntilIdleWaitsForTheL
   w.start();
   EXPECT_TRUE(w.running());
   for (int round = 0; round < 20; ++round) {
-    for (uint64_t k = 0; k < 10; ++k) ASSERT_EQ(w.push(keyframe(static_cast<uint64_t>(round) * 10 + k)), KeyframeWorker::Pushed::kQueued);
+    for (uint64_t k = 0; k < 10; ++k)
+      ASSERT_EQ(w.push(keyframe(static_cast<uint64_t>(round) * 10 + k)), KeyframeWorker::Pushed::kQueued);
     w.wait_until_idle();
     EXPECT_TRUE(w.idle());
     ASSERT_EQ(rec.get().size(), static_cast<std::size_t>(round + 1) * 10) << "round " << round;
@@ -129,8 +131,8 @@ TEST(KeyframeWorker, NotIdleWhileAKeyframeIsInProgress) {
   w.start();
   w.push(keyframe(1));
   ASSERT_TRUE(gate.wait_started());
-  EXPECT_TRUE(w.empty());   // taken off the queue ...
-  EXPECT_FALSE(w.idle());   // ... but not done
+  EXPECT_TRUE(w.empty());  // taken off the queue ...
+  EXPECT_FALSE(w.idle());  // ... but not done
   std::atomic<bool> waited{false};
   std::thread waiter([&] {
     w.wait_until_idle();

@@ -23,13 +23,15 @@ struct SmallMap {
     for (int k = 0; k < n_keyframes; ++k) {
       Frame f;
       std::vector<int> pok;
-      test::make_frame(world, test::path_pose(k * step), geometry, static_cast<uint64_t>(k), 0.0, 1u + static_cast<uint32_t>(k), f, pok);
+      test::make_frame(world, test::path_pose(k * step), geometry, static_cast<uint64_t>(k), 0.0,
+                       1u + static_cast<uint32_t>(k), f, pok);
       auto kf = std::make_shared<KeyFrame>(map.new_keyframe_id(), f);
       map.add_keyframe(kf);
       for (std::size_t i = 0; i < pok.size(); ++i) {
         MapPointPtr& p = point_of_world[static_cast<std::size_t>(pok[i])];
         if (!p) {
-          p = std::make_shared<MapPoint>(map.new_map_point_id(), world.points_w[static_cast<std::size_t>(pok[i])], kf.get(), f.id);
+          p = std::make_shared<MapPoint>(map.new_map_point_id(), world.points_w[static_cast<std::size_t>(pok[i])],
+                                         kf.get(), f.id);
           map.add_map_point(p);
         }
         kf->add_map_point(p, i);

@@ -208,10 +208,11 @@ TEST(SavedMap, RoundTripKeepsEveryKeyframeAndMapPointAndLocalisesInTheSameFrame)
   ASSERT_GE(saved.keyframes.size(), 10u);
   ASSERT_GE(saved.points.size(), 1000u);
   EXPECT_EQ(saved.one_sided_links, 0) << "keyframe and map point links disagree";
-  std::printf("KITTI 06 0-50 map: %zu keyframes, %zu map points, %zu bytes (save: wait %.1f ms, encode %.1f ms, "
-              "write+fsync+rename %.1f ms), %d one-sided links left out\n",
-              saved.keyframes.size(), saved.points.size(), ss.bytes, ss.wait_ms, ss.encode_ms, ss.write_ms,
-              saved.one_sided_links);
+  std::printf(
+      "KITTI 06 0-50 map: %zu keyframes, %zu map points, %zu bytes (save: wait %.1f ms, encode %.1f ms, "
+      "write+fsync+rename %.1f ms), %d one-sided links left out\n",
+      saved.keyframes.size(), saved.points.size(), ss.bytes, ss.wait_ms, ss.encode_ms, ss.write_ms,
+      saved.one_sided_links);
   EXPECT_EQ(ss.keyframes, saved.keyframes.size());
   EXPECT_EQ(ss.map_points, saved.points.size());
   EXPECT_EQ(ss.bytes, std::filesystem::file_size(path));
@@ -497,9 +498,10 @@ TEST(Warehouse, ForcedLossRelocalisesAndASecondRunLocalisesInTheSavedMap) {
     worst_m = std::max(worst_m, e);
   }
   const double rmse = tracked > 0 ? std::sqrt(sum_sq / tracked) : -1;
-  std::printf("warehouse run B (localisation, %zu keyframes, %zu map points, %zu bytes): first pose at frame %d, "
-              "relocalised %d frames after its blank frames, %d frames tracked, map-frame ATE %.4f m (max %.4f m)\n",
-              ss.keyframes, ss.map_points, ss.bytes, first_ok, b_recovered_after, tracked, rmse, worst_m);
+  std::printf(
+      "warehouse run B (localisation, %zu keyframes, %zu map points, %zu bytes): first pose at frame %d, "
+      "relocalised %d frames after its blank frames, %d frames tracked, map-frame ATE %.4f m (max %.4f m)\n",
+      ss.keyframes, ss.map_points, ss.bytes, first_ok, b_recovered_after, tracked, rmse, worst_m);
   EXPECT_GE(first_ok, 0) << "never localised in the saved map";
   EXPECT_LT(first_ok, 10);
   EXPECT_GE(b_recovered_after, 0);
@@ -539,7 +541,8 @@ PassResult drive_there_and_back(const SimRun& run, double revisit_distance_m, in
   const int64_t dt_ns = run.t_ns[1] - run.t_ns[0];
   for (std::size_t step = 0; step < order.size(); ++step) {
     const std::size_t k = order[step];
-    const TrackResult r = slam.track_stereo(run.t_ns[0] + static_cast<int64_t>(step) * dt_ns, run.left[k], run.right[k], run.mask[k]);
+    const TrackResult r =
+        slam.track_stereo(run.t_ns[0] + static_cast<int64_t>(step) * dt_ns, run.left[k], run.right[k], run.mask[k]);
     if (r.state != TrackingState::kOk) {
       ++out.lost;
     } else {

@@ -59,7 +59,8 @@ TEST(Matcher, LastFrameProjectionMissesAnUnmodelledTurnUnlessTheWindowIsWide) {
   // The predicted pose is off by 2.5 degrees of yaw (about 20 px): the 7 px window finds few matches, a 28 px window
   // with the ratio test finds them again.
   const SE3d truth = s.f1.T_c_w();
-  s.f1.set_pose(make_se3(Eigen::AngleAxisd(0.044, Eigen::Vector3d::UnitY()).toRotationMatrix(), Eigen::Vector3d::Zero()) * truth);
+  s.f1.set_pose(
+      make_se3(Eigen::AngleAxisd(0.044, Eigen::Vector3d::UnitY()).toRotationMatrix(), Eigen::Vector3d::Zero()) * truth);
   Matcher m;
   std::lock_guard<std::mutex> lock(s.map.mutex());
   const int narrow = m.search_last_frame(s.f1, s.f0, 7.0f, true);
@@ -92,7 +93,8 @@ TEST(Matcher, BruteForceAgainstAKeyframeNeedsNoPose) {
   const int n = m.search_keyframe_brute_force(kf, s.f1, 0.7f, matches);
   ASSERT_EQ(matches.size(), s.f1.size());
   int correct = 0;
-  for (std::size_t k = 0; k < matches.size(); ++k) correct += matches[k] && matches[k]->id == static_cast<uint64_t>(s.p1[k]) ? 1 : 0;
+  for (std::size_t k = 0; k < matches.size(); ++k)
+    correct += matches[k] && matches[k]->id == static_cast<uint64_t>(s.p1[k]) ? 1 : 0;
   EXPECT_GT(n, static_cast<int>(std::min(s.f0.size(), s.f1.size())) * 7 / 10);
   EXPECT_EQ(correct, n);
 }
@@ -115,7 +117,8 @@ TEST(Matcher, FuseReplacesADuplicateAndAddsMissingObservations) {
   dup->max_distance_m = truth0->max_distance_m;
   dup->min_distance_m = truth0->min_distance_m;
   for (std::size_t k = 0; k < 3; ++k) s.map.add_map_point(s.points[static_cast<std::size_t>(s.p1[k])]);
-  std::vector<MapPointPtr> candidates{truth0, s.points[static_cast<std::size_t>(s.p1[1])], s.points[static_cast<std::size_t>(s.p1[2])]};
+  std::vector<MapPointPtr> candidates{truth0, s.points[static_cast<std::size_t>(s.p1[1])],
+                                      s.points[static_cast<std::size_t>(s.p1[2])]};
   Matcher m;
   const int fused = m.fuse(*kf, candidates, 3.0f, s.map);
   EXPECT_EQ(fused, 3);

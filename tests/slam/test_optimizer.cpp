@@ -153,7 +153,8 @@ TEST(BundleAdjustment, ReducesAKnownError) {
   ASSERT_GT(problem.observations.size(), 1000u);
   // Perturb the free poses (5 cm, 1 degree) and every point (10 cm).
   for (std::size_t k = 2; k < problem.poses.size(); ++k) {
-    problem.poses[k].T_c_w = se3_exp((Vector6d() << 0.03, 0.02, -0.04, 0.01, -0.015, 0.01).finished()) * problem.poses[k].T_c_w;
+    problem.poses[k].T_c_w =
+        se3_exp((Vector6d() << 0.03, 0.02, -0.04, 0.01, -0.015, 0.01).finished()) * problem.poses[k].T_c_w;
   }
   std::normal_distribution<double> point_noise(0.0, 0.06);
   std::vector<Eigen::Vector3d> points_true = problem.points_w;
@@ -161,7 +162,8 @@ TEST(BundleAdjustment, ReducesAKnownError) {
 
   auto pose_error = [&]() {
     double e = 0;
-    for (std::size_t k = 2; k < problem.poses.size(); ++k) e = std::max(e, translation_error(problem.poses[k].T_c_w, poses_true[k]));
+    for (std::size_t k = 2; k < problem.poses.size(); ++k)
+      e = std::max(e, translation_error(problem.poses[k].T_c_w, poses_true[k]));
     return e;
   };
   auto point_median = [&]() {

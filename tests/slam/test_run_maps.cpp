@@ -41,7 +41,8 @@ TEST(RunToolMaps, SaveThenLocaliseInTheSavedMap) {
   const std::string dir = test::make_temp_dir("agvslam-run-maps");
   const std::string common = "--dataset " + data + " --dynamic off --mapping inline --params-features " +
                              AGVSLAM_SOURCE_DIR "/params/features_kitti.yaml";
-  ToolRun r = run_tool(common + " --out " + dir + "/map.tum --json " + dir + "/map.json --save-map " + dir + "/k06.agvmap");
+  ToolRun r =
+      run_tool(common + " --out " + dir + "/map.tum --json " + dir + "/map.json --save-map " + dir + "/k06.agvmap");
   ASSERT_EQ(r.rc, 0) << r.text;
   const nlohmann::json saved = read_json(dir + "/map.json");
   ASSERT_TRUE(saved.contains("save_map")) << saved.dump();
@@ -87,8 +88,8 @@ TEST(RunToolMaps, SaveThenLocaliseInTheSavedMap) {
   EXPECT_LT(worst, 0.10) << "localised poses are not in the saved map's frame";
 
   // Extending the map (mode map) adds keyframes to it.
-  r = run_tool(common + " --frames 25:50 --load-map " + dir + "/k06.agvmap --mode map --out " + dir + "/ext.tum --json " +
-               dir + "/ext.json --save-map " + dir + "/k06b.agvmap");
+  r = run_tool(common + " --frames 25:50 --load-map " + dir + "/k06.agvmap --mode map --out " + dir +
+               "/ext.tum --json " + dir + "/ext.json --save-map " + dir + "/k06b.agvmap");
   ASSERT_EQ(r.rc, 0) << r.text;
   EXPECT_GT(read_json(dir + "/ext.json")["save_map"]["keyframes"].get<long>(), keyframes);
   std::filesystem::remove_all(dir);
@@ -101,9 +102,7 @@ TEST(RunToolMaps, BadOptionsAndFilesExitTwoNamingThem) {
   struct Case {
     std::string args, named;
   };
-  {
-    std::ofstream(dir + "/corrupt.agvmap") << "AGVSMAP not really a map";
-  }
+  { std::ofstream(dir + "/corrupt.agvmap") << "AGVSMAP not really a map"; }
   const std::vector<Case> cases = {
       {"--loop maybe", "--loop"},
       {"--mode localise", "--mode"},
@@ -131,11 +130,10 @@ TEST(RunToolMaps, BlankFramesAndRepeatedLaps) {
   const std::string dir = test::make_temp_dir("agvslam-run-blank");
   // A still camera covered for frames 30..39: lost without poses, relocalised on the first uncovered frame (a map
   // of one keyframe: kept instead of reset, as a loaded map would be).
-  {
-    std::ofstream(dir + "/keep.yaml") << "tracking:\n  reset_max_keyframes: 0\n";
-  }
-  ToolRun r = run_tool("--dataset " + data + " --dynamic off --mapping inline --blank 30:39 --frames 0:59 --params-slam " +
-                       dir + "/keep.yaml --out " + dir + "/b.tum --json " + dir + "/b.json");
+  { std::ofstream(dir + "/keep.yaml") << "tracking:\n  reset_max_keyframes: 0\n"; }
+  ToolRun r =
+      run_tool("--dataset " + data + " --dynamic off --mapping inline --blank 30:39 --frames 0:59 --params-slam " +
+               dir + "/keep.yaml --out " + dir + "/b.tum --json " + dir + "/b.json");
   ASSERT_EQ(r.rc, 0) << r.text;
   const nlohmann::json b = read_json(dir + "/b.json");
   EXPECT_EQ(b["frames"]["lost"].get<long>(), 10);

@@ -28,7 +28,8 @@ TEST(SlamConfig, ShippedFileEqualsTheDefaults) {
 }
 
 TEST(SlamConfig, ValuesOverrideDefaults) {
-  const SlamConfig c = load_slam_config(write_temp("a.yaml", "tracking:\n  min_init_features: 300\nmapping:\n  max_keyframes: 50\n"));
+  const SlamConfig c =
+      load_slam_config(write_temp("a.yaml", "tracking:\n  min_init_features: 300\nmapping:\n  max_keyframes: 50\n"));
   EXPECT_EQ(c.tracking.min_init_features, 300);
   EXPECT_EQ(c.mapping.max_keyframes, 50);
   EXPECT_EQ(c.optimizer.motion_iterations, 10);

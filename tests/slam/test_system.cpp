@@ -7,8 +7,8 @@
 #include <thread>
 
 #include "agvslam/eval/association.h"
-#include "agvslam/features/features_config.h"
 #include "agvslam/eval/metrics.h"
+#include "agvslam/features/features_config.h"
 #include "agvslam/io/dataset.h"
 #include "agvslam/slam/system.h"
 #include "common/test_data.h"
@@ -75,7 +75,8 @@ TEST(System, KittiExcerptWithTheMappingThread) {
   const auto t0 = std::chrono::steady_clock::now();
   for (std::size_t i = 0; i < d->size(); ++i) {
     const StereoFrame fr = d->frame(i);
-    std::this_thread::sleep_until(t0 + std::chrono::milliseconds(static_cast<int64_t>(1000.0 * static_cast<double>(i) / d->rate_hz())));
+    std::this_thread::sleep_until(
+        t0 + std::chrono::milliseconds(static_cast<int64_t>(1000.0 * static_cast<double>(i) / d->rate_hz())));
     const TrackResult r = slam.track_stereo(fr.t_ns, fr.left, fr.right, {});
     EXPECT_EQ(r.state, TrackingState::kOk) << "frame " << i;
     max_queue = std::max(max_queue, r.mapping_queue);
@@ -84,10 +85,12 @@ TEST(System, KittiExcerptWithTheMappingThread) {
   EXPECT_LE(max_queue, static_cast<std::size_t>(c.slam.mapping.queue_capacity));
   const double ate = ate_rmse(*d, slam.trajectory());
   const LocalMappingStats ms = slam.mapping_stats();
-  std::printf("KITTI 06 excerpt, mapping thread: ATE %.4f m, max queue %zu, keyframes %llu (%llu skipped), BA %llu (%llu aborted)\n",
-              ate, max_queue, static_cast<unsigned long long>(ms.keyframes_processed),
-              static_cast<unsigned long long>(ms.keyframes_skipped), static_cast<unsigned long long>(ms.ba_runs),
-              static_cast<unsigned long long>(ms.ba_aborted));
+  std::printf(
+      "KITTI 06 excerpt, mapping thread: ATE %.4f m, max queue %zu, keyframes %llu (%llu skipped), BA %llu (%llu "
+      "aborted)\n",
+      ate, max_queue, static_cast<unsigned long long>(ms.keyframes_processed),
+      static_cast<unsigned long long>(ms.keyframes_skipped), static_cast<unsigned long long>(ms.ba_runs),
+      static_cast<unsigned long long>(ms.ba_aborted));
   // The order of tracking and mapping events varies from run to run, and so does the result: 13 runs on this
   // machine gave 0.036-0.071 m, median 0.052 m (ORB-SLAM2: 0.050-0.057 m over three runs). The deterministic
   // inline test above holds the 0.054 m bound; this one catches breakage of the threaded path.
@@ -124,7 +127,8 @@ TEST(System, BlankFramesGiveLostWithoutAPoseThenTrackingResumes) {
   for (std::size_t i = 0; i < 60; ++i) {
     const StereoFrame f = d->frame(i);
     const bool blank = i >= 30 && i < 40;
-    const TrackResult r = blank ? slam.track_stereo(f.t_ns, black, black, {}) : slam.track_stereo(f.t_ns, f.left, f.right, {});
+    const TrackResult r =
+        blank ? slam.track_stereo(f.t_ns, black, black, {}) : slam.track_stereo(f.t_ns, f.left, f.right, {});
     if (blank) {
       EXPECT_NE(r.state, TrackingState::kOk) << "frame " << i;
       EXPECT_FALSE(r.pose_valid);

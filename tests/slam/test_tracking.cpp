@@ -13,7 +13,9 @@
 namespace agvslam::slam {
 namespace {
 
-StereoIntrinsics intrinsics(const FrameGeometry& g) { return {g.camera.fx, g.camera.fy, g.camera.cx, g.camera.cy, g.bf}; }
+StereoIntrinsics intrinsics(const FrameGeometry& g) {
+  return {g.camera.fx, g.camera.fy, g.camera.cx, g.camera.cy, g.bf};
+}
 
 double position_error(const SE3d& T_c_w, const SE3d& T_true) {
   return (T_c_w.inverse().translation() - T_true.inverse().translation()).norm();
@@ -135,7 +137,8 @@ TEST(LocalMapping, CullsRedundantKeyframes) {
   c.tracking.keyframe_close_untracked = -1;
   Rig rig(c);
   const test::World world = test::make_world(4000, 15, 1.5, 4.5);  // all close (< 40 baselines)
-  for (int k = 0; k < 40; ++k) ASSERT_EQ(rig.step(world, test::path_pose(k, 0.01), static_cast<uint64_t>(k)), TrackingState::kOk);
+  for (int k = 0; k < 40; ++k)
+    ASSERT_EQ(rig.step(world, test::path_pose(k, 0.01), static_cast<uint64_t>(k)), TrackingState::kOk);
   const LocalMappingStats s = rig.mapper->stats();
   EXPECT_GE(s.keyframes_processed, 35u);
   EXPECT_GT(s.keyframes_culled, s.keyframes_processed / 2);
@@ -195,7 +198,8 @@ TEST(Tracking, EmptyFrameIsLostNotGarbage) {
   c.tracking.reset_max_keyframes = 0;
   Rig rig(c);
   const test::World world = test::make_world(1200, 11);
-  for (int k = 0; k < 10; ++k) ASSERT_EQ(rig.step(world, test::path_pose(k, 0.05), static_cast<uint64_t>(k)), TrackingState::kOk);
+  for (int k = 0; k < 10; ++k)
+    ASSERT_EQ(rig.step(world, test::path_pose(k, 0.05), static_cast<uint64_t>(k)), TrackingState::kOk);
   const test::World empty;
   EXPECT_EQ(rig.step(empty, test::path_pose(10, 0.05), 10), TrackingState::kLost);
   EXPECT_EQ(rig.step(empty, test::path_pose(11, 0.05), 11), TrackingState::kLost);
@@ -243,7 +247,8 @@ TEST(Tracking, PlaceRecognitionIndexesEveryKeyframeAndRelocalisesFarFromTheLoss)
 TEST(Tracking, LocalisationOnlyAddsNoKeyframes) {
   Rig rig;
   const test::World world = test::make_world(1500, 15, 1.5, 15.0);
-  for (int k = 0; k < 20; ++k) ASSERT_EQ(rig.step(world, test::path_pose(k, 0.05), static_cast<uint64_t>(k)), TrackingState::kOk);
+  for (int k = 0; k < 20; ++k)
+    ASSERT_EQ(rig.step(world, test::path_pose(k, 0.05), static_cast<uint64_t>(k)), TrackingState::kOk);
   std::size_t kfs = 0, points = 0;
   {
     std::lock_guard<std::mutex> lock(rig.map.mutex());
@@ -252,7 +257,8 @@ TEST(Tracking, LocalisationOnlyAddsNoKeyframes) {
   }
   rig.tracking->set_localisation_only(true);
   // Beyond the keyframe spacing (1 s), 1 m further on and 23 degrees turned: tracked, and the map stays as it was.
-  for (int k = 20; k < 40; ++k) ASSERT_EQ(rig.step(world, test::path_pose(k, 0.05), static_cast<uint64_t>(k)), TrackingState::kOk) << k;
+  for (int k = 20; k < 40; ++k)
+    ASSERT_EQ(rig.step(world, test::path_pose(k, 0.05), static_cast<uint64_t>(k)), TrackingState::kOk) << k;
   std::lock_guard<std::mutex> lock(rig.map.mutex());
   EXPECT_EQ(rig.map.keyframe_count(), kfs);
   EXPECT_EQ(rig.map.map_point_count(), points);
@@ -317,10 +323,12 @@ TEST(Matcher, TriangulationSearchFindsTheTrueCorrespondences) {
   Matcher matcher;
   std::vector<std::pair<int, int>> matches;
   std::lock_guard<std::mutex> lock(map.mutex());
-  const int n = matcher.search_for_triangulation(kf1, kf2, fundamental_from_poses(kf1.T_c_w(), kf2.T_c_w(), K), matches);
+  const int n =
+      matcher.search_for_triangulation(kf1, kf2, fundamental_from_poses(kf1.T_c_w(), kf2.T_c_w(), K), matches);
   ASSERT_GT(n, static_cast<int>(std::min(f1.size(), f2.size()) / 2));
   int correct = 0;
-  for (const auto& [a, b] : matches) correct += p1[static_cast<std::size_t>(a)] == p2[static_cast<std::size_t>(b)] ? 1 : 0;
+  for (const auto& [a, b] : matches)
+    correct += p1[static_cast<std::size_t>(a)] == p2[static_cast<std::size_t>(b)] ? 1 : 0;
   EXPECT_EQ(correct, n);
 }
 

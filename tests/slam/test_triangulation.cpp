@@ -50,7 +50,8 @@ TEST(Triangulation, ParallelRaysHaveNoFiniteSolutionOrParallaxOne) {
   Eigen::Vector3d q;
   const bool ok = triangulate_linear({0.1, 0.0}, {0.1, 0.0}, T1, T2, q);
   EXPECT_TRUE(!ok || q.norm() > 1e6);
-  EXPECT_NEAR(parallax_cos(Eigen::Vector3d(0, 0, 1e9), Eigen::Vector3d::Zero(), Eigen::Vector3d(0.5, 0, 0)), 1.0, 1e-12);
+  EXPECT_NEAR(parallax_cos(Eigen::Vector3d(0, 0, 1e9), Eigen::Vector3d::Zero(), Eigen::Vector3d(0.5, 0, 0)), 1.0,
+              1e-12);
   EXPECT_NEAR(parallax_cos(Eigen::Vector3d(0, 0, 1), Eigen::Vector3d(-1, 0, 0), Eigen::Vector3d(1, 0, 0)), 0.0, 1e-12);
 }
 

@@ -83,7 +83,8 @@ inline BadRate kitti_d1(const cv::Mat& estimate_px, const cv::Mat& truth_px) {
 }
 
 // Middlebury bad-2.0 on the non-occluded mask (255), over pixels with an estimate.
-inline BadRate middlebury_bad(const cv::Mat& estimate_px, const cv::Mat& truth_px, const cv::Mat& nonocc, float threshold) {
+inline BadRate middlebury_bad(const cv::Mat& estimate_px, const cv::Mat& truth_px, const cv::Mat& nonocc,
+                              float threshold) {
   BadRate r;
   int bad = 0;
   for (int y = 0; y < truth_px.rows; ++y) {

@@ -96,8 +96,8 @@ TEST(StereoSgbm, RoiDisparityAgreesWithWholeFrame) {
   sgbm.compute(p.left, p.right, full_px);
 
   // Two overlapping ROIs (merged into one crop), one at the left border, one separate, one partly outside.
-  const std::vector<cv::Rect> rois = {{400, 150, 120, 90}, {480, 200, 100, 80}, {40, 100, 120, 60},
-                                      {900, 250, 150, 100}, {1180, 300, 100, 100}};
+  const std::vector<cv::Rect> rois = {
+      {400, 150, 120, 90}, {480, 200, 100, 80}, {40, 100, 120, 60}, {900, 250, 150, 100}, {1180, 300, 100, 100}};
   cv::Mat roi_px;
   sgbm.compute_rois(p.left, p.right, rois, roi_px);
   ASSERT_EQ(roi_px.size(), p.left.size());
@@ -165,11 +165,13 @@ TEST(StereoSgbm, RowStepRoiKeepsKittiAccuracy) {
   };
   const BadRate every_row = d1_in_roi(every_row_px), row_pairs = d1_in_roi(row_pairs_px);
   ASSERT_GT(every_row.evaluated, 10000);
-  EXPECT_LT(row_pairs.rate, 0.05) << "D1 " << 100 * row_pairs.rate << " % (every row: " << 100 * every_row.rate << " %)";
+  EXPECT_LT(row_pairs.rate, 0.05) << "D1 " << 100 * row_pairs.rate << " % (every row: " << 100 * every_row.rate
+                                  << " %)";
   EXPECT_LT(row_pairs.rate, every_row.rate + 0.02);
   EXPECT_GT(row_pairs.estimated, 0.95 * every_row.estimated);
   for (int y = 0; y + 1 < roi.height; y += 2) {
-    ASSERT_EQ(cv::norm(row_pairs_px.row(y), row_pairs_px.row(y + 1), cv::NORM_INF), 0.0) << "rows " << y << ", " << y + 1;
+    ASSERT_EQ(cv::norm(row_pairs_px.row(y), row_pairs_px.row(y + 1), cv::NORM_INF), 0.0)
+        << "rows " << y << ", " << y + 1;
   }
   cv::Mat unused;
   EXPECT_THROW(sgbm.compute_roi(p.left, p.right, roi, unused, 0, 1.0, 3), cv::Exception);

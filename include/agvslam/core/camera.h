@@ -39,13 +39,13 @@ struct RawStereoRig {
 };
 
 struct StereoCalibration {
-  PinholeCamera left;      // rectified left camera; the right one shares these intrinsics
-  double baseline_m = 0;   // distance between the optical centres, > 0
+  PinholeCamera left;     // rectified left camera; the right one shares these intrinsics
+  double baseline_m = 0;  // distance between the optical centres, > 0
 
   // Set when the source images are raw (EuRoC, a raw V4L2 camera): remap tables from raw to rectified.
   bool needs_rectification = false;
   cv::Mat map_left_x, map_left_y, map_right_x, map_right_y;  // CV_32FC1, rectified size
-  SE3d T_cam0_rect = SE3d::Identity();  // rectified left frame expressed in the raw cam0 frame
+  SE3d T_cam0_rect = SE3d::Identity();                       // rectified left frame expressed in the raw cam0 frame
 
   double bf() const { return left.fx * baseline_m; }
   double depth_from_disparity(double disparity_px) const { return bf() / disparity_px; }

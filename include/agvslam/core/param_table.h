@@ -165,8 +165,8 @@ class Param {
   Param(const char* key, N C::*member, Range range, const char* unit = "", const char* reason = "")
       : key_(key),
         unit_(unit),
-        expectation_(detail::number_expectation(std::is_same_v<N, int> ? "an integer" : "a number", range, unit,
-                                                reason)) {
+        expectation_(
+            detail::number_expectation(std::is_same_v<N, int> ? "an integer" : "a number", range, unit, reason)) {
     read_ = plain_read(member, expectation_);
     validate_ = [member, range](const C& c) { return range.contains(c.*member); };
     value_ = [member](const C& c) { return detail::format_number(c.*member); };

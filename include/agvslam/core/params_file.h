@@ -39,8 +39,7 @@ class File {
   bool read(const std::string& section, const std::string& key, int& value, const std::string& expectation) const;
   bool read(const std::string& section, const std::string& key, double& value, const std::string& expectation) const;
   bool read(const std::string& section, const std::string& key, bool& value, const std::string& expectation) const;
-  bool read(const std::string& section, const std::string& key, uint64_t& value,
-            const std::string& expectation) const;
+  bool read(const std::string& section, const std::string& key, uint64_t& value, const std::string& expectation) const;
   bool read(const std::string& section, const std::string& key, std::string& value,
             const std::string& expectation) const;
 

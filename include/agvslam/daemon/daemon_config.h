@@ -55,8 +55,8 @@ struct SourceConfig {
   double rate = 1.0;
   // dataset: a fixed playback rate in Hz instead of `rate` (0 = use `rate`).
   double rate_hz = 0.0;
-  bool loop = false;        // dataset: start again at the first frame after the last (else: stop at the end)
-  std::string frames;       // dataset: inclusive frame range "A:B" (either side may be empty); "" = all
+  bool loop = false;   // dataset: start again at the first frame after the last (else: stop at the end)
+  std::string frames;  // dataset: inclusive frame range "A:B" (either side may be empty); "" = all
   // v4l2: a camera that cannot be opened at start is retried with back-off (the daemon runs and reports its
   // state meanwhile); false: exit 1 with the device's error.
   bool wait_for_camera = true;
@@ -117,9 +117,9 @@ struct BaseLinkConfig {
 // The tracker reports no covariance yet. Heuristic: standard deviations scale with sqrt(reference_inliers /
 // inliers) (a pose from half the inliers is sqrt(2) less certain), floored at min_inliers; diagonal matrices.
 struct CovarianceConfig {
-  double position_sd_m = 0.02;       // per axis, at reference_inliers
-  double rotation_sd_deg = 0.5;      // per axis
-  double velocity_sd_mps = 0.05;     // per axis of the finite-difference twist
+  double position_sd_m = 0.02;    // per axis, at reference_inliers
+  double rotation_sd_deg = 0.5;   // per axis
+  double velocity_sd_mps = 0.05;  // per axis of the finite-difference twist
   double angular_sd_degps = 2.0;
   int reference_inliers = 200;
   int min_inliers = 10;
@@ -161,7 +161,7 @@ struct TrajectoryConfig {
 };
 
 struct LogConfig {
-  std::string file;       // also log to this file (appended; reopened on SIGHUP for logrotate). "" = stderr only
+  std::string file;            // also log to this file (appended; reopened on SIGHUP for logrotate). "" = stderr only
   std::string level = "info";  // trace, debug, info, warn, error
   // One JSON line per sample handed to the outputs (the sample's SI values, the source frame, what CAN did);
   // the format agvslam-pose-replay --json writes, so can_log_check reads it. "" = none.
@@ -199,7 +199,7 @@ struct DaemonConfig {
   slam::SystemConfig system;
   dynamic::DynamicDetectorConfig detector;
   stereo::StereoConfig stereo;
-  std::optional<place::PlaceConfig> place;  // set when stages.place names a file
+  std::optional<place::PlaceConfig> place;           // set when stages.place names a file
   std::optional<semantic::SemanticConfig> semantic;  // set when stages.semantic names a file (with the detector)
 
   // Throws InputError(path, "section.key", "expected ...").

@@ -49,25 +49,25 @@ SourceSetup dataset_setup(std::shared_ptr<const io::StereoDataset> dataset, std:
 SourceSetup prepare_source(const DaemonConfig& config);
 
 struct CapturedFrame {
-  StereoFrame frame;            // rectified; frame.index: pairs delivered by the source since start
-  int64_t capture_t_ns = 0;     // CLOCK_REALTIME capture stamp (see above)
-  int64_t source_index = -1;    // dataset: index of the frame in the dataset; V4L2: -1
-  int64_t source_t_ns = 0;      // dataset: the frame's own time stamp; V4L2: CLOCK_MONOTONIC stamp of the left image
-  int64_t queued_mono_ns = 0;   // CLOCK_MONOTONIC when the capture thread queued it (stage timing)
+  StereoFrame frame;           // rectified; frame.index: pairs delivered by the source since start
+  int64_t capture_t_ns = 0;    // CLOCK_REALTIME capture stamp (see above)
+  int64_t source_index = -1;   // dataset: index of the frame in the dataset; V4L2: -1
+  int64_t source_t_ns = 0;     // dataset: the frame's own time stamp; V4L2: CLOCK_MONOTONIC stamp of the left image
+  int64_t queued_mono_ns = 0;  // CLOCK_MONOTONIC when the capture thread queued it (stage timing)
   // Dataset only:
-  int lap = 0;                  // DatasetPlayback::laps: which play of the range (frame.t_ns continues over laps)
-  bool blank = false;           // DatasetPlayback::blank: the images were replaced by black ones
-  cv::Mat ground_truth_mask;    // DatasetPlayback::ground_truth_masks: the dataset's moving-object mask (255)
-  double read_ms = 0;           // decoding (and rectifying) the frame
+  int lap = 0;                // DatasetPlayback::laps: which play of the range (frame.t_ns continues over laps)
+  bool blank = false;         // DatasetPlayback::blank: the images were replaced by black ones
+  cv::Mat ground_truth_mask;  // DatasetPlayback::ground_truth_masks: the dataset's moving-object mask (255)
+  double read_ms = 0;         // decoding (and rectifying) the frame
 };
 
 struct SourceStats {
-  uint64_t frames = 0;         // frames delivered
-  uint64_t dropped = 0;        // frames the source itself lost (V4L2: sequence gaps, unpaired, corrupt)
-  bool connected = true;       // false while a camera is lost / being reopened
-  uint64_t losses = 0;         // camera lost (error, stall, removal)
-  uint64_t reopens = 0;        // and opened again
-  std::string line;            // one line for the status / statistics log
+  uint64_t frames = 0;    // frames delivered
+  uint64_t dropped = 0;   // frames the source itself lost (V4L2: sequence gaps, unpaired, corrupt)
+  bool connected = true;  // false while a camera is lost / being reopened
+  uint64_t losses = 0;    // camera lost (error, stall, removal)
+  uint64_t reopens = 0;   // and opened again
+  std::string line;       // one line for the status / statistics log
 };
 
 class FrameSource {
@@ -118,7 +118,7 @@ class DatasetSource final : public FrameSource {
   std::size_t next_index_;  // dataset index of the frame to load next
   int lap_ = 0;
   bool have_pending_ = false, ended_ = false;
-  CapturedFrame pending_;   // decoded, waiting for its due time
+  CapturedFrame pending_;  // decoded, waiting for its due time
   int64_t start_mono_ns_ = -1;
   uint64_t delivered_ = 0;
 };

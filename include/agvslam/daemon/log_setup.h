@@ -2,10 +2,10 @@
 // agvslamd's logging: spdlog to stderr (the journal, under systemd) and optionally to a file that SIGHUP reopens
 // (logrotate moves the file, sends HUP, the daemon continues in a new file of the same name).
 
-#include <memory>
-#include <mutex>
 #include <spdlog/details/file_helper.h>
 #include <spdlog/sinks/base_sink.h>
+#include <memory>
+#include <mutex>
 #include <string>
 
 namespace agvslam::daemon {

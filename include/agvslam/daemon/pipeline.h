@@ -45,14 +45,14 @@
 namespace agvslam::daemon {
 
 struct PipelineStats {
-  uint64_t captured = 0;           // frames the source delivered
-  uint64_t processed = 0;          // frames tracked (any result)
-  uint64_t tracked = 0;            // of which state ok
-  uint64_t lost = 0;               // of which lost
-  uint64_t dropped_queue = 0;      // dropped in the capture queue (processing too slow)
-  uint64_t dropped_source = 0;     // lost by the source itself (V4L2 sequence gaps, unpaired)
-  uint64_t dropped_outputs = 0;    // samples dropped in the output queue
-  uint64_t published = 0;          // samples handed to the outputs (heartbeats included)
+  uint64_t captured = 0;         // frames the source delivered
+  uint64_t processed = 0;        // frames tracked (any result)
+  uint64_t tracked = 0;          // of which state ok
+  uint64_t lost = 0;             // of which lost
+  uint64_t dropped_queue = 0;    // dropped in the capture queue (processing too slow)
+  uint64_t dropped_source = 0;   // lost by the source itself (V4L2 sequence gaps, unpaired)
+  uint64_t dropped_outputs = 0;  // samples dropped in the output queue
+  uint64_t published = 0;        // samples handed to the outputs (heartbeats included)
   uint64_t heartbeats = 0;
   double fps = 0;                  // processed frames per second over the last second
   std::string state = "starting";  // tracking state of the last frame (or "lost (camera)", ...)
@@ -159,7 +159,7 @@ class Pipeline {
   mutable std::mutex stats_mutex_;
   PipelineStats stats_;
   RollingSeries latency_ms_, detector_ms_, tracking_ms_;  // the last 4096 frames
-  std::vector<int64_t> recent_frames_mono_ns_;  // ring of processing times for fps
+  std::vector<int64_t> recent_frames_mono_ns_;            // ring of processing times for fps
   std::size_t recent_next_ = 0;
   std::string error_;
 };

@@ -22,8 +22,8 @@
 
 #include "agvslam/daemon/daemon_config.h"
 #include "agvslam/daemon/odometry_monitor.h"
-#include "agvslam/drivers/can/odometry_input.h"
 #include "agvslam/drivers/can/can_publisher.h"
+#include "agvslam/drivers/can/odometry_input.h"
 #include "agvslam/drivers/dds/publisher.h"
 #include "agvslam/drivers/pose_sample.h"
 
@@ -114,7 +114,7 @@ class PoseOutputs {
   TextFile trajectory_, pose_log_;
   int unflushed_ = 0;
   uint64_t samples_ = 0, tracking_samples_ = 0, heartbeats_ = 0;
-  mutable std::mutex stats_mutex_;  // stats() is read by the supervisor while the outputs thread publishes
+  mutable std::mutex stats_mutex_;             // stats() is read by the supervisor while the outputs thread publishes
   drivers::can::CanPublisherStats can_stats_;  // copied after each publish (CanPosePublisher is single-threaded)
   std::string can_last_error_;
   drivers::can::CanOdometryStats can_odometry_stats_;  // copied likewise, with the monitor's figures

@@ -23,10 +23,14 @@ enum class TrackingState : uint8_t {
 
 inline const char* to_string(TrackingState state) {
   switch (state) {
-    case TrackingState::kNotInitialized: return "not_initialized";
-    case TrackingState::kTracking: return "tracking";
-    case TrackingState::kCoasting: return "coasting";
-    case TrackingState::kLost: return "lost";
+    case TrackingState::kNotInitialized:
+      return "not_initialized";
+    case TrackingState::kTracking:
+      return "tracking";
+    case TrackingState::kCoasting:
+      return "coasting";
+    case TrackingState::kLost:
+      return "lost";
   }
   return "unknown";
 }
@@ -39,17 +43,23 @@ enum class OdometryCheckState : uint8_t {
   kStale = 2,            // no odometry sample for longer than odometry.stale_ms
   kTooLittleMotion = 3,  // the window holds too little travel and turning to judge (or is not full yet)
   kAgrees = 4,
-  kDisagrees = 5,        // distance ratio or heading difference outside the tolerance
+  kDisagrees = 5,  // distance ratio or heading difference outside the tolerance
 };
 
 inline const char* to_string(OdometryCheckState state) {
   switch (state) {
-    case OdometryCheckState::kOff: return "off";
-    case OdometryCheckState::kNoOdometry: return "no_odometry";
-    case OdometryCheckState::kStale: return "stale";
-    case OdometryCheckState::kTooLittleMotion: return "too_little_motion";
-    case OdometryCheckState::kAgrees: return "agrees";
-    case OdometryCheckState::kDisagrees: return "disagrees";
+    case OdometryCheckState::kOff:
+      return "off";
+    case OdometryCheckState::kNoOdometry:
+      return "no_odometry";
+    case OdometryCheckState::kStale:
+      return "stale";
+    case OdometryCheckState::kTooLittleMotion:
+      return "too_little_motion";
+    case OdometryCheckState::kAgrees:
+      return "agrees";
+    case OdometryCheckState::kDisagrees:
+      return "disagrees";
   }
   return "unknown";
 }
@@ -83,10 +93,10 @@ struct PoseSample {
 
   TrackingState tracking_state = TrackingState::kNotInitialized;
 
-  uint64_t frame_index = 0;       // index of the frame since the daemon started
-  uint64_t frames_processed = 0;  // frames the tracker processed since start
-  uint64_t frames_dropped = 0;    // frames captured but never processed (queue full, unpaired stereo)
-  float fps = 0.0F;               // processed frames per second over the last second
+  uint64_t frame_index = 0;             // index of the frame since the daemon started
+  uint64_t frames_processed = 0;        // frames the tracker processed since start
+  uint64_t frames_dropped = 0;          // frames captured but never processed (queue full, unpaired stereo)
+  float fps = 0.0F;                     // processed frames per second over the last second
   float dynamic_pixel_fraction = 0.0F;  // 0..1, share of the left image masked as dynamic
   // Capture -> pose handed to the outputs, nanoseconds (measured by the daemon when it hands the sample over).
   int64_t latency_ns = 0;
@@ -111,11 +121,11 @@ inline PoseSample synthetic_pose_sample(uint64_t i, int64_t t_ns) {
   const double phi = 0.05 * k;  // 0.05 rad (0.15 m) per sample
   const double yaw = phi + EIGEN_PI / 2.0;
   s.t_ns = t_ns;
-  s.T_map_base = make_se3(Eigen::Quaterniond(Eigen::AngleAxisd(yaw, Eigen::Vector3d::UnitZ()) *
-                                             Eigen::AngleAxisd(0.01 * std::sin(0.3 * k), Eigen::Vector3d::UnitY()) *
-                                             Eigen::AngleAxisd(0.02 * std::cos(0.2 * k), Eigen::Vector3d::UnitX())),
-                          Eigen::Vector3d(-2.0 + radius_m * std::cos(phi), 3.0 + radius_m * std::sin(phi),
-                                          0.004 * std::sin(0.7 * k)));
+  s.T_map_base = make_se3(
+      Eigen::Quaterniond(Eigen::AngleAxisd(yaw, Eigen::Vector3d::UnitZ()) *
+                         Eigen::AngleAxisd(0.01 * std::sin(0.3 * k), Eigen::Vector3d::UnitY()) *
+                         Eigen::AngleAxisd(0.02 * std::cos(0.2 * k), Eigen::Vector3d::UnitX())),
+      Eigen::Vector3d(-2.0 + radius_m * std::cos(phi), 3.0 + radius_m * std::sin(phi), 0.004 * std::sin(0.7 * k)));
   s.cov_pose = Matrix6d::Zero();
   for (int r = 0; r < 6; ++r) {
     for (int c = 0; c < 6; ++c) s.cov_pose(r, c) = (r == c ? 1.0 : 0.1) * (1e-4 + 1e-6 * k) * (1.0 + 0.1 * (r + c));

@@ -26,13 +26,15 @@ namespace agvslam::dynamic {
 enum class BoundaryType : uint8_t { kCoplanar = 0, kHinge = 1, kLeftOcclusion = 2, kRightOcclusion = 3, kUnknown = 4 };
 
 const char* to_string(BoundaryType type);
-inline bool is_occlusion(BoundaryType t) { return t == BoundaryType::kLeftOcclusion || t == BoundaryType::kRightOcclusion; }
+inline bool is_occlusion(BoundaryType t) {
+  return t == BoundaryType::kLeftOcclusion || t == BoundaryType::kRightOcclusion;
+}
 
 // params/dynamic.yaml, section `boundaries`.
 struct BoundaryConfig {
-  double lambda_occ = 2.0;     // px^2: an occlusion needs a plane gap of more than ~sqrt(2) px
-  double lambda_hinge = 0.5;   // px^2
-  double lambda_pen = 20.0;    // px^2: an "occluder" that is behind is (practically) never chosen
+  double lambda_occ = 2.0;    // px^2: an occlusion needs a plane gap of more than ~sqrt(2) px
+  double lambda_hinge = 0.5;  // px^2
+  double lambda_pen = 20.0;   // px^2: an "occluder" that is behind is (practically) never chosen
 
   void validate(const std::string& source) const;
   std::string describe() const;
@@ -70,8 +72,8 @@ struct PixelMoments {
 };
 
 struct SuperpixelBoundary {
-  int i = 0, j = 0;        // superpixel labels, i < j
-  int length = 0;          // adjacent pixel pairs
+  int i = 0, j = 0;  // superpixel labels, i < j
+  int length = 0;    // adjacent pixel pairs
   BoundaryType type = BoundaryType::kUnknown;
   std::array<double, 4> energy{{0, 0, 0, 0}};  // E for co, hi, lo, ro (when both planes exist)
 };

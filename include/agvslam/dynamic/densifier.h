@@ -26,8 +26,8 @@ struct DensifyOptions {
   // radius_disparity_factor * the group's mean disparity (px).
   double radius_px = 24;
   double radius_disparity_factor = 1.0;
-  int max_points = 24;          // extra corners per group
-  double min_distance_px = 5;   // from existing tracks and from each other
+  int max_points = 24;         // extra corners per group
+  double min_distance_px = 5;  // from existing tracks and from each other
   // Seed points a group needs (grouping's eq. 4 with this minimum); isolated single points are usually noise.
   int min_seeds = 2;
   // Seeds are the points both per-frame tests flag (when both ran: a track that slid along an edge fools one, rarely
@@ -53,9 +53,9 @@ struct DensifyOptions {
 
 // What the densifier reads beside its own section.
 struct DensifierContext {
-  QuadtreeFastConfig features;   // min_threshold: the corners' FAST threshold; border_px: none nearer the border
-  RoiGroupingConfig grouping;    // groups of seeds; grouping.min_points: a group that is a ROI already
-  LkTrackerConfig tracking;      // tracking.max_tracks and the LK parameters of the multi-frame check
+  QuadtreeFastConfig features;  // min_threshold: the corners' FAST threshold; border_px: none nearer the border
+  RoiGroupingConfig grouping;   // groups of seeds; grouping.min_points: a group that is a ROI already
+  LkTrackerConfig tracking;     // tracking.max_tracks and the LK parameters of the multi-frame check
   MultiFrameTestConfig multiframe;
   bool use_epipolar_test = true;
   bool use_depth_test = true;
@@ -103,9 +103,9 @@ class Densifier {
   std::vector<uint8_t> extra_ok_;
   std::vector<float> extra_prev_disp_, extra_cur_disp_;
   std::vector<cv::Point2f> extra_group_motion_;  // per densified point: its group's reference motion ...
-  std::vector<uint8_t> extra_group_valid_;        // ... when known
-  std::vector<uint8_t> extra_mf_;                 // per densified point: dynamic by the multi-frame check
-  std::vector<double> extra_mf_px_;               // ... its offset (-1: not tested)
+  std::vector<uint8_t> extra_group_valid_;       // ... when known
+  std::vector<uint8_t> extra_mf_;                // per densified point: dynamic by the multi-frame check
+  std::vector<double> extra_mf_px_;              // ... its offset (-1: not tested)
   std::vector<float> mf_vx_, mf_vy_;
   std::vector<cv::Point2f> mf_cur_, mf_ref_, mf_back_, mf_pred_;
   std::vector<int> mf_index_;

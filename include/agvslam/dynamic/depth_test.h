@@ -22,18 +22,18 @@ namespace agvslam::dynamic {
 
 // params/dynamic.yaml, section `depth_test`.
 struct DepthTestConfig {
-  int min_points = 12;                // tracks with both disparities needed to estimate the motion
-  double min_disparity_px = 2.0;      // farther points (depth too uncertain) are neither used nor tested
+  int min_points = 12;            // tracks with both disparities needed to estimate the motion
+  double min_disparity_px = 2.0;  // farther points (depth too uncertain) are neither used nor tested
   double ransac_reprojection_px = 2.0;
-  int ransac_iterations = 200;       // at most this many 3-track P3P samples (fewer as the inlier ratio allows)
+  int ransac_iterations = 200;  // at most this many 3-track P3P samples (fewer as the inlier ratio allows)
   double ransac_confidence = 0.999;
-  double a_reproj_px = 1.5;           // reprojection threshold: constant (px) ...
-  double b_reproj = 0.03;             // ... + slope per px of disparity
-  double a_disp_px = 1.0;             // disparity residual threshold: constant (px) ...
-  double b_disp = 0.03;               // ... + slope per px of disparity (relative depth error)
-  bool adaptive = true;               // raise the constants to k * robust sigma of this frame's residuals
+  double a_reproj_px = 1.5;  // reprojection threshold: constant (px) ...
+  double b_reproj = 0.03;    // ... + slope per px of disparity
+  double a_disp_px = 1.0;    // disparity residual threshold: constant (px) ...
+  double b_disp = 0.03;      // ... + slope per px of disparity (relative depth error)
+  bool adaptive = true;      // raise the constants to k * robust sigma of this frame's residuals
   double adaptive_k = 3.0;
-  double max_scale = 3.0;             // adaptive constants are at most max_scale x the configured ones
+  double max_scale = 3.0;  // adaptive constants are at most max_scale x the configured ones
   // With a motion prior (run()'s T_cur_prev_prior), the tracks within ransac_reprojection_px of where it puts them
   // are the inliers when they are at least this fraction of the used tracks: RANSAC is skipped and the least-squares
   // refinement starts from the prior. Otherwise (or 0) PnP RANSAC as without a prior. Only the multi-frame test has
@@ -46,13 +46,13 @@ struct DepthTestConfig {
 };
 
 struct DepthTestResult {
-  bool valid = false;                       // false: too few points, or PnP failed
-  SE3d T_cur_prev = SE3d::Identity();       // estimated ego-motion (previous camera -> current camera)
-  int used = 0;                             // tracks with both disparities
-  int inliers = 0;                          // PnP inliers
-  bool from_prior = false;                  // the inliers came from the motion prior (no RANSAC)
+  bool valid = false;                  // false: too few points, or PnP failed
+  SE3d T_cur_prev = SE3d::Identity();  // estimated ego-motion (previous camera -> current camera)
+  int used = 0;                        // tracks with both disparities
+  int inliers = 0;                     // PnP inliers
+  bool from_prior = false;             // the inliers came from the motion prior (no RANSAC)
   double a_reproj_used_px = 0, a_disp_used_px = 0;
-  std::vector<double> reprojection_px;      // per track, -1 where not tested
+  std::vector<double> reprojection_px;        // per track, -1 where not tested
   std::vector<double> disparity_residual_px;  // per track, -1 where not tested (no current disparity)
   std::vector<uint8_t> dynamic;
 };

@@ -26,16 +26,16 @@ namespace agvslam::dynamic {
 struct TrackedPoint {
   cv::Point2f prev_px, cur_px;
   float prev_disparity_px = 0, cur_disparity_px = 0;  // 0 = unknown
-  bool tracked = false;          // LK converged and passed the forward-backward check
-  bool densified = false;        // added around a small group of dynamic points (not a quadtree corner)
-  int age = 0;                   // frames the track has been followed before this one (1 = born in the previous)
+  bool tracked = false;                               // LK converged and passed the forward-backward check
+  bool densified = false;  // added around a small group of dynamic points (not a quadtree corner)
+  int age = 0;             // frames the track has been followed before this one (1 = born in the previous)
   double d_epi_px = 0, t_epi_px = 0;
   double reprojection_px = -1, disparity_residual_px = -1;  // depth test, -1 = not tested
-  double multiframe_px = -1;     // multi-frame test: offset from the prediction, -1 = not tested
+  double multiframe_px = -1;  // multi-frame test: offset from the prediction, -1 = not tested
   double multiframe_disparity_residual_px = -1;
   bool dynamic_epipolar = false, dynamic_depth = false, dynamic_multiframe = false;
-  bool dynamic = false;          // the union of the enabled tests
-  int group = -1;                // index into DetectorResult::rois, -1 = none
+  bool dynamic = false;  // the union of the enabled tests
+  int group = -1;        // index into DetectorResult::rois, -1 = none
 };
 
 // What became of an outline (mask_mode disparity): a dynamic region, or why not.
@@ -52,23 +52,23 @@ std::string to_string(OutlineVerdict verdict);
 // The segmentation of one dynamic ROI (debugging output; coordinates of `labels` are ROI-local).
 struct RoiSegmentation {
   cv::Rect roi;
-  std::vector<int> points;                 // indices into DetectorResult::points
+  std::vector<int> points;  // indices into DetectorResult::points
   double mean_disparity_px = 0;
-  cv::Mat disparity_px;                    // CV_32FC1, ROI size (SGBM on the crop), 0 = none
-  cv::Mat labels;                          // CV_32SC1, ROI size
+  cv::Mat disparity_px;  // CV_32FC1, ROI size (SGBM on the crop), 0 = none
+  cv::Mat labels;        // CV_32SC1, ROI size
   int superpixels = 0;
   SlicStats slic;
-  std::vector<DisparityPlane> planes;      // per superpixel
+  std::vector<DisparityPlane> planes;  // per superpixel
   std::vector<SuperpixelBoundary> boundaries;
-  std::vector<SuperpixelMotion> motion;    // photometric check per superpixel (when enabled)
-  cv::Mat outline;                         // CV_8UC1, ROI size: the object's pixels (mask_mode disparity)
-  bool half_scale = false;                 // disparity_px came from half-resolution SGBM
+  std::vector<SuperpixelMotion> motion;  // photometric check per superpixel (when enabled)
+  cv::Mat outline;                       // CV_8UC1, ROI size: the object's pixels (mask_mode disparity)
+  bool half_scale = false;               // disparity_px came from half-resolution SGBM
   OutlineStats outline_stats;
   SuperpixelMotion outline_motion, outline_motion_multiframe;  // photometric check of the outline (when run)
-  MotionCarveStats motion_carve;           // two-motion carving of a kept outline (motion_carve)
-  OutlineVerdict outline_verdict = OutlineVerdict::kNoSeed;   // kKept: the outline is a dynamic region
-  int object_id = -1;                      // the object over frames (objects.enabled): continued or new
-  bool coasted = false;                    // outlined from the tracks of an object of earlier frames (objects.coast_*)
+  MotionCarveStats motion_carve;                               // two-motion carving of a kept outline (motion_carve)
+  OutlineVerdict outline_verdict = OutlineVerdict::kNoSeed;    // kKept: the outline is a dynamic region
+  int object_id = -1;    // the object over frames (objects.enabled): continued or new
+  bool coasted = false;  // outlined from the tracks of an object of earlier frames (objects.coast_*)
   DynamicRegion region;
 };
 
@@ -82,32 +82,33 @@ struct DynamicMask {
 
 struct StageTimings {
   double pyramid_ms = 0, tracking_ms = 0, point_disparity_ms = 0, epipolar_ms = 0, depth_test_ms = 0, multiframe_ms = 0,
-         densify_ms = 0, grouping_ms = 0, roi_disparity_ms = 0, slic_ms = 0, planes_ms = 0, boundaries_ms = 0, regions_ms = 0,
-         motion_carve_ms = 0, band_ms = 0, features_ms = 0, total_ms = 0;
+         densify_ms = 0, grouping_ms = 0, roi_disparity_ms = 0, slic_ms = 0, planes_ms = 0, boundaries_ms = 0,
+         regions_ms = 0, motion_carve_ms = 0, band_ms = 0, features_ms = 0, total_ms = 0;
   std::string describe() const;
 };
 
 struct DetectorResult {
   std::size_t frame_index = 0;
   int64_t t_ns = 0;
-  bool has_previous = false;     // false on the first frame: nothing can be tested
+  bool has_previous = false;  // false on the first frame: nothing can be tested
   DynamicMask mask;
   std::vector<TrackedPoint> points;
   std::vector<RoiSegmentation> rois;
   EpipolarResult epipolar;
   DepthTestResult depth;
   MultiFrameResult multiframe;
-  BandResult band;               // the left band without stereo (band_segmenter.h)
-  int band_joined = 0, band_objects = 0;  // its regions joined to an object of the mask / reported as objects of their own
+  BandResult band;  // the left band without stereo (band_segmenter.h)
+  int band_joined = 0,
+      band_objects = 0;  // its regions joined to an object of the mask / reported as objects of their own
   // While the AGV drives: the band's candidate movers (BandSegmenter::driving_seeds) / those the tests flagged, which
   // joined the dynamic points.
   int band_driving_seeds = 0, band_driving_dynamic = 0;
-  DisparityPlane ground_plane;   // d = a x + b y + c of the floor from the static points (ground veto); may be invalid
-  cv::Mat full_disparity_px;     // only with detector.full_frame_disparity
+  DisparityPlane ground_plane;  // d = a x + b y + c of the floor from the static points (ground veto); may be invalid
+  cv::Mat full_disparity_px;    // only with detector.full_frame_disparity
   StageTimings timings;
-  int unconfirmed_objects = 0;   // objects found but not reported: nothing overlapped them in the previous frame
-                                 // (confirm.min_box_iou)
-  int lk_levels = -1;            // the pyramid levels the tracks were followed on (tracking.min_levels; -1: none)
+  int unconfirmed_objects = 0;  // objects found but not reported: nothing overlapped them in the previous frame
+                                // (confirm.min_box_iou)
+  int lk_levels = -1;           // the pyramid levels the tracks were followed on (tracking.min_levels; -1: none)
 
   int dynamic_point_count() const;
 };

@@ -12,14 +12,14 @@ namespace agvslam::dynamic {
 
 // params/dynamic.yaml, section `planes`.
 struct PlaneFitConfig {
-  int ransac_iterations = 50;          // upper bound; stops earlier at `confidence`
+  int ransac_iterations = 50;  // upper bound; stops earlier at `confidence`
   double confidence = 0.99;
-  double inlier_threshold_px = 1.0;    // |d - plane| for an inlier
-  int min_valid_pixels = 12;           // fewer pixels with a disparity: no plane
-  double min_valid_fraction = 0.2;     // ... or fewer than this fraction of the superpixel
-  double min_inlier_fraction = 0.5;    // of the valid pixels, else no plane
-  int max_samples = 400;               // larger superpixels are subsampled for the fit
-  uint32_t seed = 1;                   // RANSAC random generator seed (results are reproducible)
+  double inlier_threshold_px = 1.0;  // |d - plane| for an inlier
+  int min_valid_pixels = 12;         // fewer pixels with a disparity: no plane
+  double min_valid_fraction = 0.2;   // ... or fewer than this fraction of the superpixel
+  double min_inlier_fraction = 0.5;  // of the valid pixels, else no plane
+  int max_samples = 400;             // larger superpixels are subsampled for the fit
+  uint32_t seed = 1;                 // RANSAC random generator seed (results are reproducible)
 
   void validate(const std::string& source) const;
   std::string describe() const;
@@ -28,9 +28,9 @@ struct PlaneFitConfig {
 struct DisparityPlane {
   double a = 0, b = 0, c = 0;  // d = a x + b y + c
   bool valid = false;
-  int support = 0;             // pixels with a disparity used for the fit
+  int support = 0;  // pixels with a disparity used for the fit
   int inliers = 0;
-  double rms_px = 0;           // RMS residual of the inliers after the refit
+  double rms_px = 0;  // RMS residual of the inliers after the refit
 
   double disparity_at(double x, double y) const { return a * x + b * y + c; }
 };

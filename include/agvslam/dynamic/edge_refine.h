@@ -38,8 +38,8 @@ struct EdgeRefineConfig {
 };
 
 struct EdgeRefineStats {
-  int sides = 0;          // run ends looked at
-  int moved = 0;          // ... whose position changed
+  int sides = 0;  // run ends looked at
+  int moved = 0;  // ... whose position changed
   int pixels_added = 0, pixels_removed = 0;
 };
 

@@ -18,17 +18,17 @@ namespace agvslam::dynamic {
 
 // params/dynamic.yaml, section `tracking`.
 struct LkTrackerConfig {
-  int window_px = 11;             // LK window side
-  int levels = 4;                 // pyramid levels above the image (0 = no pyramid): the most that are used
+  int window_px = 11;  // LK window side
+  int levels = 4;      // pyramid levels above the image (0 = no pyramid): the most that are used
   // Beyond the paper: each frame tracks on as few levels as the motion needs, from min_levels up to `levels`. An
   // LK window of w px follows about (w / 2) * 2^L px of motion on L levels; the fewest levels that follow
   // motion_margin x the largest motion of the previous frame's tracks are used (all of them after a frame without
   // tracks). Every level costs about the same per track: 2 levels instead of 4 is ~40 % less LK.
-  int min_levels = 2;             // (above `levels`: `levels`, always)
+  int min_levels = 2;  // (above `levels`: `levels`, always)
   double motion_margin = 2.0;
   int max_iterations = 20;
-  double epsilon = 0.03;          // LK stop criterion (px)
-  double fb_max_error_px = 1.0;   // forward-backward round trip error allowed
+  double epsilon = 0.03;         // LK stop criterion (px)
+  double fb_max_error_px = 1.0;  // forward-backward round trip error allowed
   double min_eigen_threshold = 1e-3;
   // Beyond the paper: tracks continue over frames (the multi-frame test needs their history); each frame's
   // quadtree corners are added only farther than min_track_distance_px from every track, up to max_tracks.
@@ -77,16 +77,16 @@ class LkTracker {
 
 // params/dynamic.yaml, section `epipolar`.
 struct EpipolarTestConfig {
-  double a_epi_px = 1.0;              // eq. 3 constant term (px)
-  double b_epi = 0.02;                // eq. 3 slope (px of distance per px of disparity)
-  double ransac_threshold_px = 1.0;   // RANSAC inlier distance for F
+  double a_epi_px = 1.0;             // eq. 3 constant term (px)
+  double b_epi = 0.02;               // eq. 3 slope (px of distance per px of disparity)
+  double ransac_threshold_px = 1.0;  // RANSAC inlier distance for F
   double ransac_confidence = 0.999;
   int ransac_max_iterations = 500;
-  int min_tracks = 15;                // fewer usable tracks: no test (nothing flagged)
-  double min_parallax_px = 0.5;       // median track length below this: static camera, D = track length
-  bool adaptive = true;               // adapt a_epi to the residual scale of the frame
-  double adaptive_k = 3.0;            // a = k * robust sigma ...
-  double a_epi_max_px = 3.0;          // ... clamped to [a_epi_px, a_epi_max_px]
+  int min_tracks = 15;           // fewer usable tracks: no test (nothing flagged)
+  double min_parallax_px = 0.5;  // median track length below this: static camera, D = track length
+  bool adaptive = true;          // adapt a_epi to the residual scale of the frame
+  double adaptive_k = 3.0;       // a = k * robust sigma ...
+  double a_epi_max_px = 3.0;     // ... clamped to [a_epi_px, a_epi_max_px]
 
   void validate(const std::string& source) const;
   std::string describe() const;
@@ -96,8 +96,8 @@ struct EpipolarTestConfig {
 double epipolar_distance_px(const cv::Matx33d& F, const cv::Point2f& p_prev, const cv::Point2f& p_cur);
 
 struct EpipolarResult {
-  bool valid = false;            // false: too few tracks, or F could not be estimated
-  bool static_camera = false;    // the median track was shorter than min_parallax_px
+  bool valid = false;          // false: too few tracks, or F could not be estimated
+  bool static_camera = false;  // the median track was shorter than min_parallax_px
   cv::Matx33d F = cv::Matx33d::zeros();
   int inliers = 0;               // tracks within ransac_threshold_px of their line under the final F
   double robust_sigma_px = 0;    // 1.4826 * median(D_epi)

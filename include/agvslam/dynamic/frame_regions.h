@@ -51,7 +51,8 @@ class FrameRegions {
                     bool split_side_by_side, DynamicMask& mask);
   // A region of the superpixel / rectangle modes: its pixels in `region_pixels` (CV_8UC1, the rectangle's size)
   // become new instances of no object.
-  void add_unowned_region(const cv::Mat& region_pixels, const cv::Rect& rect, bool split_side_by_side, DynamicMask& mask);
+  void add_unowned_region(const cv::Mat& region_pixels, const cv::Rect& rect, bool split_side_by_side,
+                          DynamicMask& mask);
   // Pixels `painted` into the left band for `instance`: a region of their own (new_region), or a part of the region
   // that holds the instance.
   void add_band_rect(const cv::Rect& painted, int instance, bool new_region, DynamicMask& mask);

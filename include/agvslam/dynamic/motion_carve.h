@@ -15,9 +15,9 @@
 // The error of a hypothesis is the mean absolute difference of its samples with their mean removed (exposure). A
 // block is static when the static hypothesis fits clearly better (its error <= max_static_ratio x the object's) and
 // the object's motion clearly does not fit (its error >= min_object_error_dn), while the static one does (its error
-// <= max_static_error_dn: with a wrong ego-motion, the nearer of two wrong shifts "fits better"): such a block is removed from the
-// outline. Blocks where the hypotheses cannot be told apart (no texture, too few samples, a block straddling the
-// object's edge) stay. Of what is left, the connected parts holding one of the object's points stay.
+// <= max_static_error_dn: with a wrong ego-motion, the nearer of two wrong shifts "fits better"): such a block is
+// removed from the outline. Blocks where the hypotheses cannot be told apart (no texture, too few samples, a block
+// straddling the object's edge) stay. Of what is left, the connected parts holding one of the object's points stay.
 // Nothing is carved when the object's motion is within min_separation_px of a static point's at its depth (the
 // caller passes the object's tracks' median offset from the ego-motion): the two hypotheses predict the same.
 
@@ -49,10 +49,10 @@ struct MotionCarveConfig {
 };
 
 struct MotionCarveStats {
-  bool ran = false;         // the hypotheses were separable and the outline was tested
-  int blocks_tested = 0;    // blocks with enough textured samples
-  int blocks_static = 0;    // of those, static
-  int pixels_removed = 0;   // outline pixels removed (static blocks and the parts cut off from the object's points)
+  bool ran = false;        // the hypotheses were separable and the outline was tested
+  int blocks_tested = 0;   // blocks with enough textured samples
+  int blocks_static = 0;   // of those, static
+  int pixels_removed = 0;  // outline pixels removed (static blocks and the parts cut off from the object's points)
 };
 
 // outline: CV_8UC1 ROI-local outline (non-zero = object), modified in place; disparity_px: CV_32FC1 of the same

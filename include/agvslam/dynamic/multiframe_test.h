@@ -21,9 +21,9 @@
 // small: re-localising a point 0.3-0.6 s back from the chained prediction aliases on repeated structure (the
 // hole pattern of rack uprights) and drifts with the chain in turns, both of which look like motion. But a track
 // that straddles an occlusion edge slides slowly over the frames, below the per-frame forward-backward check, and
-// piles up with others on the edge. So each candidate (a track the test flags) is verified: its current patch is tracked by
-// LK directly into the reference image, starting at the track's own reference position (close for a real mover,
-// a few px off for a slid track), forward-backward checked; the candidate stays dynamic only when the position
+// piles up with others on the edge. So each candidate (a track the test flags) is verified: its current patch is
+// tracked by LK directly into the reference image, starting at the track's own reference position (close for a real
+// mover, a few px off for a slid track), forward-backward checked; the candidate stays dynamic only when the position
 // found, back-projected with the reference disparity, still misses the current position, and its disparity
 // residual counts only when the position found is within verify_max_shift_px of the track's (the reference
 // disparity was measured there). And a stereo mismatch in one frame (repetitive racking) gives a wrong depth that
@@ -48,27 +48,27 @@ namespace agvslam::dynamic {
 // params/dynamic.yaml, section `multiframe`.
 struct MultiFrameTestConfig {
   bool enabled = true;
-  int max_frames = 12;              // history (frames); at 20 Hz 0.6 s
-  int min_frames = 3;               // the reference is at least this many frames back
-  double min_translation_m = 0.3;   // the newest reference this far from the current camera is used
-  double max_rotation_deg = 6.0;    // references rotated more than this are not used
-  int min_points = 20;              // tracks observed in both frames needed for the motion
-  double min_disparity_px = 2.0;    // farther points are neither used nor tested
+  int max_frames = 12;             // history (frames); at 20 Hz 0.6 s
+  int min_frames = 3;              // the reference is at least this many frames back
+  double min_translation_m = 0.3;  // the newest reference this far from the current camera is used
+  double max_rotation_deg = 6.0;   // references rotated more than this are not used
+  int min_points = 20;             // tracks observed in both frames needed for the motion
+  double min_disparity_px = 2.0;   // farther points are neither used nor tested
   double ransac_reprojection_px = 2.0;
-  double a_reproj_px = 2.0;         // threshold a + b d (px) on the offset of the current position
+  double a_reproj_px = 2.0;  // threshold a + b d (px) on the offset of the current position
   double b_reproj = 0.05;
-  double a_disp_px = 1.0;           // and on the disparity residual
+  double a_disp_px = 1.0;  // and on the disparity residual
   double b_disp = 0.05;
-  double adaptive_k = 3.0;          // a = clamp(k * robust sigma, a_*, max_scale * a_*)
+  double adaptive_k = 3.0;  // a = clamp(k * robust sigma, a_*, max_scale * a_*)
   double max_scale = 2.5;
   // The motion between reference and current frame is the chain of the per-frame depth test's motions (each from
   // PnP RANSAC): the tracks within ransac_reprojection_px of where it puts them are the PnP inliers when they are
   // >= this fraction of the tracks used, and the least-squares refinement starts from it; fewer (the chain drifted
   // or broke): PnP RANSAC as before. 0 = always RANSAC.
   double prior_min_inlier_fraction = 0.5;
-  int verify_levels = 1;            // LK pyramid levels of the verification (reach ~4 x window / 2 px)
-  double verify_fb_px = 1.0;        // its forward-backward check
-  double verify_max_shift_px = 1.0; // the track's reference position is confirmed within this
+  int verify_levels = 1;             // LK pyramid levels of the verification (reach ~4 x window / 2 px)
+  double verify_fb_px = 1.0;         // its forward-backward check
+  double verify_max_shift_px = 1.0;  // the track's reference position is confirmed within this
   // Depth-edge check (done by the detector, which has the stereo matcher): a confirmed track whose disparity
   // differs from the disparity edge_check_px left, right, above or below it by more than edge_tolerance_px +
   // edge_tolerance_rel * d straddles a depth edge (its LK window mixes two surfaces that move apart over the
@@ -114,7 +114,8 @@ class TrackHistory {
   // consistent[i]: how this observation agrees with the previous one under the frame's ego-motion (kStepConsistent:
   // the per-frame depth test measured both residuals and passed the track; kStepStereoOnly: the test flagged it,
   // but its disparity changed as the ego-motion predicts; kStepBroken: neither, or not measured).
-  void next_frame(const std::vector<cv::Point2f>& px, const std::vector<float>& d, const std::vector<uint8_t>& consistent);
+  void next_frame(const std::vector<cv::Point2f>& px, const std::vector<float>& d,
+                  const std::vector<uint8_t>& consistent);
   // Ends the tracks with keep[i] == 0 (the others keep their order).
   void retain(const std::vector<uint8_t>& keep);
   // Appends a track observed in the current frame.
@@ -133,22 +134,22 @@ class TrackHistory {
 
  private:
   int depth_;
-  int64_t frame_ = 0;                 // current frame number (slot = frame % depth)
+  int64_t frame_ = 0;  // current frame number (slot = frame % depth)
   std::vector<int> age_, run_, strict_run_;
-  std::vector<cv::Point2f> px_;       // size() x depth, slot-major per track
+  std::vector<cv::Point2f> px_;  // size() x depth, slot-major per track
   std::vector<float> d_;
 };
 
 struct MultiFrameResult {
-  bool valid = false;             // a reference was available and the motion to it was estimated
-  int frames_back = 0;            // the reference is this many frames before the current one
-  double translation_m = 0;       // camera translation between the two (chained estimate)
+  bool valid = false;        // a reference was available and the motion to it was estimated
+  int frames_back = 0;       // the reference is this many frames before the current one
+  double translation_m = 0;  // camera translation between the two (chained estimate)
   double rotation_deg = 0;
-  int candidates = 0;             // tracks observed in both frames with a usable disparity
-  int flagged = 0, confirmed = 0; // tracks the test flagged, and of those the ones the verification kept
+  int candidates = 0;                 // tracks observed in both frames with a usable disparity
+  int flagged = 0, confirmed = 0;     // tracks the test flagged, and of those the ones the verification kept
   SE3d T_cur_ref = SE3d::Identity();  // estimated motion (reference camera -> current camera)
-  cv::Mat reference_left;         // the reference frame's left image (shared; valid until the next run)
-  DepthTestResult test;           // per track (current list) residuals and decisions
+  cv::Mat reference_left;             // the reference frame's left image (shared; valid until the next run)
+  DepthTestResult test;               // per track (current list) residuals and decisions
 };
 
 // Aperture check of one track: for an edge-like (2 half + 1)^2 patch of `image` (CV_8UC1) around p (least / largest
@@ -198,7 +199,7 @@ class MultiFrameTest {
     SE3d T_w_c;
     cv::Mat left;
   };
-  std::deque<Frame> frames_;  // the chained frames, the current one last
+  std::deque<Frame> frames_;    // the chained frames, the current one last
   std::vector<cv::Mat> spare_;  // image buffers of dropped frames, reused
   std::vector<cv::Mat> ref_pyramid_;
   std::vector<cv::Point2f> cand_cur_, cand_ref_, cand_back_;

@@ -31,17 +31,17 @@ namespace agvslam::dynamic {
 
 // params/dynamic.yaml, section `outline`.
 struct OutlineConfig {
-  int seed_radius_px = 4;              // a point's seed pixel is searched this far from it
-  double seed_tolerance_px = 1.0;      // |d(seed pixel) - d(point)| <= this + rel * d
+  int seed_radius_px = 4;          // a point's seed pixel is searched this far from it
+  double seed_tolerance_px = 1.0;  // |d(seed pixel) - d(point)| <= this + rel * d
   double seed_tolerance_rel = 0.08;
-  double step_tolerance_px = 0.75;     // neighbouring pixels of one surface differ by <= this + rel * d
+  double step_tolerance_px = 0.75;  // neighbouring pixels of one surface differ by <= this + rel * d
   double step_tolerance_rel = 0.04;
-  double depth_band_m = 0.8;           // and lie within this depth of their seed (a person's depth extent)
-  double ground_tolerance_px = 0.6;    // floor: |d - ground plane| <= this + rel * d
+  double depth_band_m = 0.8;         // and lie within this depth of their seed (a person's depth extent)
+  double ground_tolerance_px = 0.6;  // floor: |d - ground plane| <= this + rel * d
   double ground_tolerance_rel = 0.03;
-  bool static_competition = false;     // static points claim their surfaces (see above)
+  bool static_competition = false;         // static points claim their surfaces (see above)
   double max_hole_invalid_fraction = 0.5;  // enclosed parts with at least this fraction without disparity join
-  int min_hole_fill_px = 64;           // enclosed parts smaller than this join regardless
+  int min_hole_fill_px = 64;               // enclosed parts smaller than this join regardless
   // SGBM fattens a foreground object by about half its block (its cost window spills over the edge onto the
   // background): the outline is eroded by this many px (0 = not; edge_refine.h re-decides the sides instead).
   int erode_px = 0;
@@ -92,8 +92,8 @@ struct OutlineStats {
   int object_pixels = 0;
   int tracked_inside = 0, dynamic_inside = 0;  // tracked points inside the outline, and the dynamic ones (detector)
   int multiframe_tested_inside = 0, multiframe_dynamic_inside = 0;  // ... those the multi-frame test tested / flagged
-  double median_offset_px = -1;                // their median depth-test reprojection offset (detector; -1 none)
-  double median_disparity_px = 0;              // of the outline's pixels with a disparity
+  double median_offset_px = -1;    // their median depth-test reprojection offset (detector; -1 none)
+  double median_disparity_px = 0;  // of the outline's pixels with a disparity
 };
 
 // outline.aggregate_*: whether the tracks inside an outline move together, their median depth-test reprojection
@@ -143,9 +143,9 @@ class ObjectOutliner {
   OutlineConfig config_;
   const DisparityPlane* ground_ = nullptr;  // during outline(): the floor, when used
   std::vector<int> queue_;
-  std::vector<uint8_t> label_;     // 0 unvisited, 1 object, 2 static
+  std::vector<uint8_t> label_;               // 0 unvisited, 1 object, 2 static
   std::vector<double> ground_x_, ground_y_;  // the floor plane's column and row terms over the ROI
-  std::vector<int32_t> seed_of_;   // per claimed pixel: its seed
+  std::vector<int32_t> seed_of_;             // per claimed pixel: its seed
   std::vector<Seed> seeds_;
   std::vector<uint8_t> fill_;
   std::vector<float> disparities_;

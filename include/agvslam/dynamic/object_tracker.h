@@ -45,14 +45,14 @@ struct ObjectTrackerOptions {
 
 // An object of the last frame that had a region (or was carried into the left band).
 struct ObjectTrack {
-  cv::Rect rect;                   // its region in that frame
+  cv::Rect rect;  // its region in that frame
   double median_disparity_px = 0;
-  int pixels = 0;                  // its outline's pixels in that frame
-  int detections = 0;              // frames kept on its own evidence
-  int coasted = 0;                 // frames in a row it has coasted since
-  int band_frames = 0;             // frames in a row it was only carried in the left band (band_carry.*)
-  cv::Rect carry_rect;             // its pixels in that frame, kept near the left band only (band_carry.*) ...
-  cv::Mat carry_mask;              // ... CV_8UC1 of carry_rect's size, 255 = the object's
+  int pixels = 0;       // its outline's pixels in that frame
+  int detections = 0;   // frames kept on its own evidence
+  int coasted = 0;      // frames in a row it has coasted since
+  int band_frames = 0;  // frames in a row it was only carried in the left band (band_carry.*)
+  cv::Rect carry_rect;  // its pixels in that frame, kept near the left band only (band_carry.*) ...
+  cv::Mat carry_mask;   // ... CV_8UC1 of carry_rect's size, 255 = the object's
 };
 
 // An object whose pixels this frame's left band carried (LeftBand::carry).

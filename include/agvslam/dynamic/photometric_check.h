@@ -25,10 +25,10 @@ namespace agvslam::dynamic {
 // params/dynamic.yaml, section `photometric`.
 struct PhotometricCheckConfig {
   bool enabled = true;
-  double max_motion_px = 1.0;   // apparent motion below this: the superpixel moves with the background
-  double min_gradient = 6.0;    // grey levels per px: weaker texture cannot tell (undecided, not vetoed)
-  int sample_step_px = 2;       // every 2nd pixel in x and y
-  int min_samples = 12;         // fewer usable samples: undecided
+  double max_motion_px = 1.0;  // apparent motion below this: the superpixel moves with the background
+  double min_gradient = 6.0;   // grey levels per px: weaker texture cannot tell (undecided, not vetoed)
+  int sample_step_px = 2;      // every 2nd pixel in x and y
+  int min_samples = 12;        // fewer usable samples: undecided
   // Region check (mask_mode disparity): a region is static when its apparent motion is at most max_motion_px
   // against the previous frame and at most multiframe_max_motion_px against the multi-frame reference (larger:
   // the depth error of the warp grows with the baseline), sampling its pixels at least region_inset_px inside its
@@ -45,8 +45,8 @@ struct PhotometricCheckConfig {
 
 struct SuperpixelMotion {
   int samples = 0;
-  double mean_gradient = 0;       // grey levels per px
-  double apparent_motion_px = -1; // -1: not measured
+  double mean_gradient = 0;        // grey levels per px
+  double apparent_motion_px = -1;  // -1: not measured
   bool moves_with_background = false;
 };
 

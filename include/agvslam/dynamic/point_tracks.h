@@ -75,8 +75,8 @@ class PointTracks {
   bool flagged_by_enabled_tests(const TrackedPoint& p) const;
 
   // LK of `prev_px` from the previous frame's pyramid into this frame's, on `levels` levels.
-  void track_points(const std::vector<cv::Point2f>& prev_px, std::vector<cv::Point2f>& cur_px,
-                    std::vector<uint8_t>& ok, int levels);
+  void track_points(const std::vector<cv::Point2f>& prev_px, std::vector<cv::Point2f>& cur_px, std::vector<uint8_t>& ok,
+                    int levels);
   // The sparse matcher's disparity at `px` of a stereo pair (0 = none).
   float match_disparity(const cv::Mat& left, const cv::Mat& right, const cv::Point2f& px);
   // The multi-frame test's depth-edge and stereo checks of a point of `frame` with this disparity
@@ -100,8 +100,9 @@ class PointTracks {
   const std::vector<cv::Mat>& cur_pyramid() const { return cur_pyramid_; }
 
  private:
-  void measure_disparities(const StereoFrame& frame, const std::vector<cv::Point2f>& px, const std::vector<uint8_t>* usable,
-                           const cv::Mat& full_disparity_px, std::vector<float>& out);
+  void measure_disparities(const StereoFrame& frame, const std::vector<cv::Point2f>& px,
+                           const std::vector<uint8_t>* usable, const cv::Mat& full_disparity_px,
+                           std::vector<float>& out);
   // Where each track's LK search starts: where the motion prior puts it as a static point, when that is far enough
   // from its previous position (tracking.predict_min_px); false when no track needs it.
   bool predicted_starts();
@@ -137,7 +138,7 @@ class PointTracks {
   // LK starts (tracking.predict_min_px); none after a frame without one.
   SE3d T_motion_prior_ = SE3d::Identity();
   bool has_motion_prior_ = false;
-  std::vector<cv::Point2f> lk_start_;  // where each track's search starts (empty: at its old position)
+  std::vector<cv::Point2f> lk_start_;            // where each track's search starts (empty: at its old position)
   std::vector<std::vector<std::size_t>> split_;  // tracks searched from the old position / from a prediction
   std::vector<cv::Point2f> part_prev_, part_start_, part_cur_;
   std::vector<uint8_t> part_ok_;

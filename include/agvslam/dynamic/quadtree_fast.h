@@ -17,11 +17,11 @@ namespace agvslam::dynamic {
 
 // params/dynamic.yaml, section `features`.
 struct QuadtreeFastConfig {
-  int target_count = 300;     // N: corners returned (when available)
-  int cell_size_px = 32;      // side of the extraction cells
-  int threshold = 20;         // FAST threshold (grey levels)
-  int min_threshold = 7;      // fallback threshold in cells with no corner at `threshold`
-  int border_px = 16;         // no corner closer than this to the image edge (LK and stereo windows fit)
+  int target_count = 300;  // N: corners returned (when available)
+  int cell_size_px = 32;   // side of the extraction cells
+  int threshold = 20;      // FAST threshold (grey levels)
+  int min_threshold = 7;   // fallback threshold in cells with no corner at `threshold`
+  int border_px = 16;      // no corner closer than this to the image edge (LK and stereo windows fit)
 
   void validate(const std::string& source) const;
   std::string describe() const;
@@ -33,16 +33,16 @@ struct Corner {
 };
 
 struct QuadtreeStats {
-  int candidates = 0;          // corners after the per-cell threshold choice
-  int weak_cells = 0;          // cells that used min_threshold
+  int candidates = 0;                  // corners after the per-cell threshold choice
+  int weak_cells = 0;                  // cells that used min_threshold
   std::vector<cv::Rect2f> node_rects;  // the final nodes (filled only when collect_nodes is true)
 };
 
 // Step (2)-(4) on given candidates inside `area`: one corner per node, the strongest; exactly
 // min(target_count, distinct nodes) corners, sorted by decreasing response. node_rects (optional) receives
 // the rectangle of the node each returned corner comes from (same order).
-std::vector<Corner> distribute_quadtree(const std::vector<Corner>& candidates, const cv::Rect2f& area,
-                                        int target_count, std::vector<cv::Rect2f>* node_rects = nullptr);
+std::vector<Corner> distribute_quadtree(const std::vector<Corner>& candidates, const cv::Rect2f& area, int target_count,
+                                        std::vector<cv::Rect2f>* node_rects = nullptr);
 
 class QuadtreeFast {
  public:

@@ -34,12 +34,12 @@ bool parse_mask_mode(const std::string& text, MaskMode& mode);
 
 // params/dynamic.yaml, section `regions`.
 struct RegionSearchConfig {
-  int start_radius_px = 3;            // superpixels within this distance of a point are start candidates
-  double start_tolerance_px = 1.5;    // |d_point - plane| allowed for a start superpixel ...
-  double start_tolerance_rel = 0.1;   // ... + this fraction of d_point
-  bool stop_at_unknown = false;       // treat boundaries of superpixels without a plane as occlusions
-  bool disparity_band = true;         // also stop at superpixels outside the group's disparity band
-  double band_tolerance_px = 1.5;     // band = [min d - tol(min d), max d + tol(max d)], tol(d) = px + rel * d
+  int start_radius_px = 3;           // superpixels within this distance of a point are start candidates
+  double start_tolerance_px = 1.5;   // |d_point - plane| allowed for a start superpixel ...
+  double start_tolerance_rel = 0.1;  // ... + this fraction of d_point
+  bool stop_at_unknown = false;      // treat boundaries of superpixels without a plane as occlusions
+  bool disparity_band = true;        // also stop at superpixels outside the group's disparity band
+  double band_tolerance_px = 1.5;    // band = [min d - tol(min d), max d + tol(max d)], tol(d) = px + rel * d
   double band_tolerance_rel = 0.05;
   // With the band, a superpixel also joins the outline only when its plane agrees (band tolerance) with the
   // disparity of the group's nearest started point: one group may hold objects at different depths.
@@ -55,9 +55,9 @@ struct RegionSearchConfig {
   // search stops on entering it and the outline never includes it. Removes the floor strip around the feet of
   // a person or the wheels of a vehicle, where the object touches the floor and no occlusion boundary exists.
   bool ground_veto = true;
-  double ground_tolerance_px = 1.0;     // |plane - ground| at the superpixel's centre ...
-  double ground_tolerance_rel = 0.05;   // ... + this fraction of d
-  double ground_slope_tolerance = 0.75; // |b_plane - b_ground| <= this fraction of b_ground (b = 0 never passes)
+  double ground_tolerance_px = 1.0;      // |plane - ground| at the superpixel's centre ...
+  double ground_tolerance_rel = 0.05;    // ... + this fraction of d
+  double ground_slope_tolerance = 0.75;  // |b_plane - b_ground| <= this fraction of b_ground (b = 0 never passes)
   // Superpixels without a plane (no SGBM disparity: textureless, or the half-occluded strip to the left of a
   // foreground object) join the outline only when enclosed: from their centre, the first other superpixel
   // left, right, above and below is a member. The half-occluded background strip has background on one side,
@@ -73,7 +73,7 @@ struct DisparityBand {
   bool enabled = false;
   double lo_px = 0, hi_px = 0;
   const std::vector<DisparityPlane>* planes = nullptr;
-  cv::Point origin;  // full-image position of the label image's top-left pixel
+  cv::Point origin;                           // full-image position of the label image's top-left pixel
   const std::vector<char>* vetoed = nullptr;  // per label: static superpixel (the search stops before it)
   // Ground plane (full-image coordinates) for the ground veto; nullptr = none. A superpixel whose plane agrees
   // with it counts as outside the band.
@@ -102,11 +102,11 @@ int choose_start_superpixel(const cv::Mat& labels, cv::Point origin, const std::
                             cv::Point2f point_px, float d_px, const RegionSearchConfig& config);
 
 struct DynamicRegion {
-  cv::Rect rectangle;              // full-image coordinates (empty when no point could start)
-  std::vector<int> superpixels;    // the flood from the start superpixels (labels of this ROI)
+  cv::Rect rectangle;            // full-image coordinates (empty when no point could start)
+  std::vector<int> superpixels;  // the flood from the start superpixels (labels of this ROI)
   std::vector<int> start_superpixels;
   std::vector<int> vetoed_superpixels;  // static superpixels (static veto)
-  std::vector<cv::Point> stop_points;  // full-image coordinates, 4 per started point
+  std::vector<cv::Point> stop_points;   // full-image coordinates, 4 per started point
   int started_points = 0;
   double band_lo_px = 0, band_hi_px = 0;  // the disparity band used (when enabled)
 };

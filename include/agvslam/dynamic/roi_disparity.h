@@ -20,7 +20,9 @@ class RoiMatcher {
   void match(const StereoFrame& frame, const cv::Rect& roi, int max_disparity_px, double scale, int row_step,
              cv::Mat& disparity_px);
   // The whole frame (debugging).
-  void match_full(const StereoFrame& frame, cv::Mat& disparity_px) { sgbm_.compute(frame.left, frame.right, disparity_px); }
+  void match_full(const StereoFrame& frame, cv::Mat& disparity_px) {
+    sgbm_.compute(frame.left, frame.right, disparity_px);
+  }
 
  private:
   stereo::StereoSgbm sgbm_;

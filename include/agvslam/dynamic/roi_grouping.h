@@ -17,12 +17,12 @@ namespace agvslam::dynamic {
 
 // params/dynamic.yaml, section `grouping`.
 struct RoiGroupingConfig {
-  double a_s_px = 40.0;          // eq. 4 constant (px)
-  double b_s = 1.5;              // eq. 4 slope (px per px of disparity)
-  double t_disp_px = 3.0;        // T_disp constant (px)
-  double t_disp_rel = 0.1;       // ... + t_disp_rel * d (0 = the paper's constant threshold)
-  int min_points = 5;            // "more than four dynamic features"
-  int margin_px = 16;            // ROI = bounding box + margin_px + margin_disparity_factor * d
+  double a_s_px = 40.0;     // eq. 4 constant (px)
+  double b_s = 1.5;         // eq. 4 slope (px per px of disparity)
+  double t_disp_px = 3.0;   // T_disp constant (px)
+  double t_disp_rel = 0.1;  // ... + t_disp_rel * d (0 = the paper's constant threshold)
+  int min_points = 5;       // "more than four dynamic features"
+  int margin_px = 16;       // ROI = bounding box + margin_px + margin_disparity_factor * d
   double margin_disparity_factor = 0.5;
   // Beyond the paper: groups (of >= 2 points) whose ROIs overlap, or are stacked vertically (overlapping
   // columns, vertical gap <= T_s), and whose mean disparities agree within T_disp are one object (a person's
@@ -41,9 +41,9 @@ struct RoiGroupingConfig {
 };
 
 struct DynamicGroup {
-  std::vector<int> members;      // indices into the points given to group_dynamic_points
-  cv::Rect bounds;               // bounding box of the members (px, inclusive of the points)
-  cv::Rect roi;                  // bounds + margin, clipped to the image
+  std::vector<int> members;  // indices into the points given to group_dynamic_points
+  cv::Rect bounds;           // bounding box of the members (px, inclusive of the points)
+  cv::Rect roi;              // bounds + margin, clipped to the image
   double mean_disparity_px = 0;
 };
 

@@ -88,10 +88,10 @@ struct RoiOutlinerContext {
   PhotometricCheckConfig photometric;
   MotionCarveConfig motion_carve;
   StaticCarveOptions static_carve;
-  ConfirmOptions confirm;            // near_*: which kept outlines are near and moving
-  bool full_frame_disparity = false; // detector.full_frame_disparity: ROIs cut from the whole-frame SGBM
-  bool merge_stacked_regions = true; // detector.merge_stacked_regions
-  bool split_side_by_side = true;    // detector.split_side_by_side
+  ConfirmOptions confirm;             // near_*: which kept outlines are near and moving
+  bool full_frame_disparity = false;  // detector.full_frame_disparity: ROIs cut from the whole-frame SGBM
+  bool merge_stacked_regions = true;  // detector.merge_stacked_regions
+  bool split_side_by_side = true;     // detector.split_side_by_side
 };
 
 class RoiOutliner {
@@ -102,7 +102,9 @@ class RoiOutliner {
   // Starts a frame (forgets the frame's static offset median).
   void begin_frame() { static_offset_median_px_ = -1; }
   // detector.full_frame_disparity: SGBM of the whole frame.
-  void full_frame_disparity(const StereoFrame& frame, cv::Mat& disparity_px) { matcher_.match_full(frame, disparity_px); }
+  void full_frame_disparity(const StereoFrame& frame, cv::Mat& disparity_px) {
+    matcher_.match_full(frame, disparity_px);
+  }
 
   // Outlines `group` (group index `group_index`; its members index `dynamic`) into `seg`: its points get the group
   // index, a kept region is painted into result.mask through `regions`. object_id: the object it continues (-1:
@@ -138,8 +140,8 @@ class RoiOutliner {
   void collect_static_seeds(const DetectorResult& result, const cv::Rect& roi);
   void outline_roi(const DetectorResult& result, RoiSegmentation& seg);
   // The sides of the ROI to widen (roi.extend_*); false when none.
-  bool sides_to_widen(const StereoFrame& frame, const DetectorResult& result, const RoiSegmentation& seg,
-                      bool& left, bool& right) const;
+  bool sides_to_widen(const StereoFrame& frame, const DetectorResult& result, const RoiSegmentation& seg, bool& left,
+                      bool& right) const;
   // Widens the ROI on those sides, matching only the new strips, and outlines again.
   void widen(const StereoFrame& frame, const RoiMatch& match, bool left, bool right, RoiSegmentation& seg);
   // Edge refinement, half-scale erosion, closing of far outlines and the fill to the left band.

@@ -9,8 +9,8 @@
 //                of an evaluated pixel q becomes unstable when cluster(p) != cluster(q) or q is still
 //                unstable (its cluster changed); everything else becomes stable. An unstable pixel is
 //                compared with every centre whose 2S x 2S window contains it, as in the plain variant (found
-//                among the 3 x 3 seeds around its grid cell: centres stay near their seeds). Cluster centres are kept as
-//                running sums, updated only for the pixels that changed.
+//                among the 3 x 3 seeds around its grid cell: centres stay near their seeds). Cluster centres are kept
+//                as running sums, updated only for the pixels that changed.
 // Both stop after `iterations` rounds or when a round changes fewer than min_change_fraction of the pixels
 // (0: only when no label changes); both end with the connectivity
 // step (4-connected components, fragments smaller than min_segment_fraction * S^2 merged into a neighbour).
@@ -30,8 +30,8 @@ struct SlicConfig {
   int max_superpixels = 800;         // per ROI; S grows when a large ROI would need more
   double max_color_distance = 16.0;  // N_c (grey levels): lower = superpixels follow intensity edges more
   int iterations = 10;
-  double min_change_fraction = 0.02; // converged when a round changes fewer than this fraction of the pixels
-  bool incremental = false;          // the paper's unstable-pixel update (false = plain SLIC, faster here)
+  double min_change_fraction = 0.02;  // converged when a round changes fewer than this fraction of the pixels
+  bool incremental = false;           // the paper's unstable-pixel update (false = plain SLIC, faster here)
   double min_segment_fraction = 0.25;
 
   void validate(const std::string& source) const;
@@ -44,16 +44,16 @@ struct SlicConfig {
 // pixel touched by the bookkeeping (buffer resets, change counts, centre sums, the unstable set); work() is their
 // sum, one unit each (it tracks callgrind instruction counts: see tests/bench/bench_dynamic.cpp BM_DynamicSlic).
 struct SlicStats {
-  int64_t distance_evaluations = 0;                  // D_SLIC computations in total
+  int64_t distance_evaluations = 0;  // D_SLIC computations in total
   int64_t candidate_checks = 0;
   int64_t pixel_visits = 0;
   int64_t work() const { return candidate_checks + pixel_visits; }
   std::vector<int64_t> evaluations_per_iteration;
-  std::vector<int> changed_per_iteration;           // pixels whose cluster changed
+  std::vector<int> changed_per_iteration;  // pixels whose cluster changed
   int iterations = 0;
-  int step_px = 0;                                   // S actually used
-  int seeds = 0;                                     // K
-  int superpixels = 0;                               // after the connectivity step
+  int step_px = 0;      // S actually used
+  int seeds = 0;        // K
+  int superpixels = 0;  // after the connectivity step
 };
 
 class Slic {
@@ -81,11 +81,11 @@ class Slic {
   // The seed grid of one image and the buffers the steps share.
   struct Grid {
     int W = 0, H = 0;
-    std::size_t P = 0;       // pixels
+    std::size_t P = 0;          // pixels
     int nx = 0, ny = 0, K = 0;  // seeds per row / column, in all
-    double sx = 0, sy = 0;   // grid cell size (px)
-    double step = 0;         // N_s = S_step (px)
-    int win = 0;             // a centre's search window: +- win px around it
+    double sx = 0, sy = 0;      // grid cell size (px)
+    double step = 0;            // N_s = S_step (px)
+    int win = 0;                // a centre's search window: +- win px around it
     float inv_nc2 = 0, inv_ns2 = 0;
     const uint8_t* img = nullptr;
     int32_t* lab = nullptr;  // the labels being computed

@@ -38,7 +38,7 @@ struct DetectedObject {
   int pixels = 0;
   int matched_object_id = -1;  // -1: false positive (or ignored)
   double iou = 0;
-  bool ignored = false;        // on a "don't care" object, or below min_detection_pixels
+  bool ignored = false;  // on a "don't care" object, or below min_detection_pixels
 };
 
 struct FrameDetectionScore {

@@ -21,9 +21,9 @@ ErrorStats compute_stats(std::vector<double> values);
 
 struct AteResult {
   AlignMode mode = AlignMode::kSE3;
-  Alignment alignment;               // maps the estimate's world frame into the ground truth's
+  Alignment alignment;  // maps the estimate's world frame into the ground truth's
   ErrorStats translation_m;
-  std::vector<double> errors_m;      // per associated pose
+  std::vector<double> errors_m;  // per associated pose
   std::vector<Eigen::Vector3d> p_gt, p_est_aligned;
 };
 AteResult compute_ate(const PosePairs& pairs, AlignMode mode);
@@ -50,8 +50,8 @@ struct KittiResult {
 };
 // nullopt when the ground-truth path is shorter than the shortest segment length.
 std::optional<KittiResult> compute_kitti_relative(const PosePairs& pairs, double scale = 1.0,
-                                                  const std::vector<double>& lengths_m = {100, 200, 300, 400, 500,
-                                                                                          600, 700, 800},
+                                                  const std::vector<double>& lengths_m = {100, 200, 300, 400, 500, 600,
+                                                                                          700, 800},
                                                   int step_frames = 10);
 
 double path_length_m(const std::vector<SE3d>& poses);

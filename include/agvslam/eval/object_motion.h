@@ -17,22 +17,22 @@
 namespace agvslam::eval {
 
 struct ObjectMotionConfig {
-  int min_pixels = 200;             // pixels with ground-truth disparity in each frame
-  double max_visible_change = 0.25; // now / then within [1 / (1 + c), 1 + c]
+  int min_pixels = 200;              // pixels with ground-truth disparity in each frame
+  double max_visible_change = 0.25;  // now / then within [1 / (1 + c), 1 + c]
 };
 
 struct ObjectImageMotion {
   bool valid = false;
-  double offset_px = -1;       // centroid now - predicted static centroid, |.| in px
-  double visible_ratio = 0;    // pixels now / pixels then (with disparity)
+  double offset_px = -1;     // centroid now - predicted static centroid, |.| in px
+  double visible_ratio = 0;  // pixels now / pixels then (with disparity)
   int pixels_then = 0, pixels_now = 0;
 };
 
 // instances_*: CV_8UC1 object ids (0 = none); disparity_*_px: CV_32FC1, 0 = none; T_now_then maps points of the
 // earlier camera frame into the current one (T_w_now^-1 * T_w_then).
 ObjectImageMotion ground_truth_image_motion(const cv::Mat& instances_then, const cv::Mat& disparity_then_px,
-                                            const cv::Mat& instances_now, const cv::Mat& disparity_now_px, int object_id,
-                                            const PinholeCamera& camera, double bf_px_m, const SE3d& T_now_then,
-                                            const ObjectMotionConfig& config = {});
+                                            const cv::Mat& instances_now, const cv::Mat& disparity_now_px,
+                                            int object_id, const PinholeCamera& camera, double bf_px_m,
+                                            const SE3d& T_now_then, const ObjectMotionConfig& config = {});
 
 }  // namespace agvslam::eval

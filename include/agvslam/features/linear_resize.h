@@ -1,9 +1,9 @@
 #pragma once
 // Bilinear downscaling bit-exact with cv::resize(..., INTER_LINEAR_EXACT) for 8-bit grey images (used for the
 // features module's pyramids): the same fixed-point weights (8 fractional bits, from OpenCV's formula in double
-// precision) and the same single rounding of the exact integer sum. cv::resize spends ~17 instructions per output pixel at
-// these sizes; this one shuffles eight pixels at a time (SSSE3) and blends rows with SSE2, and it allocates
-// nothing once its tables are built for a size.
+// precision) and the same single rounding of the exact integer sum. cv::resize spends ~17 instructions per output pixel
+// at these sizes; this one shuffles eight pixels at a time (SSSE3) and blends rows with SSE2, and it allocates nothing
+// once its tables are built for a size.
 #include <cstdint>
 #include <opencv2/core.hpp>
 #include <vector>
@@ -26,13 +26,13 @@ class LinearExactResizer {
 
   cv::Size src_size_, dst_size_;
   bool usable_ = false, last_fast_ = false, ssse3_ = false;
-  std::vector<int> x_ofs_;                  // per output column: left source column
-  std::vector<uint16_t> x_c0_, x_c1_;       // weights of x_ofs and x_ofs + 1 (sum 256)
-  std::vector<int> y_ofs_;                  // per output row: upper source row
+  std::vector<int> x_ofs_;             // per output column: left source column
+  std::vector<uint16_t> x_c0_, x_c1_;  // weights of x_ofs and x_ofs + 1 (sum 256)
+  std::vector<int> y_ofs_;             // per output row: upper source row
   std::vector<uint16_t> y_c0_, y_c1_;
-  std::vector<int> block_base_;             // per 8 output columns: first source column they read
-  std::vector<uint8_t> block_shuffle_;      // per block: 16-byte shuffles for x_ofs and x_ofs + 1
-  std::vector<uint16_t> rows_[2];           // horizontally resized source rows (8 fractional bits)
+  std::vector<int> block_base_;         // per 8 output columns: first source column they read
+  std::vector<uint8_t> block_shuffle_;  // per block: 16-byte shuffles for x_ofs and x_ofs + 1
+  std::vector<uint16_t> rows_[2];       // horizontally resized source rows (8 fractional bits)
   int row_id_[2] = {-1, -1};
 };
 

@@ -31,13 +31,13 @@ bool parse_level_allocation(const std::string& text, LevelAllocation& out);
 
 // params/features.yaml, section `orb` (features::load_features_config).
 struct OrbExtractorConfig {
-  int n_features = 1200;         // per image (paper 004 uses ORB-SLAM2's 1200 for 752x480)
-  double scale_factor = 1.2;     // between pyramid levels
+  int n_features = 1200;      // per image (paper 004 uses ORB-SLAM2's 1200 for 752x480)
+  double scale_factor = 1.2;  // between pyramid levels
   int n_levels = 8;
-  int ini_fast_threshold = 20;   // FAST threshold for the first pass
-  int min_fast_threshold = 7;    // retry in cells where the first pass found no corner
-  int mask_dilation_px = 8;      // the dynamic mask grows by this (level-0 px) before it excludes keypoints
-  int cell_size_px = 30;         // side of the FAST cells whose emptiness triggers the retry (ORB-SLAM2's W = 30)
+  int ini_fast_threshold = 20;  // FAST threshold for the first pass
+  int min_fast_threshold = 7;   // retry in cells where the first pass found no corner
+  int mask_dilation_px = 8;     // the dynamic mask grows by this (level-0 px) before it excludes keypoints
+  int cell_size_px = 30;        // side of the FAST cells whose emptiness triggers the retry (ORB-SLAM2's W = 30)
   LevelAllocation level_allocation = LevelAllocation::kArea;
 
   // Features wanted on each level (n_levels values summing to n_features).
@@ -61,9 +61,9 @@ struct KeypointSet {
 
 // Per-call figures of OrbExtractor::extract (for tests, benchmarks and the tracker's statistics).
 struct OrbExtractorStats {
-  int candidates = 0;        // FAST corners outside the mask, all levels, before the quadtree
-  int masked_candidates = 0; // corners dropped because they lie within the dilated dynamic mask
-  int retry_cells = 0;       // cells without a corner at ini_fast_threshold (they take min_fast_threshold ones)
+  int candidates = 0;         // FAST corners outside the mask, all levels, before the quadtree
+  int masked_candidates = 0;  // corners dropped because they lie within the dilated dynamic mask
+  int retry_cells = 0;        // cells without a corner at ini_fast_threshold (they take min_fast_threshold ones)
   std::vector<int> keypoints_per_level;
   // Wall time of each stage (ms): pyramid, mask, FAST + cells, quadtree, orientation, blur, descriptors.
   double t_pyramid_ms = 0, t_mask_ms = 0, t_fast_ms = 0, t_distribute_ms = 0, t_orientation_ms = 0, t_blur_ms = 0,
@@ -71,9 +71,9 @@ struct OrbExtractorStats {
 };
 
 // Constants of ORB-SLAM2's extractor (and OpenCV's ORB with patchSize = 31).
-inline constexpr int kOrbPatchSize = 31;       // BRIEF patch side at the keypoint's level
-inline constexpr int kOrbHalfPatchSize = 15;   // radius of the intensity-centroid disc
-inline constexpr int kOrbEdgeThreshold = 19;   // keypoints stay this far (level px) from every level's border
+inline constexpr int kOrbPatchSize = 31;      // BRIEF patch side at the keypoint's level
+inline constexpr int kOrbHalfPatchSize = 15;  // radius of the intensity-centroid disc
+inline constexpr int kOrbEdgeThreshold = 19;  // keypoints stay this far (level px) from every level's border
 inline constexpr int kOrbDescriptorBytes = 32;
 
 class OrbExtractor {
@@ -108,11 +108,11 @@ class OrbExtractor {
 
  private:
   struct Candidate {
-    int16_t x, y;      // level px
-    int16_t score;     // FAST score
+    int16_t x, y;   // level px
+    int16_t score;  // FAST score
     int16_t cell;
   };
-  static constexpr int kBlurBorder = 3;     // reflected border around each left level (the 7x7 blur's radius)
+  static constexpr int kBlurBorder = 3;  // reflected border around each left level (the 7x7 blur's radius)
   void build_bordered_pyramid(const cv::Mat& image);
   void prepare_mask(const cv::Mat& dynamic_mask, cv::Size image_size);
   bool masked(float x0_px, float y0_px, int level) const;
@@ -121,21 +121,21 @@ class OrbExtractor {
   void compute_descriptors(const std::vector<cv::KeyPoint>& keypoints, cv::Mat& descriptors) const;
 
   OrbExtractorConfig config_;
-  std::vector<cv::Mat> pyramid_;           // views into bordered_
-  std::vector<cv::Mat> bordered_;          // each level with a kBlurBorder reflected border
+  std::vector<cv::Mat> pyramid_;              // views into bordered_
+  std::vector<cv::Mat> bordered_;             // each level with a kBlurBorder reflected border
   std::vector<LinearExactResizer> resizers_;  // level l - 1 -> l
   std::vector<float> scale_factors_, inv_scale_factors_, level_sigma2_, inv_level_sigma2_;
   std::vector<int> features_per_level_;
-  std::vector<int> umax_;                  // half-width of each row of the orientation disc
-  std::vector<cv::Mat> blurred_;           // Gaussian 7x7, sigma 2 of each level (the descriptor image)
+  std::vector<int> umax_;         // half-width of each row of the orientation disc
+  std::vector<cv::Mat> blurred_;  // Gaussian 7x7, sigma 2 of each level (the descriptor image)
   OrbBlur blur_;
-  cv::Mat mask_binary_;                    // dynamic_mask as 0 / 255
-  cv::Mat mask_integral_;                  // integral image of (dynamic_mask != 0), level 0; empty = no mask
+  cv::Mat mask_binary_;    // dynamic_mask as 0 / 255
+  cv::Mat mask_integral_;  // integral image of (dynamic_mask != 0), level 0; empty = no mask
   bool mask_active_ = false;
-  cv::Mat strength_;                       // FAST strength of the current level (a view of strength_buffer_)
+  cv::Mat strength_;  // FAST strength of the current level (a view of strength_buffer_)
   std::vector<uint8_t> strength_buffer_;
-  std::vector<int> maxima_;                // columns of the local maxima of one strength row
-  std::vector<Candidate> candidates_;      // corners of the current level
+  std::vector<int> maxima_;            // columns of the local maxima of one strength row
+  std::vector<Candidate> candidates_;  // corners of the current level
   std::vector<int> cell_counts_;
   std::vector<QuadtreeCandidate> quadtree_input_;
   std::vector<int> kept_;

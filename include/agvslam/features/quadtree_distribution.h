@@ -14,7 +14,7 @@
 namespace agvslam::features {
 
 struct QuadtreeCandidate {
-  float x = 0, y = 0;   // px, relative to the area's top-left corner
+  float x = 0, y = 0;  // px, relative to the area's top-left corner
   float response = 0;  // larger is better
 };
 
@@ -23,8 +23,8 @@ class QuadtreeDistributor {
   // candidates: inside [0, area_width) x [0, area_height). Writes to `kept` the indices (into `candidates`) of at
   // most `target_count` candidates, one per final node (if the last round overshoots, the weakest node winners
   // are dropped). Order: by decreasing response.
-  void distribute(const std::vector<QuadtreeCandidate>& candidates, int area_width, int area_height,
-                  int target_count, std::vector<int>& kept);
+  void distribute(const std::vector<QuadtreeCandidate>& candidates, int area_width, int area_height, int target_count,
+                  std::vector<int>& kept);
 
   // The final nodes of the last call (area coordinates), one per kept candidate before trimming, when
   // collect_nodes was set. A node is [x0, x1) x [y0, y1).
@@ -40,8 +40,8 @@ class QuadtreeDistributor {
   };
   void split(int node_index);
 
-  std::vector<int> index_;       // candidate indices, grouped by node
-  std::vector<int> scratch_;     // partition buffer
+  std::vector<int> index_;    // candidate indices, grouped by node
+  std::vector<int> scratch_;  // partition buffer
   std::vector<Node> nodes_;
   std::vector<int> expandable_, previous_expandable_;
   std::vector<int> winners_;

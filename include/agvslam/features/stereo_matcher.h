@@ -8,8 +8,8 @@
 // signature only together with its callers.
 
 #include <cstdint>
-#include <optional>
 #include <opencv2/core.hpp>
+#include <optional>
 #include <string>
 #include <utility>
 #include <vector>
@@ -35,15 +35,15 @@ bool parse_stereo_method(const std::string& text, StereoMethod& out);
 
 // params/features.yaml, section `stereo_matching` (features::load_features_config).
 struct StereoMatcherConfig {
-  double min_depth_m = 0.3;        // nearer matches are rejected (disparity above bf / min_depth)
-  double max_depth_m = 60.0;       // farther matches get no depth (they still track as monocular points)
-  int sad_half_window = 5;         // 11x11 window for the sub-pixel refinement (ORB-SLAM2's w = 5)
-  int sad_search_px = 5;           // +-5 px around the descriptor match (ORB-SLAM2's L = 5)
+  double min_depth_m = 0.3;          // nearer matches are rejected (disparity above bf / min_depth)
+  double max_depth_m = 60.0;         // farther matches get no depth (they still track as monocular points)
+  int sad_half_window = 5;           // 11x11 window for the sub-pixel refinement (ORB-SLAM2's w = 5)
+  int sad_search_px = 5;             // +-5 px around the descriptor match (ORB-SLAM2's L = 5)
   int max_descriptor_distance = 75;  // ORB-SLAM2's (TH_HIGH + TH_LOW) / 2
   StereoMethod method = StereoMethod::kBlockMatching;
-  double uniqueness_ratio = 0.9;   // block matching: best SAD <= ratio * best SAD >= 2 px (level px) away
-  double min_curvature = 1.0;      // block matching: SAD rise 1 px off the minimum, per window pixel (grey levels)
-  double outlier_factor = 2.1;     // reject SAD > factor * median SAD of the image's matches (ORB-SLAM2 1.5 * 1.4)
+  double uniqueness_ratio = 0.9;  // block matching: best SAD <= ratio * best SAD >= 2 px (level px) away
+  double min_curvature = 1.0;     // block matching: SAD rise 1 px off the minimum, per window pixel (grey levels)
+  double outlier_factor = 2.1;    // reject SAD > factor * median SAD of the image's matches (ORB-SLAM2 1.5 * 1.4)
 
   // InputError(source, "stereo_matching.<field>", expected) when out of range; both from the table of
   // params/features.yaml's settings (features_config.cpp).
@@ -85,17 +85,17 @@ class StereoMatcher {
   StereoMatcherConfig config_;
   StereoCalibration calibration_;
   double min_disparity_px_ = 0, max_disparity_px_ = 0;  // level 0, from max_depth_m / min_depth_m
-  std::vector<cv::Mat> right_pyramid_;                   // views into right_padded_
+  std::vector<cv::Mat> right_pyramid_;                  // views into right_padded_
   std::vector<cv::Mat> right_padded_;
   std::vector<LinearExactResizer> right_resizers_;
-  SadKernel sad_kernel_ = nullptr;                       // best for this CPU (SSE4.1 / AVX2 / scalar)
+  SadKernel sad_kernel_ = nullptr;  // best for this CPU (SSE4.1 / AVX2 / scalar)
   const char* sad_kernel_name_ = "scalar";
-  std::optional<OrbExtractor> right_extractor_;          // kDescriptor only
+  std::optional<OrbExtractor> right_extractor_;  // kDescriptor only
   KeypointSet right_keypoints_;
-  std::vector<std::vector<int>> row_index_;              // kDescriptor: right keypoints per level-0 row
-  std::vector<uint16_t> costs_;                          // SAD per candidate of one keypoint (block matching)
-  std::vector<int32_t> descriptor_costs_;                // SAD per offset (descriptor method)
-  std::vector<std::pair<int32_t, int>> match_costs_;     // (SAD, keypoint) of the accepted matches
+  std::vector<std::vector<int>> row_index_;           // kDescriptor: right keypoints per level-0 row
+  std::vector<uint16_t> costs_;                       // SAD per candidate of one keypoint (block matching)
+  std::vector<int32_t> descriptor_costs_;             // SAD per offset (descriptor method)
+  std::vector<std::pair<int32_t, int>> match_costs_;  // (SAD, keypoint) of the accepted matches
   double t_right_ms_ = 0, t_match_ms_ = 0;
 };
 

@@ -37,10 +37,10 @@ double l1_score(const BowVector& a, const BowVector& b);
 std::size_t common_words(const BowVector& a, const BowVector& b);
 
 struct FeatureVector {
-  int level = 0;                    // depth of the nodes below the root (1 .. vocabulary levels)
-  std::vector<NodeId> nodes;        // ascending, unique
-  std::vector<uint32_t> offsets;    // nodes.size() + 1 entries; features of nodes[i]: [offsets[i], offsets[i+1])
-  std::vector<uint32_t> features;   // feature indices grouped by node, ascending within a node
+  int level = 0;                   // depth of the nodes below the root (1 .. vocabulary levels)
+  std::vector<NodeId> nodes;       // ascending, unique
+  std::vector<uint32_t> offsets;   // nodes.size() + 1 entries; features of nodes[i]: [offsets[i], offsets[i+1])
+  std::vector<uint32_t> features;  // feature indices grouped by node, ascending within a node
 
   std::size_t size() const { return nodes.size(); }
   bool empty() const { return nodes.empty(); }

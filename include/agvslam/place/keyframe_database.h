@@ -39,13 +39,13 @@ struct Candidate {
 };
 
 struct QueryOptions {
-  std::size_t max_results = 0;        // 0: every candidate that passes
-  float min_score = 0;                // keep candidates with score >= this
-  uint32_t min_common_words = 1;      // keep candidates sharing at least this many words
+  std::size_t max_results = 0;    // 0: every candidate that passes
+  float min_score = 0;            // keep candidates with score >= this
+  uint32_t min_common_words = 1;  // keep candidates sharing at least this many words
   // Keep candidates sharing at least this fraction of the largest number of common words among the candidates
   // that pass the filters below (ORB-SLAM2: 0.8). 0: off.
   float min_common_words_ratio = 0;
-  std::vector<KeyframeId> exclude;    // never returned (e.g. the query keyframe and its covisible neighbours)
+  std::vector<KeyframeId> exclude;  // never returned (e.g. the query keyframe and its covisible neighbours)
   // Only keyframes with id < this (e.g. older than some time, when ids grow with time). 0: no limit.
   KeyframeId id_below = 0;
   // Extra filter: keep a candidate only where it returns true (called without the database's lock held).
@@ -94,7 +94,7 @@ class KeyframeDatabase {
 
   std::size_t word_count_;
   mutable std::shared_mutex mutex_;
-  std::vector<std::vector<Posting>> postings_;      // word -> keyframes (slots) containing it
+  std::vector<std::vector<Posting>> postings_;  // word -> keyframes (slots) containing it
   std::vector<Slot> slots_;
   std::vector<uint32_t> free_slots_;
   std::unordered_map<KeyframeId, uint32_t> slot_of_;
@@ -106,9 +106,9 @@ class KeyframeDatabase {
 // min_group_ratio x the best group score (ORB-SLAM2: 0.75), one entry per distinct representative, best group
 // score first. neighbours(id, out) fills `out` (cleared before each call).
 struct GroupCandidate {
-  KeyframeId best_id = 0;    // best-scoring keyframe of the group
+  KeyframeId best_id = 0;  // best-scoring keyframe of the group
   float best_score = 0;
-  float group_score = 0;     // accumulated score of the group
+  float group_score = 0;  // accumulated score of the group
 };
 std::vector<GroupCandidate> group_candidates(
     const std::vector<Candidate>& candidates,

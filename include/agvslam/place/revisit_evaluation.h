@@ -37,11 +37,11 @@ struct PlaceSample {
 
 struct QueryOutcome {
   std::size_t query = 0;
-  long match = -1;               // database index of the top-1 candidate; -1: no frame shares a word
-  float score = 0;               // its L1 score
-  bool positive = false;         // the database holds a revisit of the query
-  bool correct = false;          // the top-1 candidate is a revisit
-  double match_distance_m = 0;   // camera distance and relative rotation to the top-1 candidate
+  long match = -1;              // database index of the top-1 candidate; -1: no frame shares a word
+  float score = 0;              // its L1 score
+  bool positive = false;        // the database holds a revisit of the query
+  bool correct = false;         // the top-1 candidate is a revisit
+  double match_distance_m = 0;  // camera distance and relative rotation to the top-1 candidate
   double match_angle_deg = 0;
 };
 

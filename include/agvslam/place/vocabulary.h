@@ -58,11 +58,11 @@ class DescriptorSet {
 };
 
 struct VocabularyTrainingConfig {
-  int branching = 10;        // k: children per node (DBoW2 / ORB-SLAM2: 10)
-  int levels = 5;            // L: depth of the tree; at most k^L words
-  int max_iterations = 20;   // k-medians iterations per node (it stops earlier once the assignment is stable)
-  uint64_t seed = 1;         // k-means++ seeding (per node, derived from this and the node)
-  int threads = 1;           // the result does not depend on it
+  int branching = 10;       // k: children per node (DBoW2 / ORB-SLAM2: 10)
+  int levels = 5;           // L: depth of the tree; at most k^L words
+  int max_iterations = 20;  // k-medians iterations per node (it stops earlier once the assignment is stable)
+  uint64_t seed = 1;        // k-means++ seeding (per node, derived from this and the node)
+  int threads = 1;          // the result does not depend on it
 
   // InputError(source, "vocabulary_training.<field>", expected) for an out-of-range value (k in 2..64, L in 1..8,
   // k^L <= 4e9 ...); the table in vocabulary.cpp.
@@ -115,7 +115,9 @@ class Vocabulary {
   float word_weight(WordId w) const { return word_weight_[w]; }
   NodeId word_node(WordId w) const { return word_node_[w]; }
   // Tree access (tests, tools): a node's descriptor, children [first_child, first_child + child_count), depth.
-  const uint8_t* node_descriptor(NodeId n) const { return node_descriptors_.data() + std::size_t(n) * kDescriptorBytes; }
+  const uint8_t* node_descriptor(NodeId n) const {
+    return node_descriptors_.data() + std::size_t(n) * kDescriptorBytes;
+  }
   NodeId first_child(NodeId n) const { return first_child_[n]; }
   int child_count(NodeId n) const { return child_count_[n]; }
   bool is_leaf(NodeId n) const { return child_count_[n] == 0; }

@@ -11,7 +11,7 @@
 namespace agvslam::semantic {
 
 enum class SegmentReason : uint8_t {
-  kNone,             // not segmented: the masks are propagated
+  kNone,  // not segmented: the masks are propagated
   kFirstFrame,
   kRelocalised,
   kFewDynamicPoints,
@@ -22,9 +22,9 @@ const char* to_string(SegmentReason reason);
 
 // What tracking knows about the frame about to be processed.
 struct FrameCues {
-  bool relocalised = false;              // the first frame after tracking was lost and found again
-  int previous_dynamic_points = -1;      // dynamic points of the previous frame (-1: unknown)
-  bool new_keyframe = false;             // the previous frame was made a SLAM keyframe
+  bool relocalised = false;          // the first frame after tracking was lost and found again
+  int previous_dynamic_points = -1;  // dynamic points of the previous frame (-1: unknown)
+  bool new_keyframe = false;         // the previous frame was made a SLAM keyframe
 };
 
 class KeyframeSelector {

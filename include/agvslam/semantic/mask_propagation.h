@@ -14,15 +14,15 @@ namespace agvslam::semantic {
 
 // One segmented object of a movable class, as seen in the current frame.
 struct SemanticObject {
-  int id = 0;                         // stable over frames while the object is carried or matched
-  int class_id = 0;                   // the network's class id
-  cv::Mat mask;                       // CV_8UC1, frame size, 255 = the object
-  cv::Rect box;                       // bounding box of mask
-  std::vector<cv::Point2f> corners;   // its own points, in the current frame
-  cv::Point2f flow_px{0, 0};          // how far its corners moved into this frame (median), px
-  bool flow_known = false;            // false: no corner followed it into this frame
+  int id = 0;                        // stable over frames while the object is carried or matched
+  int class_id = 0;                  // the network's class id
+  cv::Mat mask;                      // CV_8UC1, frame size, 255 = the object
+  cv::Rect box;                      // bounding box of mask
+  std::vector<cv::Point2f> corners;  // its own points, in the current frame
+  cv::Point2f flow_px{0, 0};         // how far its corners moved into this frame (median), px
+  bool flow_known = false;           // false: no corner followed it into this frame
   int frames_seen = 0;
-  double evidence = 0;                // accumulated motion evidence (object_motion.h)
+  double evidence = 0;  // accumulated motion evidence (object_motion.h)
   bool moving = false;
 };
 

@@ -20,12 +20,12 @@ namespace agvslam::semantic {
 
 // What one frame said about one object.
 struct MotionVote {
-  int tested_points = 0;     // its points with a reprojection offset
+  int tested_points = 0;  // its points with a reprojection offset
   int moving_points = 0;
-  bool from_mask = false;    // the far-object rule decided (too few tested points)
+  bool from_mask = false;      // the far-object rule decided (too few tested points)
   double mask_offset_px = -1;  // far rule: |own shift - static shift at its depth|, -1: not measured
-  double vote = 0;           // 1: moving, 0: standing (no evidence also gives 0)
-  bool measured = false;     // false: nothing could be said this frame
+  double vote = 0;             // 1: moving, 0: standing (no evidence also gives 0)
+  bool measured = false;       // false: nothing could be said this frame
 };
 
 class ObjectMotionTest {

@@ -12,10 +12,10 @@ namespace agvslam::semantic {
 struct ModelConfig {
   // Relative: to the working directory here, to the YAML file's folder when read from one.
   std::string path = "params/models/pspnet_mnv2.onnx";
-  int input_width = 288;     // px: the network's fixed input size; the frame is resized to it (INTER_AREA)
-  int input_height = 192;    // px
-  int input_channels = 1;    // 1: the grey image; 3: grey copied to B, G, R (networks trained on colour)
-  double mean = 127.5;       // grey levels: the network sees (pixel - mean) * scale
+  int input_width = 288;   // px: the network's fixed input size; the frame is resized to it (INTER_AREA)
+  int input_height = 192;  // px
+  int input_channels = 1;  // 1: the grey image; 3: grey copied to B, G, R (networks trained on colour)
+  double mean = 127.5;     // grey levels: the network sees (pixel - mean) * scale
   double scale = 1.0 / 127.5;
   std::string movable_classes = "5 6 7";  // the class ids that can move (person, forklift, AGV of the simulator)
 
@@ -27,9 +27,9 @@ struct ModelConfig {
 
 // Section `keyframes`: which frames are segmented (paper 002's rules).
 struct KeyframeConfig {
-  int every_n_frames = 5;        // frames: at most this many between two requests
-  int min_dynamic_points = 5;    // a frame after one with fewer dynamic points is segmented (0: rule off)
-  bool on_new_keyframe = true;   // segment the SLAM's new keyframes
+  int every_n_frames = 5;       // frames: at most this many between two requests
+  int min_dynamic_points = 5;   // a frame after one with fewer dynamic points is segmented (0: rule off)
+  bool on_new_keyframe = true;  // segment the SLAM's new keyframes
 
   void validate(const std::string& source) const;
   std::string describe() const;
@@ -51,15 +51,15 @@ struct PropagationConfig {
 
 // Section `motion`: is a segmented object moving against the ego-motion? (paper 001)
 struct MotionConfig {
-  int min_points = 4;               // tested points an object needs for the point vote; fewer: mask displacement
-  double static_sigmas = 3.0;       // a point moves when its reprojection offset exceeds the static points' median
-                                    // by this many robust sigmas
-  double min_offset_px = 1.5;       // px: ... and at least this much
-  double moving_fraction = 0.35;    // the object's frame vote is "moving" when this fraction of its points move
-  double far_min_offset_px = 1.0;   // px per frame: mask displacement beyond the static prediction that counts
-  double decay = 0.8;               // evidence kept from one frame to the next
-  double enter_evidence = 1.5;      // accumulated evidence above which the object is moving
-  double exit_evidence = 0.3;       // ... and below which it is standing again
+  int min_points = 4;              // tested points an object needs for the point vote; fewer: mask displacement
+  double static_sigmas = 3.0;      // a point moves when its reprojection offset exceeds the static points' median
+                                   // by this many robust sigmas
+  double min_offset_px = 1.5;      // px: ... and at least this much
+  double moving_fraction = 0.35;   // the object's frame vote is "moving" when this fraction of its points move
+  double far_min_offset_px = 1.0;  // px per frame: mask displacement beyond the static prediction that counts
+  double decay = 0.8;              // evidence kept from one frame to the next
+  double enter_evidence = 1.5;     // accumulated evidence above which the object is moving
+  double exit_evidence = 0.3;      // ... and below which it is standing again
 
   void validate(const std::string& source) const;
   std::string describe() const;

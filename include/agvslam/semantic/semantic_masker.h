@@ -38,21 +38,21 @@ namespace agvslam::semantic {
 struct SemanticFrame {
   std::size_t frame_index = 0;
   SegmentReason requested = SegmentReason::kNone;  // why this frame was sent to the network (kNone: not sent)
-  int result_age_frames = -1;       // a segmentation arrived this frame, computed this many frames ago (-1: none)
+  int result_age_frames = -1;  // a segmentation arrived this frame, computed this many frames ago (-1: none)
   std::vector<SemanticObject> objects;
-  std::vector<MotionVote> votes;    // per object, this frame
-  cv::Mat moving_mask;              // CV_8UC1, 255 = a moving segmented object (dilated)
-  cv::Mat fused_mask;               // CV_8UC1, 255 = dynamic after fusion with the detector's mask
-  double process_ms = 0;            // what process() cost its caller's thread
+  std::vector<MotionVote> votes;  // per object, this frame
+  cv::Mat moving_mask;            // CV_8UC1, 255 = a moving segmented object (dilated)
+  cv::Mat fused_mask;             // CV_8UC1, 255 = dynamic after fusion with the detector's mask
+  double process_ms = 0;          // what process() cost its caller's thread
 };
 
 struct SemanticStats {
-  uint64_t requests = 0;            // frames sent to the worker
-  uint64_t segmented = 0;           // segmentations that arrived
-  uint64_t dropped_requests = 0;    // replaced in the queue by a newer one before the worker took them
-  uint64_t late_results = 0;        // arrived for an earlier frame and were carried to the current one
-  uint64_t stale_results = 0;       // older than max_late_frames: dropped
-  double segment_ms_total = 0;      // worker time in the network
+  uint64_t requests = 0;          // frames sent to the worker
+  uint64_t segmented = 0;         // segmentations that arrived
+  uint64_t dropped_requests = 0;  // replaced in the queue by a newer one before the worker took them
+  uint64_t late_results = 0;      // arrived for an earlier frame and were carried to the current one
+  uint64_t stale_results = 0;     // older than max_late_frames: dropped
+  double segment_ms_total = 0;    // worker time in the network
 };
 
 class SemanticMasker {

@@ -47,17 +47,17 @@ struct Load {
 };
 
 struct VehicleLook {
-  float body_shade = 0.72f;   // albedo of the painted body (forklifts come yellow, orange, red, blue, grey, ...)
-  Load load;                  // forklift: on its forks; pallet: on the pallet; tugger: on each cart
-  uint8_t tugger_carts = 0;   // AGV: 0 a cart AGV carrying crates; n > 0 an automated tugger towing n carts
+  float body_shade = 0.72f;  // albedo of the painted body (forklifts come yellow, orange, red, blue, grey, ...)
+  Load load;                 // forklift: on its forks; pallet: on the pallet; tugger: on each cart
+  uint8_t tugger_carts = 0;  // AGV: 0 a cart AGV carrying crates; n > 0 an automated tugger towing n carts
 };
 
 // How a person looks. Shades are albedos of a colour as the grey camera sees it. The default is a plain long-sleeved
 // shirt without pockets, prints or folds (the least textured clothing).
 struct PersonLook {
   float height_m = 1.75f;
-  float build = 1.0f;   // width of shoulders and hips relative to an average body of this height
-  float girth = 1.0f;   // depth of chest and belly, likewise
+  float build = 1.0f;  // width of shoulders and hips relative to an average body of this height
+  float girth = 1.0f;  // depth of chest and belly, likewise
   float skin_shade = 0.6f, hair_shade = 0.15f;
   bool helmet = false;
   enum class Top : uint8_t { kTshirt, kLongSleeve, kJacket, kHoodie, kHiVisVest, kOveralls };
@@ -69,9 +69,9 @@ struct PersonLook {
   float inner_shade = 0.7f;       // what shows under a vest or an open jacket
   float pattern_period_m = 0.1f;  // stripes, checks, dots
   enum Print : uint8_t { kChestLogo = 1, kBackPrint = 2, kFrontGraphic = 4, kNameBadge = 8 };
-  uint8_t prints = 0;             // Print bits
-  bool pockets = false;           // pockets, buttons, zips
-  bool folds = false;             // creases of the fabric
+  uint8_t prints = 0;    // Print bits
+  bool pockets = false;  // pockets, buttons, zips
+  bool folds = false;    // creases of the fabric
   enum class Bottom : uint8_t { kWork, kJeans, kCargo, kHiVis };
   Bottom bottom = Bottom::kWork;
   float trousers_shade = 0.25f;
@@ -85,20 +85,20 @@ struct PersonLook {
 struct ActorSegment {
   double t0 = 0, t1 = 0, length_m = 0, dir_rad = 0;
   bool moving = false;
-  double distance_before_m = 0;  // walked before this segment
-  double run_t0 = 0, run_t1 = 0; // the stretch of consecutive moving segments this one belongs to
+  double distance_before_m = 0;   // walked before this segment
+  double run_t0 = 0, run_t1 = 0;  // the stretch of consecutive moving segments this one belongs to
 };
 
 struct Actor {
   int id = 1;  // > 0, unique in the scenario (the value in the object-id buffer)
   ActorClass cls = ActorClass::kPerson;
-  std::string role;                // what it does in the scenario (for logs)
-  std::vector<Waypoint> path;      // sorted by time; before the first / after the last it stands still
-  double initial_yaw_rad = 0;      // heading before it first moves (and if it never moves)
+  std::string role;            // what it does in the scenario (for logs)
+  std::vector<Waypoint> path;  // sorted by time; before the first / after the last it stands still
+  double initial_yaw_rad = 0;  // heading before it first moves (and if it never moves)
   PersonLook look;
-  VehicleLook vehicle;             // forklifts, AGVs and pallets
-  uint32_t seed = 0;               // texture seed
-  int carrier_id = 0;              // the actor that carries this one at times (its forks), 0 = none
+  VehicleLook vehicle;                 // forklifts, AGVs and pallets
+  uint32_t seed = 0;                   // texture seed
+  int carrier_id = 0;                  // the actor that carries this one at times (its forks), 0 = none
   std::vector<ActorSegment> segments;  // derived from `path` by prepare_actor() (recomputed when stale)
 };
 
@@ -129,9 +129,9 @@ enum class PrimitiveShape : uint8_t { kBox, kSphere, kCapsule };
 struct DynamicPrimitive {
   PrimitiveShape shape = PrimitiveShape::kBox;
   Material material = Material::kVehicleBody;
-  V3 a;        // box centre, sphere centre or capsule start
-  V3 b;        // capsule end
-  V3 half;     // box half extents in the object's yaw frame
+  V3 a;     // box centre, sphere centre or capsule start
+  V3 b;     // capsule end
+  V3 half;  // box half extents in the object's yaw frame
   float radius = 0;
   uint8_t part = 0;  // which body part (for texturing)
 };
@@ -141,14 +141,14 @@ struct DynamicObject {
   int id = 0;
   ActorClass cls = ActorClass::kPerson;
   bool moving = false;
-  V3 origin;                    // on the floor, below the object's centre
+  V3 origin;  // on the floor, below the object's centre
   float cos_yaw = 1, sin_yaw = 0;
-  V3 lo, hi;                    // bounding box of all primitives
+  V3 lo, hi;  // bounding box of all primitives
   std::vector<DynamicPrimitive> primitives;
   PersonLook look;
   VehicleLook vehicle;
   uint32_t seed = 0;
-  float walk_phase = 0;         // gait phase (texture animation)
+  float walk_phase = 0;  // gait phase (texture animation)
 
   // Map-frame vector expressed in the object's yaw frame (x forward, y left, z up).
   V3 to_local(const V3& p_map) const {

@@ -38,7 +38,7 @@ class PngWriter {
  private:
   struct Compressor;  // libdeflate's compressor (RAII)
   std::unique_ptr<Compressor> compressor_;
-  std::vector<uint8_t> buffer_;             // the PNG file
+  std::vector<uint8_t> buffer_;                 // the PNG file
   std::vector<uint8_t> filtered_, prev_, cur_;  // filtered scanlines; raw (big-endian) rows
 };
 

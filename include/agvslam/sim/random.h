@@ -38,13 +38,13 @@ inline float unit_from_hash(uint32_t h) { return static_cast<float>(h >> 8) * (1
 
 // Tags of the independent random streams.
 enum class RngStream : uint64_t {
-  kLayout = 0x4c41594f5554ULL,   // warehouse structure and placement
-  kTextures = 0x54455854ULL,     // per-surface texture seeds
-  kActors = 0x4143544f5253ULL,   // people and vehicles: paths, timing, appearance
-  kVehicle = 0x56454849434cULL,  // the camera-carrying AGV: vibration
-  kSensor = 0x53454e534f52ULL,   // image noise and exposure
-  kAppearance = 0x4150504541ULL, // an actor's clothing, pose and colours (seeded by its texture seed)
-  kLighting = 0x4c49474854ULL,   // the hall's lighting (seeded by the layout seed)
+  kLayout = 0x4c41594f5554ULL,    // warehouse structure and placement
+  kTextures = 0x54455854ULL,      // per-surface texture seeds
+  kActors = 0x4143544f5253ULL,    // people and vehicles: paths, timing, appearance
+  kVehicle = 0x56454849434cULL,   // the camera-carrying AGV: vibration
+  kSensor = 0x53454e534f52ULL,    // image noise and exposure
+  kAppearance = 0x4150504541ULL,  // an actor's clothing, pose and colours (seeded by its texture seed)
+  kLighting = 0x4c49474854ULL,    // the hall's lighting (seeded by the layout seed)
 };
 
 class Rng {

@@ -48,21 +48,21 @@ struct RayHit {
   enum class Kind : uint8_t { kNone, kFloor, kCeiling, kWall, kBox, kDynamic };
   float t = kInfinity;  // ray parameter (= depth along the optical axis for camera rays)
   Kind kind = Kind::kNone;
-  uint8_t face = 0;     // box: axis * 2 + (outward normal positive); wall: wall index
-  int32_t index = -1;   // box index (kBox) or primitive index (kDynamic)
-  int16_t object = -1;  // index into the frame's objects (kDynamic)
-  float axis_param = 0; // capsules: position along the axis in [0, 1]
-  V3 normal;            // unit, map frame
+  uint8_t face = 0;      // box: axis * 2 + (outward normal positive); wall: wall index
+  int32_t index = -1;    // box index (kBox) or primitive index (kDynamic)
+  int16_t object = -1;   // index into the frame's objects (kDynamic)
+  float axis_param = 0;  // capsules: position along the axis in [0, 1]
+  V3 normal;             // unit, map frame
 };
 
 // Render targets of one camera, reused from frame to frame.
 struct CameraRender {
-  cv::Mat radiance;   // CV_32FC1, linear
-  cv::Mat depth_m;    // CV_32FC1, depth along the optical axis (0 = nothing hit)
-  cv::Mat object_id;  // CV_16UC1, actor id at the pixel centre (0 = static scene)
-  cv::Mat class_id;   // CV_8UC1, SemanticClass of the surface at the pixel centre (semantic_classes.h)
-  cv::Mat surface_key;// CV_32SC1
-  cv::Mat edge;       // CV_8UC1, scratch: pixels that were supersampled
+  cv::Mat radiance;     // CV_32FC1, linear
+  cv::Mat depth_m;      // CV_32FC1, depth along the optical axis (0 = nothing hit)
+  cv::Mat object_id;    // CV_16UC1, actor id at the pixel centre (0 = static scene)
+  cv::Mat class_id;     // CV_8UC1, SemanticClass of the surface at the pixel centre (semantic_classes.h)
+  cv::Mat surface_key;  // CV_32SC1
+  cv::Mat edge;         // CV_8UC1, scratch: pixels that were supersampled
 };
 
 class Renderer {
@@ -128,8 +128,8 @@ class Renderer {
   void rasterize_boxes(const CameraIntrinsics& cam, const std::vector<BoxFace>& faces,
                        const std::vector<std::vector<uint32_t>>& buckets, cv::Mat& depth, cv::Mat& key,
                        int threads) const;
-  static void rasterize_row(int width, const std::vector<BoxFace>& faces, const std::vector<uint32_t>& bucket,
-                            int v, float* zrow, int32_t* krow);
+  static void rasterize_row(int width, const std::vector<BoxFace>& faces, const std::vector<uint32_t>& bucket, int v,
+                            float* zrow, int32_t* krow);
   void cast_dynamic(const Ray& ray, const std::vector<DynamicObject>& objects, const ObjectRects* rects, int u, int v,
                     RayHit& hit) const;
   // The row passes of render(): hits, depth, ids, keys and radiance of row v; the antialiasing of row v.

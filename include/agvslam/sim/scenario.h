@@ -74,9 +74,9 @@ struct ScenarioOptions {
   int frames = 0;             // frames to write: the first `frames` of the timeline (0: all of it); beyond its
                               // end the AGV and the actors stand where the timeline left them
   int squeeze_to_frames = 0;  // play the whole timeline over this many frames (0: at its own speed)
-  uint64_t seed = 1;                     // actors (and, by default, the layout)
-  std::optional<uint64_t> layout_seed;   // warehouse layout and textures (default: seed)
-  double start_offset_m = 0;             // AGV start along its route (loop: any value, wraps; line: [0, 3] m)
+  uint64_t seed = 1;          // actors (and, by default, the layout)
+  std::optional<uint64_t> layout_seed;  // warehouse layout and textures (default: seed)
+  double start_offset_m = 0;            // AGV start along its route (loop: any value, wraps; line: [0, 3] m)
 
   uint64_t effective_layout_seed() const { return layout_seed ? *layout_seed : seed; }
   // Throws InputError naming the option for negative frame counts, a bad start offset, ...
@@ -99,8 +99,8 @@ class RoutePath {
  private:
   struct Piece {
     bool arc;
-    double x0, y0, x1, y1;           // line
-    double cx, cy, r, a0, sweep;     // arc
+    double x0, y0, x1, y1;        // line
+    double cx, cy, r, a0, sweep;  // arc
     double s0, len;
   };
   std::vector<Piece> pieces_;
@@ -131,7 +131,7 @@ struct AgvMotion {
   bool stationary = true;
   double x = 0, y = 0, yaw_rad = 0;  // when stationary
   RoutePath route;
-  double s_start = 0;                 // arc length where it starts
+  double s_start = 0;  // arc length where it starts
   SpeedProfile profile;
   // Planar pose (map frame) at scenario time t_s; s_out = arc length travelled from the start.
   void planar_pose(double t_s, double& x_out, double& y_out, double& yaw_out, double& s_out) const;
@@ -141,11 +141,11 @@ struct Scenario {
   std::string name, description;
   uint64_t seed = 1, layout_seed = 1;
   double start_offset_m = 0;
-  int frames = 1;                   // frames written
-  int timeline_frames = 1;          // frames the whole timeline is played over (the scenario's own: its default)
+  int frames = 1;           // frames written
+  int timeline_frames = 1;  // frames the whole timeline is played over (the scenario's own: its default)
   double rate_hz = 20;
-  double nominal_duration_s = 20;   // scenario timeline length
-  double time_scale = 1;            // real seconds per scenario second = timeline_frames / rate / nominal duration
+  double nominal_duration_s = 20;  // scenario timeline length
+  double time_scale = 1;           // real seconds per scenario second = timeline_frames / rate / nominal duration
   AgvMotion agv;
   std::vector<Actor> actors;
   double min_camera_clearance_m = 1e9;  // smallest actor-to-camera distance over the timeline (surface)

@@ -56,9 +56,12 @@ constexpr SemanticClass static_box_class(Material m) {
     case Material::kRackUpright:
     case Material::kRackBeam:
     case Material::kRackBrace:
-    case Material::kShelfDeck: return SemanticClass::kRack;
-    case Material::kDockLeveller: return SemanticClass::kFloor;
-    default: return SemanticClass::kWall;  // pillars and anything else built in
+    case Material::kShelfDeck:
+      return SemanticClass::kRack;
+    case Material::kDockLeveller:
+      return SemanticClass::kFloor;
+    default:
+      return SemanticClass::kWall;  // pillars and anything else built in
   }
 }
 
@@ -74,10 +77,14 @@ constexpr SemanticClass actor_part_class(ActorClass actor, Material part) {
   if (is_goods(part)) return SemanticClass::kPalletBox;
   if (is_person_part(part)) return SemanticClass::kPerson;
   switch (actor) {
-    case ActorClass::kPerson: return SemanticClass::kPerson;
-    case ActorClass::kForklift: return SemanticClass::kForklift;
-    case ActorClass::kAgv: return SemanticClass::kAgv;
-    case ActorClass::kPallet: return SemanticClass::kPalletBox;
+    case ActorClass::kPerson:
+      return SemanticClass::kPerson;
+    case ActorClass::kForklift:
+      return SemanticClass::kForklift;
+    case ActorClass::kAgv:
+      return SemanticClass::kAgv;
+    case ActorClass::kPallet:
+      return SemanticClass::kPalletBox;
   }
   return SemanticClass::kBackground;
 }

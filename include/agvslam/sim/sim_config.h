@@ -30,21 +30,21 @@ struct SimConfig {
   double rate_hz = 20.0;
 
   // Sensor.
-  double noise_sigma_dn = 2.0;        // Gaussian read noise, grey levels (digital numbers)
-  double exposure_variation = 0.04;   // amplitude of the smooth global gain variation (0.04 = +-4 %)
-  double exposure_spread = 0.1;       // a sequence's exposure is drawn from its seed in [1 - s, 1 + s]
-  double vignetting = 0.10;           // relative brightness loss in the image corners
+  double noise_sigma_dn = 2.0;       // Gaussian read noise, grey levels (digital numbers)
+  double exposure_variation = 0.04;  // amplitude of the smooth global gain variation (0.04 = +-4 %)
+  double exposure_spread = 0.1;      // a sequence's exposure is drawn from its seed in [1 - s, 1 + s]
+  double vignetting = 0.10;          // relative brightness loss in the image corners
 
   // Rendering.
-  double max_depth_m = 60.0;          // disparity 0 beyond this depth
-  bool antialias_edges = true;        // 2 extra samples on silhouette pixels (ground truth: pixel centres)
-  double haze_distance_m = 140.0;     // e-folding distance of a faint atmospheric haze (<= 0: none)
-  int png_compression = 1;            // zlib level 0..9 for the written PNGs
-  double lighting_variation = 0.25;   // relative spread of the key light's strength (the ambient light's: half of
-                                      // it), drawn from the layout seed with the key light's direction (0: fixed)
+  double max_depth_m = 60.0;         // disparity 0 beyond this depth
+  bool antialias_edges = true;       // 2 extra samples on silhouette pixels (ground truth: pixel centres)
+  double haze_distance_m = 140.0;    // e-folding distance of a faint atmospheric haze (<= 0: none)
+  int png_compression = 1;           // zlib level 0..9 for the written PNGs
+  double lighting_variation = 0.25;  // relative spread of the key light's strength (the ambient light's: half of
+                                     // it), drawn from the layout seed with the key light's direction (0: fixed)
 
   // Vehicle.
-  double vibration_deg = 0.25;        // amplitude of the camera's pitch/roll vibration at full speed
+  double vibration_deg = 0.25;  // amplitude of the camera's pitch/roll vibration at full speed
 
   double fy_px() const { return fy > 0 ? fy : fx; }
   double cx_px() const { return cx >= 0 ? cx : 0.5 * (width - 1); }

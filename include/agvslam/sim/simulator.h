@@ -40,11 +40,11 @@ struct SimFrame {
   int64_t t_ns = 0;
   SE3d T_w_c = SE3d::Identity();  // left camera in the world frame
   double exposure_gain = 1.0;
-  cv::Mat left, right;            // CV_8UC1
-  cv::Mat disparity_u16;          // CV_16UC1: disparity * 256, 0 = none
-  cv::Mat mask;                   // CV_8UC1: 255 = pixel of a moving object
-  cv::Mat instances;              // CV_8UC1: the id of the actor seen at each pixel (moving or not), 0 = none
-  cv::Mat classes;                // CV_8UC1: the SemanticClass of each pixel (semantic_classes.h)
+  cv::Mat left, right;    // CV_8UC1
+  cv::Mat disparity_u16;  // CV_16UC1: disparity * 256, 0 = none
+  cv::Mat mask;           // CV_8UC1: 255 = pixel of a moving object
+  cv::Mat instances;      // CV_8UC1: the id of the actor seen at each pixel (moving or not), 0 = none
+  cv::Mat classes;        // CV_8UC1: the SemanticClass of each pixel (semantic_classes.h)
   std::vector<VisibleObject> objects;
   std::vector<DynamicObject> posed_objects;  // the actors as rendered
   CameraRender left_render, right_render;    // depth_m and object_id of each camera (pixel centres)

@@ -123,8 +123,8 @@ AGVSLAM_SIM_INLINE f32x4 value_noise(f32x4 x, f32x4 y, u32x4 seed) {
 }  // namespace simd
 #endif
 
-AGVSLAM_SIM_INLINE float fractal_noise(float u, float v, float wavelength_m, int octaves, float persistence, float footprint_m,
-                           uint32_t seed) {
+AGVSLAM_SIM_INLINE float fractal_noise(float u, float v, float wavelength_m, int octaves, float persistence,
+                                       float footprint_m, uint32_t seed) {
 #if defined(__GNUC__)
   if (octaves <= 4) {
     using simd::f32x4;
@@ -174,16 +174,15 @@ AGVSLAM_SIM_INLINE float rect_coverage(float u, float v, float u0, float u1, flo
 }
 
 // Coverage of a rectangular frame (outline) of line width `line_w` around [u0, u1] x [v0, v1].
-inline float frame_coverage(float u, float v, float u0, float u1, float v0, float v1, float line_w,
-                            float footprint_m) {
+inline float frame_coverage(float u, float v, float u0, float u1, float v0, float v1, float line_w, float footprint_m) {
   return rect_coverage(u, v, u0, u1, v0, v1, footprint_m) -
          rect_coverage(u, v, u0 + line_w, u1 - line_w, v0 + line_w, v1 - line_w, footprint_m);
 }
 
 // Text-like print inside [u0, u1] x [v0, v1]: lines of glyph blocks with word gaps (ink coverage in [0, 1]).
 // Below the glyph size it averages to its mean ink density.
-inline float text_coverage(float u, float v, float u0, float u1, float v0, float v1, float glyph_m,
-                           float footprint_m, uint32_t seed) {
+inline float text_coverage(float u, float v, float u0, float u1, float v0, float v1, float glyph_m, float footprint_m,
+                           uint32_t seed) {
   if (u < u0 || u > u1 || v < v0 || v > v1) return 0.0f;
   const float line_pitch = glyph_m * 1.6f;
   const float char_pitch = glyph_m * 0.8f;
@@ -201,8 +200,8 @@ inline float text_coverage(float u, float v, float u0, float u1, float v0, float
     ink = rect_coverage(fu, fv, 0, w_glyph, 0, h_glyph, footprint_m);
     // Notch: removes a random quadrant-ish part so glyphs differ.
     const float nu = ((h >> 3) & 1U) ? 0.0f : w_glyph * 0.5f, nv = ((h >> 4) & 1U) ? 0.0f : h_glyph * 0.45f;
-    ink -= rect_coverage(fu, fv, nu + w_glyph * 0.12f, nu + w_glyph * 0.38f, nv + h_glyph * 0.15f,
-                         nv + h_glyph * 0.4f, footprint_m);
+    ink -= rect_coverage(fu, fv, nu + w_glyph * 0.12f, nu + w_glyph * 0.38f, nv + h_glyph * 0.15f, nv + h_glyph * 0.4f,
+                         footprint_m);
     ink = clamp01(ink);
   }
   return lerp(mean_ink, ink, fade);

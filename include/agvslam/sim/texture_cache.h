@@ -6,9 +6,9 @@
 // source sampled at the centres of square texels of side T = base_texel_m * 2^L, each evaluated with a footprint
 // of kBakeFootprint * T (pre-filtered texels; below one texel because the bilinear reconstruction blurs too, so
 // that lookups stay as sharp as evaluating the source per pixel). A lookup with footprint w blends bilinear
-// samples of the two levels whose texel sizes bracket w (trilinear filtering). A static surface's texture is thus evaluated about once per
-// texel, and each texel serves both cameras and the frames while the surface stays at about that distance,
-// instead of the source being evaluated for every pixel of every frame.
+// samples of the two levels whose texel sizes bracket w (trilinear filtering). A static surface's texture is thus
+// evaluated about once per texel, and each texel serves both cameras and the frames while the surface stays at about
+// that distance, instead of the source being evaluated for every pixel of every frame.
 //
 // Texels are baked in tiles of kTileTexels x kTileTexels (plus a one-texel apron, so a bilinear lookup never
 // straddles two tiles) the first time a lookup needs them. A texel's value depends only on the surface, the
@@ -48,8 +48,8 @@ class TextureCache {
 #if defined(__GNUC__)
   __attribute__((always_inline))  // into the caller, and so into its AVX2 copy (cpu_dispatch.h)
 #endif
-  float sample(std::size_t id, float size_u, float size_v, float u, float v, float footprint_m,
-               const Source& source) const {
+  float
+  sample(std::size_t id, float size_u, float size_v, float u, float v, float footprint_m, const Source& source) const {
     const Surface& s = surface(id, size_u, size_v);
     // footprint / base texel = 2^level * (1 + blend), blend in [0, 1): read straight from the float's bits.
     const float ratio = footprint_m * inv_base_texel_m_;
@@ -71,9 +71,9 @@ class TextureCache {
   void begin_pass();
 
   struct Stats {
-    std::size_t tiles = 0;          // tiles held now
-    std::size_t bytes = 0;          // memory of the tiles held now
-    uint64_t texels_baked = 0;      // source evaluations so far
+    std::size_t tiles = 0;      // tiles held now
+    std::size_t bytes = 0;      // memory of the tiles held now
+    uint64_t texels_baked = 0;  // source evaluations so far
     uint64_t tiles_freed = 0;
   };
   Stats stats() const;
@@ -118,7 +118,8 @@ class TextureCache {
 #if defined(__GNUC__)
   __attribute__((always_inline))
 #endif
-  float sample_level(const Surface& s, int level, float u, float v, const Source& source) const {
+  float
+  sample_level(const Surface& s, int level, float u, float v, const Source& source) const {
     const Level& lv = s.levels[static_cast<std::size_t>(level)];
     // Texel coordinates clamped to the surface (std::max(0, NaN) is 0).
     const float x = std::min(std::max(0.0f, u * lv.inv_texel_m - 0.5f), lv.x_max);
@@ -147,7 +148,8 @@ class TextureCache {
 #if defined(__GNUC__)
   __attribute__((noinline))
 #endif
-  const Tile* bake(const Level& lv, int tx, int ty, Slot& slot, const Source& source) const {
+  const Tile*
+  bake(const Level& lv, int tx, int ty, Slot& slot, const Source& source) const {
     const int i0 = tx << kTileShift, j0 = ty << kTileShift;
     const int nu = std::min(kTileTexels, lv.texels_u - i0) + 1, nv = std::min(kTileTexels, lv.texels_v - j0) + 1;
     auto tile = std::make_unique<Tile>();
@@ -155,7 +157,8 @@ class TextureCache {
     for (int j = 0; j < nv; ++j) {
       const float v = (static_cast<float>(j0 + j) + 0.5f) * t;
       uint16_t* row = tile->texels + j * kTileStride;
-      for (int i = 0; i < nu; ++i) row[i] = encode(source((static_cast<float>(i0 + i) + 0.5f) * t, v, kBakeFootprint * t));
+      for (int i = 0; i < nu; ++i)
+        row[i] = encode(source((static_cast<float>(i0 + i) + 0.5f) * t, v, kBakeFootprint * t));
     }
     return publish(std::move(tile), static_cast<uint64_t>(nu) * static_cast<uint64_t>(nv), slot);
   }

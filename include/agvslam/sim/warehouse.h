@@ -78,7 +78,7 @@ struct WarehouseLayout {
   double line_cross_half_width_m = 1.35;
   double north_corridor_y = 9.15;  // service corridors parallel to the main aisle
   double south_corridor_y = 0.95;
-  double line_exit_x = 24.95;      // a cross-aisle through the south row, beyond the rows on the north side
+  double line_exit_x = 24.95;  // a cross-aisle through the south row, beyond the rows on the north side
 
   // Loop: a rounded rectangle (corner arcs of loop_corner_radius_m) around an inner rack block.
   double loop_x0 = 26.0, loop_y0 = 13.0, loop_x1 = 34.8, loop_y1 = 19.4;
@@ -91,7 +91,7 @@ struct WarehouseLayout {
 
   // Open staging area (scene1): the stationary AGV stands at (stage_x, stage_y) looking north (+y).
   double stage_x = 10.5, stage_y = 10.8;
-  double stage_cross_y = 16.0;       // where people cross in front of it
+  double stage_cross_y = 16.0;  // where people cross in front of it
 };
 
 // 2-D grid over the floor; each cell's boxes are listed per height slab (a box is listed in every slab it
@@ -103,8 +103,8 @@ struct FloorGrid {
   int nx = 0, ny = 0, nz = 0;
   std::vector<uint32_t> slab_begin;  // size nx * ny * nz + 1 (CSR offsets into box_index), index (cell * nz + slab)
   std::vector<uint32_t> box_index;
-  std::vector<float> cell_top_z;     // highest box top in the cell (-inf when empty)
-  std::vector<uint8_t> empty_radius; // 0: occupied; k: every cell within Chebyshev distance k - 1 is empty
+  std::vector<float> cell_top_z;      // highest box top in the cell (-inf when empty)
+  std::vector<uint8_t> empty_radius;  // 0: occupied; k: every cell within Chebyshev distance k - 1 is empty
 };
 
 struct Warehouse {

@@ -15,11 +15,11 @@
 namespace agvslam::sim {
 
 struct WheelOdometryConfig {
-  double distance_scale_error = 0.01;       // +1 %: the wheels read 1 % too far
-  double yaw_bias_rad_per_m = 0.004;        // systematic heading drift
+  double distance_scale_error = 0.01;  // +1 %: the wheels read 1 % too far
+  double yaw_bias_rad_per_m = 0.004;   // systematic heading drift
   double distance_noise_m_per_sqrt_m = 0.005;
   double yaw_noise_rad_per_sqrt_m = 0.003;
-  double yaw_noise_rad_per_rad = 0.01;      // noise proportional to the turned angle
+  double yaw_noise_rad_per_rad = 0.01;  // noise proportional to the turned angle
 };
 
 // gt: T_w_c of the camera (one pose per frame); returns the odometry poses at the same time stamps.

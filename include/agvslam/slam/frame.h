@@ -29,10 +29,10 @@ using KeyFramePtr = std::shared_ptr<KeyFrame>;
 
 // Camera, baseline and ORB pyramid scales shared by all frames and keyframes of one map.
 struct FrameGeometry {
-  PinholeCamera camera;          // rectified left camera (the right one shares it, shifted by baseline_m along x)
+  PinholeCamera camera;  // rectified left camera (the right one shares it, shifted by baseline_m along x)
   double baseline_m = 0;
-  double bf = 0;                 // fx * baseline_m (px m)
-  double close_depth_m = 0;      // close/far threshold (ORB-SLAM2's ThDepth)
+  double bf = 0;             // fx * baseline_m (px m)
+  double close_depth_m = 0;  // close/far threshold (ORB-SLAM2's ThDepth)
   int n_levels = 8;
   float scale_factor = 1.2f;
   float log_scale_factor = 0;
@@ -48,9 +48,7 @@ struct FrameGeometry {
   // ORB-SLAM2's PredictScale: the pyramid level at which a point seen at distance_m appears, given the largest
   // distance max_distance_m at which it is still seen at level 0 ... n_levels-1.
   int predict_scale_level(double distance_m, double max_distance_m) const;
-  bool in_image(double u, double v) const {
-    return u >= 0 && v >= 0 && u < camera.width && v < camera.height;
-  }
+  bool in_image(double u, double v) const { return u >= 0 && v >= 0 && u < camera.width && v < camera.height; }
 };
 using FrameGeometryPtr = std::shared_ptr<const FrameGeometry>;
 
@@ -90,13 +88,13 @@ class Frame {
   FrameGeometryPtr geometry;
 
   std::vector<cv::KeyPoint> keypoints;
-  cv::Mat descriptors;                 // N x 32, CV_8UC1
-  std::vector<float> u_right;          // x of the right-image match, -1 = none
-  std::vector<float> depth;            // m, -1 = none
+  cv::Mat descriptors;         // N x 32, CV_8UC1
+  std::vector<float> u_right;  // x of the right-image match, -1 = none
+  std::vector<float> depth;    // m, -1 = none
   FeatureGrid grid;
 
-  std::vector<MapPointPtr> map_points; // per keypoint, null = none
-  std::vector<uint8_t> outlier;        // per keypoint, set by the motion-only BA
+  std::vector<MapPointPtr> map_points;  // per keypoint, null = none
+  std::vector<uint8_t> outlier;         // per keypoint, set by the motion-only BA
 
   KeyFramePtr reference_keyframe;
 

@@ -36,17 +36,16 @@ class Map;
 
 struct LocalMappingStats {
   uint64_t keyframes_processed = 0;
-  uint64_t points_created = 0;     // by triangulation
+  uint64_t points_created = 0;  // by triangulation
   uint64_t points_fused = 0;
-  uint64_t points_culled = 0;      // recent points removed by the culling test
+  uint64_t points_culled = 0;  // recent points removed by the culling test
   uint64_t keyframes_culled = 0;
   uint64_t ba_runs = 0;
   uint64_t ba_aborted = 0;
   uint64_t ba_outliers = 0;        // observations removed by local BA
   uint64_t keyframes_skipped = 0;  // refused because the queue was full
   // Milliseconds of the last processed keyframe, per step.
-  double insert_ms = 0, culling_ms = 0, triangulation_ms = 0, fusion_ms = 0, ba_ms = 0, kf_culling_ms = 0,
-         total_ms = 0;
+  double insert_ms = 0, culling_ms = 0, triangulation_ms = 0, fusion_ms = 0, ba_ms = 0, kf_culling_ms = 0, total_ms = 0;
 };
 
 // Milliseconds per step for one keyframe.

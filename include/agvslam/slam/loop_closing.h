@@ -58,23 +58,23 @@ struct LoopEvent {
   uint64_t frame_id = 0, loop_frame_id = 0;
   int64_t t_ns = 0;
   int bow_matches = 0, ransac_inliers = 0, refined_inliers = 0, total_matches = 0;
-  int confirmations = -1;      // covisible keyframes that confirmed it (-1: consistent over time, not needed)
+  int confirmations = -1;  // covisible keyframes that confirmed it (-1: consistent over time, not needed)
   double correction_m = 0, correction_deg = 0;  // how far the keyframe moved
   int fused_points = 0;
   std::size_t graph_keyframes = 0, graph_edges = 0;
-  double detect_ms = 0;        // detection + verification (map mutex held while matching)
-  double correct_ms = 0;       // correction incl. pose graph (local mapping paused, map mutex held)
+  double detect_ms = 0;   // detection + verification (map mutex held while matching)
+  double correct_ms = 0;  // correction incl. pose graph (local mapping paused, map mutex held)
   double pose_graph_ms = 0;
-  double global_ba_ms = -1;    // solve time of the global BA that followed (-1: none or aborted)
+  double global_ba_ms = -1;        // solve time of the global BA that followed (-1: none or aborted)
   double global_ba_merge_ms = -1;  // time the merge held the map
 };
 
 struct LoopClosingStats {
   uint64_t keyframes_processed = 0;
-  uint64_t keyframes_dropped = 0;     // queue full: the oldest waiting keyframe was dropped
-  uint64_t consistent_detections = 0; // keyframes with a candidate consistent `consistency` times
-  uint64_t rejected_geometry = 0;     // ... that failed verification
-  uint64_t rejected_correction = 0;   // ... rejected by max_correction_m
+  uint64_t keyframes_dropped = 0;      // queue full: the oldest waiting keyframe was dropped
+  uint64_t consistent_detections = 0;  // keyframes with a candidate consistent `consistency` times
+  uint64_t rejected_geometry = 0;      // ... that failed verification
+  uint64_t rejected_correction = 0;    // ... rejected by max_correction_m
   uint64_t loops_closed = 0;
   uint64_t global_ba_runs = 0, global_ba_aborted = 0;
   std::vector<LoopEvent> loops;
@@ -143,8 +143,8 @@ class LoopClosing {
   KeyFrame* matched_kf_ = nullptr;
   bool matched_consistent_ = false;
   SE3d T_cur_w_corrected_ = SE3d::Identity();
-  std::vector<MapPointPtr> current_matches_;   // per keypoint of the current keyframe: the loop's point
-  std::vector<MapPointPtr> loop_points_;       // map points of the loop keyframe's neighbourhood
+  std::vector<MapPointPtr> current_matches_;  // per keypoint of the current keyframe: the loop's point
+  std::vector<MapPointPtr> loop_points_;      // map points of the loop keyframe's neighbourhood
 
   // Global BA.
   std::thread gba_thread_;

@@ -20,8 +20,8 @@ namespace agvslam::slam {
 struct MapCounts {
   std::size_t keyframes = 0;
   std::size_t map_points = 0;
-  std::size_t observations = 0;     // keyframe-point links
-  std::size_t memory_bytes = 0;     // estimate of what the map holds (keypoints, descriptors, points)
+  std::size_t observations = 0;  // keyframe-point links
+  std::size_t memory_bytes = 0;  // estimate of what the map holds (keypoints, descriptors, points)
 };
 
 class Map {

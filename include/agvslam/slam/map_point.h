@@ -36,13 +36,13 @@ class MapPoint : public std::enable_shared_from_this<MapPoint> {
   const uint64_t first_keyframe_id;  // the keyframe that created it
   const uint64_t first_frame_id;
 
-  Eigen::Vector3d p_w;               // position in the world frame (m)
+  Eigen::Vector3d p_w;                                 // position in the world frame (m)
   Eigen::Vector3d normal_w = Eigen::Vector3d::Zero();  // mean viewing direction (unit)
-  Descriptor descriptor{};           // the observations' most central descriptor
-  float min_distance_m = 0, max_distance_m = 0;  // scale-invariance range
+  Descriptor descriptor{};                             // the observations' most central descriptor
+  float min_distance_m = 0, max_distance_m = 0;        // scale-invariance range
   KeyFrame* reference_keyframe = nullptr;
-  int visible = 1;                   // frames in whose frustum it was
-  int found = 1;                     // frames that matched it
+  int visible = 1;  // frames in whose frustum it was
+  int found = 1;    // frames that matched it
 
   const std::vector<Observation>& observations() const { return observations_; }
   // Number of views: a stereo observation counts 2 (ORB-SLAM2's nObs).

@@ -31,8 +31,8 @@ struct StereoIntrinsics {
 struct PoseObservation {
   Eigen::Vector3d p_w = Eigen::Vector3d::Zero();
   Eigen::Vector2d uv_px = Eigen::Vector2d::Zero();
-  double u_right_px = -1;   // < 0: monocular observation
-  double inv_sigma2 = 1;    // 1 / sigma^2 of the keypoint's level
+  double u_right_px = -1;  // < 0: monocular observation
+  double inv_sigma2 = 1;   // 1 / sigma^2 of the keypoint's level
 };
 
 struct MotionOnlyStats {
@@ -61,7 +61,7 @@ struct BaProblem {
     Eigen::Vector2d uv_px = Eigen::Vector2d::Zero();
     double u_right_px = -1;  // < 0: monocular
     double inv_sigma2 = 1;
-    bool outlier = false;    // output: rejected (chi-square or behind the camera)
+    bool outlier = false;  // output: rejected (chi-square or behind the camera)
   };
   std::vector<Pose> poses;
   std::vector<Eigen::Vector3d> points_w;

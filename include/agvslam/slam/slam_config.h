@@ -14,24 +14,24 @@ struct TrackingConfig {
   // A stereo point is "close" (trusted for depth, created as a map point at once) when its depth is below
   // close_depth_baselines * baseline_m (ORB-SLAM2's ThDepth: 35-40 baselines).
   double close_depth_baselines = 40.0;
-  int min_init_features = 500;           // stereo initialisation needs more keypoints than this (ORB-SLAM2) ...
-  int min_init_stereo = 100;             // ... of which at least this many with stereo depth
-  int motion_model_radius_px = 7;        // search window (x scale of the level) when projecting the last frame
-  int min_motion_model_matches = 20;     // below this the window is doubled, then the model is given up
-  int min_frame_inliers = 10;            // motion-model / reference-keyframe tracking succeeds above this
-  int min_reference_matches = 15;        // reference-keyframe tracking needs this many descriptor matches
-  double reference_ratio = 0.7;          // best-to-second ratio of the reference-keyframe matching
-  bool bow_matching = true;              // reference keyframe matched by bag of words (brute force without a vocabulary)
-  double local_map_radius = 1.0;         // search window factor for local map points (ORB-SLAM2's th = 1)
-  int min_local_map_inliers = 30;        // local-map tracking succeeds with at least this many inliers
-  int max_local_keyframes = 80;          // size cap of the local map (keyframes)
+  int min_init_features = 500;        // stereo initialisation needs more keypoints than this (ORB-SLAM2) ...
+  int min_init_stereo = 100;          // ... of which at least this many with stereo depth
+  int motion_model_radius_px = 7;     // search window (x scale of the level) when projecting the last frame
+  int min_motion_model_matches = 20;  // below this the window is doubled, then the model is given up
+  int min_frame_inliers = 10;         // motion-model / reference-keyframe tracking succeeds above this
+  int min_reference_matches = 15;     // reference-keyframe tracking needs this many descriptor matches
+  double reference_ratio = 0.7;       // best-to-second ratio of the reference-keyframe matching
+  bool bow_matching = true;           // reference keyframe matched by bag of words (brute force without a vocabulary)
+  double local_map_radius = 1.0;      // search window factor for local map points (ORB-SLAM2's th = 1)
+  int min_local_map_inliers = 30;     // local-map tracking succeeds with at least this many inliers
+  int max_local_keyframes = 80;       // size cap of the local map (keyframes)
   // Keyframe decision (ORB-SLAM2's NeedNewKeyFrame).
-  int keyframe_max_frames = 0;           // insert at least every this many frames (0 = the frame rate)
+  int keyframe_max_frames = 0;  // insert at least every this many frames (0 = the frame rate)
   int keyframe_min_frames = 0;
-  double keyframe_ref_ratio = 0.75;      // fewer inliers than this x the reference keyframe's tracked points
-  int keyframe_close_tracked = 100;      // close points: fewer tracked than this and ...
-  int keyframe_close_untracked = 70;     // ... more untracked than this -> insert
-  int keyframe_max_new_points = 100;     // a new keyframe creates at least this many of its closest stereo points
+  double keyframe_ref_ratio = 0.75;   // fewer inliers than this x the reference keyframe's tracked points
+  int keyframe_close_tracked = 100;   // close points: fewer tracked than this and ...
+  int keyframe_close_untracked = 70;  // ... more untracked than this -> insert
+  int keyframe_max_new_points = 100;  // a new keyframe creates at least this many of its closest stereo points
   // Revisits: no new keyframe where an older keyframe (made >= keyframe_revisit_min_age_s before the frame)
   // already sees the place from within keyframe_revisit_distance_m and keyframe_revisit_angle_deg and observes at
   // least keyframe_revisit_shared of the frame's inliers; tracking takes it as the reference instead. This keeps the
@@ -55,21 +55,21 @@ struct TrackingConfig {
 
 // Section `mapping`.
 struct LocalMappingConfig {
-  int queue_capacity = 3;                // keyframes waiting for the local mapper (tracking skips a keyframe when full)
-  int triangulation_neighbours = 10;     // covisible keyframes searched for new map points
-  bool triangulation_bow = false;        // true: candidate pairs from the vocabulary's direct index (ORB-SLAM2);
-                                         // false: epipolar-segment search (more accurate: params/slam.yaml)
-  int fusion_neighbours = 10;            // first-order neighbours for duplicate fusion (+ 5 second-order each)
+  int queue_capacity = 3;             // keyframes waiting for the local mapper (tracking skips a keyframe when full)
+  int triangulation_neighbours = 10;  // covisible keyframes searched for new map points
+  bool triangulation_bow = false;     // true: candidate pairs from the vocabulary's direct index (ORB-SLAM2);
+                                      // false: epipolar-segment search (more accurate: params/slam.yaml)
+  int fusion_neighbours = 10;         // first-order neighbours for duplicate fusion (+ 5 second-order each)
   int fusion_second_order = 5;
-  double fusion_radius = 3.0;            // search window factor (x scale) for duplicate fusion
-  int local_ba_iterations_first = 5;     // robust pass
-  int local_ba_iterations_second = 10;   // after outlier removal
-  int max_local_ba_keyframes = 20;       // optimised keyframes (covisible with the new one, best first)
+  double fusion_radius = 3.0;               // search window factor (x scale) for duplicate fusion
+  int local_ba_iterations_first = 5;        // robust pass
+  int local_ba_iterations_second = 10;      // after outlier removal
+  int max_local_ba_keyframes = 20;          // optimised keyframes (covisible with the new one, best first)
   double map_point_min_found_ratio = 0.25;  // culled below found/visible
-  int map_point_min_observations = 3;    // culled when seen by fewer keyframes 2 keyframes after its creation
-  double keyframe_redundancy = 0.9;      // culled when this fraction of its points is seen by >= 3 others
+  int map_point_min_observations = 3;       // culled when seen by fewer keyframes 2 keyframes after its creation
+  double keyframe_redundancy = 0.9;         // culled when this fraction of its points is seen by >= 3 others
   int keyframe_redundancy_observers = 3;
-  int max_keyframes = 0;                 // hard cap on the map (oldest redundant removed first); 0 = no cap
+  int max_keyframes = 0;  // hard cap on the map (oldest redundant removed first); 0 = no cap
 
   void validate(const std::string& source) const;
   std::string describe() const;
@@ -77,12 +77,12 @@ struct LocalMappingConfig {
 
 // Section `optimizer`.
 struct OptimizerConfig {
-  double chi2_mono = 5.991;              // 95 % of chi-square with 2 DOF
-  double chi2_stereo = 7.815;            // 95 % of chi-square with 3 DOF
-  int motion_rounds = 4;                 // motion-only BA: rounds of optimise + outlier classification
-  int motion_iterations = 10;            // per round
-  int motion_robust_rounds = 2;          // the Huber loss is used in the first rounds only (ORB-SLAM2: 2)
-  bool local_ba_dense_schur = true;      // DENSE_SCHUR for the reduced camera system (SPARSE_SCHUR otherwise)
+  double chi2_mono = 5.991;          // 95 % of chi-square with 2 DOF
+  double chi2_stereo = 7.815;        // 95 % of chi-square with 3 DOF
+  int motion_rounds = 4;             // motion-only BA: rounds of optimise + outlier classification
+  int motion_iterations = 10;        // per round
+  int motion_robust_rounds = 2;      // the Huber loss is used in the first rounds only (ORB-SLAM2: 2)
+  bool local_ba_dense_schur = true;  // DENSE_SCHUR for the reduced camera system (SPARSE_SCHUR otherwise)
 
   void validate(const std::string& source) const;
   std::string describe() const;
@@ -91,14 +91,14 @@ struct OptimizerConfig {
 // Section `relocalisation` (ORB-SLAM2's Relocalization): bag-of-words candidates, BoW matching, PnP RANSAC
 // (EPnP), motion-only BA, projection search for more matches.
 struct RelocalisationConfig {
-  int max_candidates = 10;               // candidate keyframes tried per frame (best group first)
-  int min_bow_matches = 15;              // a candidate needs this many BoW matches for PnP
-  double bow_ratio = 0.75;               // best-to-second ratio of the BoW matching
-  int pnp_iterations = 300;              // RANSAC iterations per candidate
-  double pnp_reprojection_px = 4.0;      // RANSAC inlier threshold (px, level 0)
-  int min_pnp_inliers = 10;              // PnP needs this many inliers
-  int min_inliers = 50;                  // inliers after motion-only BA + projection search for success
-  double projection_radius_px = 10.0;    // first projection search window (then 3 px, distance <= 64)
+  int max_candidates = 10;             // candidate keyframes tried per frame (best group first)
+  int min_bow_matches = 15;            // a candidate needs this many BoW matches for PnP
+  double bow_ratio = 0.75;             // best-to-second ratio of the BoW matching
+  int pnp_iterations = 300;            // RANSAC iterations per candidate
+  double pnp_reprojection_px = 4.0;    // RANSAC inlier threshold (px, level 0)
+  int min_pnp_inliers = 10;            // PnP needs this many inliers
+  int min_inliers = 50;                // inliers after motion-only BA + projection search for success
+  double projection_radius_px = 10.0;  // first projection search window (then 3 px, distance <= 64)
 
   void validate(const std::string& source) const;
   std::string describe() const;
@@ -118,13 +118,13 @@ struct LoopClosingConfig {
   int ransac_iterations = 300;           // 3-point SE(3) RANSAC on the 3-D matches
   double ransac_chi2 = 9.210;            // inlier test: reprojection chi-square (2 DOF, 99 %) in both keyframes
   int min_ransac_inliers = 20;
-  double projection_radius_px = 7.5;     // SearchBySim3 window (then 10 px for the loop neighbourhood)
-  int min_refined_inliers = 20;          // after the SE(3) refinement
-  int min_total_matches = 40;            // matches with the whole loop neighbourhood to accept the loop
-  double max_correction_m = 0;           // reject loops that move the keyframe by more than this (0: no limit)
-  int essential_min_weight = 100;        // covisibility edges of the essential graph
+  double projection_radius_px = 7.5;  // SearchBySim3 window (then 10 px for the loop neighbourhood)
+  int min_refined_inliers = 20;       // after the SE(3) refinement
+  int min_total_matches = 40;         // matches with the whole loop neighbourhood to accept the loop
+  double max_correction_m = 0;        // reject loops that move the keyframe by more than this (0: no limit)
+  int essential_min_weight = 100;     // covisibility edges of the essential graph
   int pose_graph_iterations = 20;
-  bool global_ba = true;                 // global bundle adjustment after each loop (background thread)
+  bool global_ba = true;  // global bundle adjustment after each loop (background thread)
   int global_ba_iterations = 10;
 
   void validate(const std::string& source) const;

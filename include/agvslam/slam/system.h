@@ -61,7 +61,7 @@ struct SystemConfig {
   // Bag-of-words vocabulary (load_vocabulary). Null: no relocalisation by place recognition, no loop closing,
   // brute-force matching; maps are saved with vocabulary identity 0.
   std::shared_ptr<const place::Vocabulary> vocabulary;
-  int direct_index_level = 2;    // params/place.yaml vocabulary.direct_index_level
+  int direct_index_level = 2;  // params/place.yaml vocabulary.direct_index_level
 };
 
 // Loads the vocabulary that a place configuration names (InputError naming the file for a bad one).
@@ -77,14 +77,14 @@ struct TrackResult {
   int64_t t_ns = 0;
   uint64_t frame_id = 0;
   TrackingState state = TrackingState::kInitialising;
-  bool pose_valid = false;       // state == kOk
-  SE3d T_w_c = SE3d::Identity(); // left camera in the world (the first keyframe's camera); identity when invalid
+  bool pose_valid = false;        // state == kOk
+  SE3d T_w_c = SE3d::Identity();  // left camera in the world (the first keyframe's camera); identity when invalid
   TrackingCounts counts;
   TrackTimings timings;
-  std::size_t keyframes = 0;     // in the map after this frame
+  std::size_t keyframes = 0;  // in the map after this frame
   std::size_t map_points = 0;
-  std::size_t mapping_queue = 0; // keyframes waiting for the local mapper
-  uint64_t loops_closed = 0;     // loops closed so far
+  std::size_t mapping_queue = 0;  // keyframes waiting for the local mapper
+  uint64_t loops_closed = 0;      // loops closed so far
   bool global_ba_running = false;
   // Level-0 pixel positions (left image) of the keypoints the pose rests on: the map point inliers of this frame
   // (empty unless the state is ok). Tools score them against ground-truth masks: how much of the pose leaned on
@@ -94,9 +94,9 @@ struct TrackResult {
 
 struct MapSaveStats {
   std::size_t keyframes = 0, map_points = 0, bytes = 0;
-  double wait_ms = 0;     // waiting for local mapping / loop closing to settle
-  double encode_ms = 0;   // with the map locked
-  double write_ms = 0;    // temporary file, fsync, rename
+  double wait_ms = 0;    // waiting for local mapping / loop closing to settle
+  double encode_ms = 0;  // with the map locked
+  double write_ms = 0;   // temporary file, fsync, rename
 };
 
 struct MapLoadStats {

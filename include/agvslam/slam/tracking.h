@@ -34,28 +34,28 @@ const char* to_string(TrackingState state);
 
 // Per-stage wall-clock times of one frame in the tracking thread (ms).
 struct TrackTimings {
-  double extract_ms = 0;       // ORB on the left image (features module)
-  double stereo_ms = 0;        // stereo matching at the keypoints (features module)
-  double map_wait_ms = 0;      // waiting for the map mutex (held by the local mapper)
-  double frame_ms = 0;         // motion model / reference keyframe / recovery, with its motion-only BA
-  double local_map_ms = 0;     // local map update, projection search and motion-only BA
-  double keyframe_ms = 0;      // keyframe decision and creation
+  double extract_ms = 0;         // ORB on the left image (features module)
+  double stereo_ms = 0;          // stereo matching at the keypoints (features module)
+  double map_wait_ms = 0;        // waiting for the map mutex (held by the local mapper)
+  double frame_ms = 0;           // motion model / reference keyframe / recovery, with its motion-only BA
+  double local_map_ms = 0;       // local map update, projection search and motion-only BA
+  double keyframe_ms = 0;        // keyframe decision and creation
   double inline_mapping_ms = 0;  // local mapping run in this thread (SystemConfig::threaded_mapping = false only)
-  double total_ms = 0;         // all of track_stereo (including inline mapping)
-  double total_cpu_ms = 0;     // CPU time of the calling thread in track_stereo (what one core spends, whatever
-                               // else runs on the machine)
+  double total_ms = 0;           // all of track_stereo (including inline mapping)
+  double total_cpu_ms = 0;       // CPU time of the calling thread in track_stereo (what one core spends, whatever
+                                 // else runs on the machine)
 };
 
 struct TrackingCounts {
-  int features = 0;            // keypoints in the frame
-  int stereo_features = 0;     // of which with stereo depth
-  int frame_matches = 0;       // matches of the motion model / reference keyframe step
-  const char* method = "";     // which step tracked the frame: init, motion_model, reference, relocalisation, recovery
-  int inliers = 0;             // map point inliers after local-map tracking
+  int features = 0;         // keypoints in the frame
+  int stereo_features = 0;  // of which with stereo depth
+  int frame_matches = 0;    // matches of the motion model / reference keyframe step
+  const char* method = "";  // which step tracked the frame: init, motion_model, reference, relocalisation, recovery
+  int inliers = 0;          // map point inliers after local-map tracking
   bool new_keyframe = false;
-  bool recovered = false;      // tracked again after being lost (by relocalisation or recovery)
+  bool recovered = false;             // tracked again after being lost (by relocalisation or recovery)
   int relocalisation_candidates = 0;  // BoW candidates tried while lost
-  bool reset = false;          // the map was reset on this frame
+  bool reset = false;                 // the map was reset on this frame
 };
 
 class Tracking {
@@ -124,7 +124,7 @@ class Tracking {
   SE3d last_T_c_r_ = SE3d::Identity();
   SE3d velocity_ = SE3d::Identity();  // T_c_l: last camera -> current camera
   bool has_velocity_ = false;
-  int64_t velocity_dt_ns_ = 0;        // the time between the two frames velocity_ was measured on (0: unknown)
+  int64_t velocity_dt_ns_ = 0;  // the time between the two frames velocity_ was measured on (0: unknown)
   // velocity_ scaled to the time since the last frame (a dropped frame doubles the motion to predict); velocity_
   // itself when either time is unknown.
   SE3d predicted_motion() const;

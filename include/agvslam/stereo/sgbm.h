@@ -19,18 +19,18 @@ bool parse_sgbm_mode(const std::string& text, SgbmMode& mode);
 
 // params/stereo.yaml, section `sgbm`.
 struct SgbmConfig {
-  int min_disparity = 0;         // smallest disparity searched (px, >= 0)
-  int num_disparities = 64;      // size of the search range, a positive multiple of 16
-  int block_size = 5;            // matched block side (odd, 1..11)
-  int p1 = 0;                    // smoothness penalty for +-1 px changes; <= 0: 8 * channels * block_size^2
-  int p2 = 0;                    // penalty for larger changes; <= 0: 32 * channels * block_size^2
-  int disp12_max_diff = 1;       // left-right check tolerance (px); < 0 disables
-  int pre_filter_cap = 63;       // clip of the x-derivative prefilter
-  int uniqueness_ratio = 10;     // best cost must beat the second best by this percentage
-  int speckle_window_size = 100; // connected blobs smaller than this are invalidated (0 disables)
-  int speckle_range = 2;         // max disparity variation inside a blob (px)
+  int min_disparity = 0;          // smallest disparity searched (px, >= 0)
+  int num_disparities = 64;       // size of the search range, a positive multiple of 16
+  int block_size = 5;             // matched block side (odd, 1..11)
+  int p1 = 0;                     // smoothness penalty for +-1 px changes; <= 0: 8 * channels * block_size^2
+  int p2 = 0;                     // penalty for larger changes; <= 0: 32 * channels * block_size^2
+  int disp12_max_diff = 1;        // left-right check tolerance (px); < 0 disables
+  int pre_filter_cap = 63;        // clip of the x-derivative prefilter
+  int uniqueness_ratio = 10;      // best cost must beat the second best by this percentage
+  int speckle_window_size = 100;  // connected blobs smaller than this are invalidated (0 disables)
+  int speckle_range = 2;          // max disparity variation inside a blob (px)
   SgbmMode mode = SgbmMode::kSgbm3Way;
-  int roi_margin_px = 4;         // context added around each ROI (rows and columns) before matching the crop
+  int roi_margin_px = 4;  // context added around each ROI (rows and columns) before matching the crop
 
   int effective_p1(int channels) const { return p1 > 0 ? p1 : 8 * channels * block_size * block_size; }
   int effective_p2(int channels) const { return p2 > 0 ? p2 : 32 * channels * block_size * block_size; }

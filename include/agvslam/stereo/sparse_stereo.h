@@ -12,15 +12,15 @@ namespace agvslam::stereo {
 
 // params/stereo.yaml, section `sparse`.
 struct SparseStereoConfig {
-  int half_window = 4;               // matching window is (2 h + 1)^2 pixels
-  int min_disparity = 0;             // search range [min, min + num - 1] px
+  int half_window = 4;    // matching window is (2 h + 1)^2 pixels
+  int min_disparity = 0;  // search range [min, min + num - 1] px
   int num_disparities = 64;
-  double uniqueness_margin = 0.10;   // second-best cost (more than 1 px away) must exceed best * (1 + margin)
-  double max_mean_cost = 40.0;       // mean |zero-mean difference| per pixel at the best match (grey levels)
-  double max_cost_ratio = 0.6;       // ... and at most this fraction of the window's texture (below)
-  double min_texture = 3.0;          // mean |I - mean(I)| of the left window (grey levels); below: no match
-  int lr_max_diff_px = 1;            // left-right check tolerance (px); < 0 disables the check
-  bool subpixel = true;              // parabola fit through the costs at d-1, d, d+1
+  double uniqueness_margin = 0.10;  // second-best cost (more than 1 px away) must exceed best * (1 + margin)
+  double max_mean_cost = 40.0;      // mean |zero-mean difference| per pixel at the best match (grey levels)
+  double max_cost_ratio = 0.6;      // ... and at most this fraction of the window's texture (below)
+  double min_texture = 3.0;         // mean |I - mean(I)| of the left window (grey levels); below: no match
+  int lr_max_diff_px = 1;           // left-right check tolerance (px); < 0 disables the check
+  bool subpixel = true;             // parabola fit through the costs at d-1, d, d+1
 
   int max_disparity() const { return min_disparity + num_disparities - 1; }
   // InputError(source, "sparse.<field>", expectation) for an invalid value; both from the table of

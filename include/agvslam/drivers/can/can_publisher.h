@@ -32,7 +32,7 @@ struct CanPublisherStats {
   uint64_t frames_dropped_down = 0;       // interface down / closed
   uint64_t frames_failed = 0;             // other send errors
   uint64_t reopen_attempts = 0;
-  uint64_t reopens = 0;  // successful (re)opens, the first open included
+  uint64_t reopens = 0;                  // successful (re)opens, the first open included
   uint64_t frames_received = 0;          // data frames of the receive ids
   uint64_t frames_received_dropped = 0;  // of which dropped: more than kMaxReceivedPending waited
   ErrorFrameCounts error_frames;

@@ -7,8 +7,8 @@
 //   base+0 AGVSLAM_POSE_XYAW   PoseX int32 mm | PoseYaw int16 0.01 deg | TrackingState 4 bit | Counter | Crc
 //   base+1 AGVSLAM_POSE_YZ     PoseY int32 mm | PoseZ int16 mm | reserved 4 bit | Counter | Crc
 //   base+2 AGVSLAM_VELOCITY    VelX int16 mm/s | VelY int16 mm/s | YawRate int16 0.01 deg/s | reserved | Counter | Crc
-//   base+3 AGVSLAM_POSE_STDDEV StdDevX uint16 mm | StdDevY uint16 mm | StdDevYaw uint16 0.01 deg | reserved | Counter | Crc
-//   base+4 AGVSLAM_STATUS      LatencyMs uint16 0.1 ms | Fps uint8 0.5 Hz | DynamicPct uint8 0.5 % |
+//   base+3 AGVSLAM_POSE_STDDEV StdDevX uint16 mm | StdDevY uint16 mm | StdDevYaw uint16 0.01 deg | reserved | Counter |
+//   Crc base+4 AGVSLAM_STATUS      LatencyMs uint16 0.1 ms | Fps uint8 0.5 Hz | DynamicPct uint8 0.5 % |
 //                              DroppedFrames uint16 | TrackingState 4 bit | Counter | Crc
 //   base+5 AGVSLAM_ODOM_CHECK  DistanceRatio uint16 0.001 (0xFFFF: not available) | SpeedRmse uint16 mm/s |
 //                              HeadingDiff int16 0.01 deg | OdomCheckState 4 bit | Counter | Crc

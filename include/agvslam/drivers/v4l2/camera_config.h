@@ -25,7 +25,7 @@ namespace agvslam::drivers::v4l2 {
 enum class PixelFormat { kGrey, kYuyv, kMjpeg };
 const char* to_string(PixelFormat f);
 bool parse_pixel_format(const std::string& s, PixelFormat& out);
-uint32_t fourcc(PixelFormat f);               // V4L2_PIX_FMT_*
+uint32_t fourcc(PixelFormat f);                 // V4L2_PIX_FMT_*
 std::string fourcc_to_string(uint32_t fourcc);  // "GREY", "YUYV", ...
 
 struct V4l2CameraConfig {
@@ -50,7 +50,7 @@ struct V4l2CameraConfig {
 
   // Throws InputError(source, "camera.<field>", "expected ...") for an invalid value.
   void validate(const std::string& source) const;
-  std::string describe() const;  // one line for start-up logs
+  std::string describe() const;              // one line for start-up logs
   std::vector<std::string> devices() const;  // the device paths in use (one or two)
   int device_width() const { return side_by_side ? 2 * width : width; }
 };

@@ -37,15 +37,15 @@ class V4l2Error : public std::runtime_error {
 struct CaptureRequest {
   int width = 0, height = 0;  // the device's image size (side by side: both eyes)
   PixelFormat pixel_format = PixelFormat::kGrey;
-  double fps = 0;   // 0 = keep the device's rate
+  double fps = 0;  // 0 = keep the device's rate
   int buffers = 4;
 };
 
 // A dequeued buffer converted to grey.
 struct CapturedImage {
-  int64_t t_ns = 0;            // buffer time stamp, CLOCK_MONOTONIC ns (see V4l2Device::timestamp_source)
-  uint32_t sequence = 0;       // V4L2 buffer sequence number
-  bool error_flag = false;     // V4L2_BUF_FLAG_ERROR: the driver says the data may be corrupt
+  int64_t t_ns = 0;         // buffer time stamp, CLOCK_MONOTONIC ns (see V4l2Device::timestamp_source)
+  uint32_t sequence = 0;    // V4L2 buffer sequence number
+  bool error_flag = false;  // V4L2_BUF_FLAG_ERROR: the driver says the data may be corrupt
 };
 
 class V4l2Device {
@@ -59,7 +59,7 @@ class V4l2Device {
 
   int fd() const { return fd_; }
   const std::string& path() const { return path_; }
-  std::string card() const { return card_; }  // VIDIOC_QUERYCAP card name
+  std::string card() const { return card_; }         // VIDIOC_QUERYCAP card name
   double actual_fps() const { return actual_fps_; }  // what VIDIOC_G_PARM reports, 0 when unknown
   // "monotonic" when the driver flags its time stamps V4L2_BUF_FLAG_TIMESTAMP_MONOTONIC, else "unknown" (then
   // a time stamp far from CLOCK_MONOTONIC's now is replaced by the dequeue time).
@@ -106,7 +106,7 @@ class V4l2Output {
   enum class Mode { kQueue, kWrite };
   // format: PixelFormat::kGrey or kMjpeg. Throws V4l2Error.
   V4l2Output(const std::string& path, int width, int height, Mode mode = Mode::kQueue,
-                 PixelFormat format = PixelFormat::kGrey);
+             PixelFormat format = PixelFormat::kGrey);
   ~V4l2Output();
   V4l2Output(const V4l2Output&) = delete;
   V4l2Output& operator=(const V4l2Output&) = delete;

@@ -19,8 +19,8 @@ void grey_to_grey(const uint8_t* src, std::size_t bytes_per_line, cv::Mat& grey)
 // Takes the luma bytes of a packed YUYV 4:2:2 image (Y0 U Y1 V ...): exact, no colour maths.
 void yuyv_to_grey(const uint8_t* src, std::size_t bytes_per_line, cv::Mat& grey);
 
-// 64-bit FNV-1a over the image's pixels taken as 64-bit words, row by row (stride-independent): used by the tools to check that
-// frames arrive pixel-exact.
+// 64-bit FNV-1a over the image's pixels taken as 64-bit words, row by row (stride-independent): used by the tools to
+// check that frames arrive pixel-exact.
 uint64_t image_hash(const cv::Mat& grey);
 
 // MJPEG to grey with libv4lconvert (libv4l2's conversion library): JPEG -> YUV 4:2:0, whose Y plane is the

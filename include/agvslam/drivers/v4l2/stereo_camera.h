@@ -35,16 +35,16 @@ struct CaptureInfo {
 struct CaptureStats {
   enum class State { kClosed, kStreaming, kReopening };
   State state = State::kClosed;
-  uint64_t frames = 0;            // pairs delivered
-  uint64_t dropped_left = 0;      // frames the device skipped (gaps in buffer sequence numbers)
+  uint64_t frames = 0;        // pairs delivered
+  uint64_t dropped_left = 0;  // frames the device skipped (gaps in buffer sequence numbers)
   uint64_t dropped_right = 0;
-  uint64_t unpaired_left = 0;     // frames thrown away for want of a partner within the tolerance
+  uint64_t unpaired_left = 0;  // frames thrown away for want of a partner within the tolerance
   uint64_t unpaired_right = 0;
-  uint64_t corrupt = 0;           // buffers flagged V4L2_BUF_FLAG_ERROR (dropped)
-  uint64_t device_losses = 0;     // times a streaming camera was lost (error or stall)
-  uint64_t reopen_attempts = 0;   // failed reopen attempts
-  uint64_t reopens = 0;           // successful reopens after a loss
-  std::string last_error;         // the last device error, naming the device
+  uint64_t corrupt = 0;          // buffers flagged V4L2_BUF_FLAG_ERROR (dropped)
+  uint64_t device_losses = 0;    // times a streaming camera was lost (error or stall)
+  uint64_t reopen_attempts = 0;  // failed reopen attempts
+  uint64_t reopens = 0;          // successful reopens after a loss
+  std::string last_error;        // the last device error, naming the device
 };
 const char* to_string(CaptureStats::State s);
 
@@ -88,7 +88,7 @@ class StereoCamera {
   int64_t next_reopen_ns_ = 0;
   int backoff_ms_ = 0;
   bool ever_opened_ = false;
-  cv::Mat sbs_grey_;                  // side by side: the whole image before the split
+  cv::Mat sbs_grey_;  // side by side: the whole image before the split
   std::vector<cv::Mat> left_pool_, right_pool_;
   std::vector<bool> left_busy_, right_busy_;
 };
