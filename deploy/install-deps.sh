@@ -12,6 +12,7 @@ packages=(
   libgtest-dev libgmock-dev libbenchmark-dev
   cyclonedds-dev cyclonedds-tools can-utils iproute2 util-linux  # pose outputs: DDS (idlc), CAN tools, netns tests
   libv4l-dev v4l-utils qemu-system-x86 busybox-static kmod cpio  # V4L2 camera (libv4l2); VM harness (tests/vm)
+  clang-format  # the layout in .clang-format, checked by the format test
   libsystemd-dev systemd  # agvslamd: sd_notify (READY/WATCHDOG/STATUS/STOPPING); systemd-analyze verify in the tests
   python3-torch python3-onnx python3-opencv python3-numpy  # src/semantic/training: train and export the segmenter
 )
