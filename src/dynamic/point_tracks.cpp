@@ -104,7 +104,8 @@ bool PointTracks::predicted_starts() {
 
 void PointTracks::follow_tracks(DetectorResult& result) {
   result.lk_levels = tracker_.levels_for_motion(last_max_motion_px_);
-  if (!predicted_starts()) {
+  const bool predicted = predicted_starts();
+  if (!predicted) {
     tracker_.track(prev_pyramid_, cur_pyramid_, prev_pts_, cur_pts_, tracked_, result.lk_levels);
   } else {
     // The predicted tracks search on the finest levels only (the prediction is a few px off; the coarse levels of a
@@ -132,11 +133,11 @@ void PointTracks::follow_tracks(DetectorResult& result) {
     }
   }
   // The next frame's levels follow the largest motion from where the searches started.
-  const bool predicted = lk_start_.size() == prev_pts_.size() && has_motion_prior_;
+  const std::vector<cv::Point2f>& start = predicted ? lk_start_ : prev_pts_;
   float max_motion2 = -1;
   for (std::size_t i = 0; i < tracked_.size(); ++i) {
     if (!tracked_[i]) continue;
-    const cv::Point2f m = cur_pts_[i] - (predicted ? lk_start_[i] : prev_pts_[i]);
+    const cv::Point2f m = cur_pts_[i] - start[i];
     max_motion2 = std::max(max_motion2, m.dot(m));
   }
   last_max_motion_px_ = max_motion2 < 0 ? -1.0 : std::sqrt(static_cast<double>(max_motion2));
