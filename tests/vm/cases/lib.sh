@@ -3,13 +3,14 @@
 set -uo pipefail
 BIN=$AGVSLAM_BUILD/bin
 step() { echo "=== $* (t=$(cut -d' ' -f1 /proc/uptime) s)"; }
-die() { echo "FAIL: $*"; exit 1; }
+# Messages go to stderr: a helper called as data=$(require_data ...) must still say why on the console.
+die() { echo "FAIL: $*" >&2; exit 1; }
 # require_data REL: the shared data set's path; exit 77 (skip) when absent, 1 under CI=true.
 require_data() {
   local p=$AGVSLAM_SHARED_DIR/$1
   if [ ! -d "$p" ]; then
     if [ "${CI:-}" = "true" ]; then die "shared data $1 missing under $AGVSLAM_SHARED_DIR (CI=true)"; fi
-    echo "SKIP: shared data $1 not found under $AGVSLAM_SHARED_DIR"; exit 77
+    echo "SKIP: shared data $1 not found under $AGVSLAM_SHARED_DIR" >&2; exit 77
   fi
   echo "$p"
 }
