@@ -5,8 +5,8 @@
 # long ones). The seeds must be ones no test or benchmark uses (tests: small seeds, 101-103, 9xxx).
 #
 #   render_data.sh SIM_BINARY SIM_PARAMS OUT_DIR FIRST_SEED LAST_SEED FRAMES
-#   e.g. render_data.sh build/release/bin/agvslam-sim params/sim.yaml /work/semdata/train 5000 5099 12
-#        render_data.sh build/release/bin/agvslam-sim params/sim.yaml /work/semdata/val 5100 5119 12
+#   e.g. render_data.sh build/release/bin/agvslam-sim params/sim.yaml /work/semdata/train 5000 5099 10
+#        render_data.sh build/release/bin/agvslam-sim params/sim.yaml /work/semdata/val 5100 5119 10
 # A sequence whose folder already holds FRAMES class labels is kept, so an interrupted run resumes.
 set -euo pipefail
 if [ $# -ne 6 ]; then
