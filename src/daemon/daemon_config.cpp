@@ -1,6 +1,8 @@
 #include "agvslam/daemon/daemon_config.h"
 
+#include <algorithm>
 #include <cmath>
+#include <cstdlib>
 #include <filesystem>
 
 #include "agvslam/core/error.h"
@@ -246,6 +248,64 @@ const params::Table<MapConfig>& map_params() {
   return table;
 }
 
+const params::Table<FilesConfig>& files_params() {
+  static const params::Table<FilesConfig> table(
+      "files", {{"write_dirs", &FilesConfig::write_dirs, Text::any(), "folders separated by ':'; env | \"\""}});
+  return table;
+}
+
+std::vector<std::string> split_dirs(const std::string& list) {
+  std::vector<std::string> out;
+  std::size_t start = 0;
+  while (start <= list.size()) {
+    const std::size_t end = std::min(list.find(':', start), list.size());
+    if (end > start) out.push_back(list.substr(start, end - start));
+    start = end + 1;
+  }
+  return out;
+}
+
+// The canonical folders of files.write_dirs (relative ones against `dir`).
+std::vector<std::string> write_roots(const std::string& write_dirs, const fs::path& dir) {
+  std::vector<std::string> listed;
+  if (write_dirs == "env") {
+    for (const char* name : {"STATE_DIRECTORY", "LOGS_DIRECTORY"}) {
+      const char* value = std::getenv(name);
+      for (const std::string& d : split_dirs(value != nullptr ? value : "")) listed.push_back(d);
+    }
+  } else {
+    listed = split_dirs(write_dirs);
+  }
+  std::vector<std::string> roots;
+  for (const std::string& d : listed) roots.push_back(fs::weakly_canonical(dir / d).string());
+  return roots;
+}
+
+std::string joined(const std::vector<std::string>& dirs) {
+  std::string out;
+  for (const std::string& d : dirs) out += (out.empty() ? "" : ":") + d;
+  return out;
+}
+
+// The files the daemon's outputs name, with their fields.
+std::vector<std::pair<const char*, std::string>> named_files(const DaemonConfig& c) {
+  return {{"trajectory.file", c.trajectory.file},
+          {"trajectory.final_file", c.trajectory.final_file},
+          {"log.file", c.log.file},
+          {"log.pose_log", c.log.pose_log},
+          {"map.file", c.map.file}};
+}
+
+bool inside(const fs::path& root, const fs::path& p) {
+  auto r = root.begin();
+  auto q = p.begin();
+  for (; r != root.end(); ++r, ++q) {
+    if (r->empty()) continue;  // the empty last element of a root written with a trailing '/'
+    if (q == p.end() || *r != *q) return false;
+  }
+  return true;
+}
+
 }  // namespace
 
 const char* to_string(SourceType type) { return source_type_names().name(type); }
@@ -300,16 +360,32 @@ void DaemonConfig::validate() const {
                      "in a saved map needs the vocabulary it was saved with");
   }
   // Two outputs writing one file would interleave.
-  const std::vector<std::pair<const char*, std::string>> files = {{"trajectory.file", trajectory.file},
-                                                                  {"trajectory.final_file", trajectory.final_file},
-                                                                  {"log.file", log.file},
-                                                                  {"log.pose_log", log.pose_log},
-                                                                  {"map.file", map.file}};
-  for (std::size_t i = 0; i < files.size(); ++i) {
-    for (std::size_t j = i + 1; j < files.size(); ++j) {
-      if (!files[i].second.empty() && files[i].second == files[j].second) {
-        throw InputError(p, files[j].first, std::string("expected a file other than ") + files[i].first + "'s");
+  const std::vector<std::pair<const char*, std::string>> named = named_files(*this);
+  for (std::size_t i = 0; i < named.size(); ++i) {
+    for (std::size_t j = i + 1; j < named.size(); ++j) {
+      if (!named[i].second.empty() && named[i].second == named[j].second) {
+        throw InputError(p, named[j].first, std::string("expected a file other than ") + named[i].first + "'s");
       }
+    }
+  }
+  check_write_confinement();
+}
+
+void DaemonConfig::check_write_confinement() const {
+  if (files.write_roots.empty()) return;
+  // The map file is only read in localisation mode or without save_on_stop.
+  const bool map_written = map.mode == slam::MapMode::kMapping && map.save_on_stop;
+  const std::string roots = joined(files.write_roots);
+  for (const auto& [field, file] : named_files(*this)) {
+    if (file.empty() || (std::string(field) == "map.file" && !map_written)) continue;
+    const fs::path resolved = fs::weakly_canonical(file);
+    bool ok = false;
+    for (const std::string& r : files.write_roots) ok = ok || inside(r, resolved);
+    if (!ok) {
+      throw InputError(path, field,
+                       "expected a file inside the folders the daemon may write (" + roots +
+                           "; files.write_dirs), got " + file +
+                           (resolved.string() != file ? " (resolves to " + resolved.string() + ")" : ""));
     }
   }
 }
@@ -331,6 +407,9 @@ std::vector<std::string> DaemonConfig::describe() const {
   out.push_back(trajectory_params().describe(trajectory));
   out.push_back(log_params().describe(log));
   out.push_back(systemd_params().describe(systemd));
+  const std::string roots = joined(files.write_roots);
+  out.push_back(files_params().describe(files) + " (writes " + (roots.empty() ? "not confined" : "only in " + roots) +
+                ")");
   features::FeaturesConfig f;
   f.orb = system.orb;
   f.stereo_matching = system.stereo;
@@ -383,7 +462,8 @@ DaemonConfig load_daemon_config(const std::string& path) {
                              trajectory_params().reader(c.trajectory),
                              log_params().reader(c.log),
                              systemd_params().reader(c.systemd),
-                             map_params().reader(c.map)});
+                             map_params().reader(c.map),
+                             files_params().reader(c.files)});
   const fs::path dir = fs::absolute(fs::path(path)).parent_path();
   for (std::string* f :
        {&c.source.dataset, &c.calibration_file, &c.stage_files.features, &c.stage_files.slam, &c.stage_files.dynamic,
@@ -391,6 +471,7 @@ DaemonConfig load_daemon_config(const std::string& path) {
         &c.trajectory.final_file, &c.log.file, &c.log.pose_log, &c.map.file, &c.odometry.can.dbc}) {
     *f = resolve(dir, *f);
   }
+  c.files.write_roots = write_roots(c.files.write_dirs, dir);
   c.validate();
   // The DBC, its message and signals: wrong ones stop the daemon here, not when the first frame arrives.
   if (c.odometry.source == OdometrySource::kCan)

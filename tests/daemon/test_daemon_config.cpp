@@ -5,6 +5,7 @@
 
 #include <gtest/gtest.h>
 
+#include <cstdlib>
 #include <filesystem>
 
 #include "agvslam/core/error.h"
@@ -136,6 +137,66 @@ TEST(DaemonConfig, EveryKindOfBadSettingNamesTheFileAndTheField) {
       }
     }
   }
+  fs::remove_all(dir);
+}
+
+// files.write_dirs: every written file resolves inside the listed folders, ".." and symbolic links followed.
+TEST(DaemonConfig, WrittenFilesStayInsideTheFoldersTheDaemonMayWrite) {
+  const std::string dir = test::make_temp_dir("agvslamd-confine");
+  fs::create_directories(dir + "/state");
+  fs::create_directories(dir + "/elsewhere");
+  fs::create_symlink(dir + "/elsewhere", dir + "/state/link");
+  const std::string head = "source:\n  type: dataset\n  dataset: /x\nfiles:\n  write_dirs: state\n";
+  const auto load = [&](const std::string& yaml) {
+    write_text(dir + "/d.yaml", head + yaml);
+    return load_daemon_config(dir + "/d.yaml");
+  };
+  const auto refused_field = [&](const std::string& yaml) -> std::string {
+    try {
+      load(yaml);
+    } catch (const InputError& e) {
+      const std::string msg = e.what();
+      EXPECT_NE(msg.find("expected a file inside the folders the daemon may write (" + dir + "/state"),
+                std::string::npos)
+          << msg;
+      return msg;
+    }
+    return "accepted";
+  };
+  // Inside: accepted, and the echo says where writes go.
+  const DaemonConfig ok = load("trajectory:\n  file: state/t.tum\nlog:\n  file: state/logs/d.log\n");
+  ASSERT_EQ(ok.files.write_roots.size(), 1U);
+  EXPECT_EQ(ok.files.write_roots[0], dir + "/state");
+  std::string echo;
+  for (const auto& line : ok.describe()) echo += line + "\n";
+  EXPECT_NE(echo.find("(writes only in " + dir + "/state)"), std::string::npos) << echo;
+
+  EXPECT_NE(refused_field("trajectory:\n  file: /etc/t.tum\n").find("trajectory.file"), std::string::npos);
+  EXPECT_NE(refused_field("log:\n  file: state/../d.log\n").find("log.file"), std::string::npos);
+  EXPECT_NE(refused_field("log:\n  pose_log: state-old/p.jsonl\n").find("log.pose_log"), std::string::npos);
+  // Through a symbolic link inside the folder to one outside it; the message gives where it leads.
+  const std::string via_link = refused_field("trajectory:\n  final_file: state/link/f.tum\n");
+  EXPECT_NE(via_link.find("trajectory.final_file"), std::string::npos);
+  EXPECT_NE(via_link.find("resolves to " + dir + "/elsewhere/f.tum"), std::string::npos) << via_link;
+  // A map file is written only when the map is saved.
+  const std::string place = "stages:\n  place: " + std::string(AGVSLAM_SOURCE_DIR) + "/params/place.yaml\n";
+  EXPECT_NE(refused_field(place + "map:\n  file: " + dir + "/m.agvmap\n").find("map.file"), std::string::npos);
+  EXPECT_NO_THROW(load(place + "map:\n  file: " + dir + "/m.agvmap\n  save_on_stop: false\n"));
+
+  // env: the service's folders from systemd; none set: not confined.
+  write_text(dir + "/e.yaml", "source:\n  type: dataset\n  dataset: /x\ntrajectory:\n  file: /var/t.tum\n");
+  ::setenv("STATE_DIRECTORY", (dir + "/state").c_str(), 1);
+  ::setenv("LOGS_DIRECTORY", (dir + "/logs:" + dir + "/more").c_str(), 1);
+  try {
+    load_daemon_config(dir + "/e.yaml");
+    ADD_FAILURE() << "a trajectory outside $STATE_DIRECTORY was accepted";
+  } catch (const InputError& e) {
+    EXPECT_NE(std::string(e.what()).find(dir + "/state:" + dir + "/logs:" + dir + "/more"), std::string::npos)
+        << e.what();
+  }
+  ::unsetenv("STATE_DIRECTORY");
+  ::unsetenv("LOGS_DIRECTORY");
+  EXPECT_TRUE(load_daemon_config(dir + "/e.yaml").files.write_roots.empty());
   fs::remove_all(dir);
 }
 

@@ -83,6 +83,17 @@ struct MapConfig {
   std::string describe() const;
 };
 
+// Where the daemon may write (section `files`): every file it writes (map, trajectories, log, pose log) must lie,
+// after symbolic links and ".." are resolved, inside one of these folders, or the configuration is refused; so a
+// changed or injected configuration cannot make the service overwrite files elsewhere on the vehicle.
+struct FilesConfig {
+  // "env": the folders systemd gives the service ($STATE_DIRECTORY and $LOGS_DIRECTORY, ':'-separated lists; when
+  // neither is set, as in a developer's run, writes are not confined); "": not confined; otherwise folders
+  // separated by ':' (relative ones against the file's folder).
+  std::string write_dirs = "env";
+  std::vector<std::string> write_roots;  // set at load: the folders above, canonical; empty = not confined
+};
+
 enum class DynamicMode { kDetector, kOff };
 enum class MappingMode { kThread, kInline };
 
@@ -194,6 +205,7 @@ struct DaemonConfig {
   LogConfig log;
   SystemdConfig systemd;
   MapConfig map;
+  FilesConfig files;
 
   // Loaded from the stage files (defaults when a file is not given).
   slam::SystemConfig system;
@@ -204,6 +216,8 @@ struct DaemonConfig {
 
   // Throws InputError(path, "section.key", "expected ...").
   void validate() const;
+  // Throws InputError naming the field of a written file that lies outside files.write_roots (none: no check).
+  void check_write_confinement() const;
   // Every setting, a line each, for the start-up echo.
   std::vector<std::string> describe() const;
 };
