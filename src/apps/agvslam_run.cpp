@@ -495,6 +495,7 @@ struct SlamResults {
   std::vector<slam::KeyframeMappingTimes> mapping_history;
   slam::MapCounts map_counts;
   nlohmann::json load_map, save_map;  // null when not asked for
+  uint64_t skipped_frames = 0;        // unreadable images the source skipped
 };
 
 nlohmann::json load_map(slam::System& system, const Options& o, const Settings& s) {
@@ -541,6 +542,8 @@ bool play(const Options& o, const Settings& s, const Input& in, FrameLog& log, S
   pipeline.start();
   pipeline.wait();
   if (pipeline.failed()) return false;
+  results.skipped_frames = pipeline.stats().dropped_source;
+  if (results.skipped_frames > 0) spdlog::warn("{} unreadable frames skipped", results.skipped_frames);
   results.trajectory = system.trajectory();
   results.mapping = system.mapping_stats();
   results.loops = system.loop_stats();
@@ -743,9 +746,10 @@ void write_json(const Options& o, const Input& in, const FrameLog& log, const Sl
   j["semantic"] = o.semantic;
   j["mapping"] = o.mapping;
   j["speed"] = o.speed;
-  j["frames"] = {{"first", in.setup.first}, {"last", in.setup.last}, {"processed", log.frames},
-                 {"tracked", log.tracked},  {"lost", log.lost},      {"recovered", log.recovered},
-                 {"resets", log.resets}};
+  j["frames"] = {{"first", in.setup.first}, {"last", in.setup.last},
+                 {"processed", log.frames}, {"tracked", log.tracked},
+                 {"lost", log.lost},        {"recovered", log.recovered},
+                 {"resets", log.resets},    {"skipped_unreadable", results.skipped_frames}};
   j["loops"] = loops_json;
   j["loop_closing"] = {{"enabled", o.loop == "on"},
                        {"keyframes_processed", l.keyframes_processed},

@@ -5,6 +5,8 @@
 #include <cstdio>
 #include <thread>
 
+#include <spdlog/spdlog.h>
+
 #include "agvslam/core/error.h"
 #include "agvslam/drivers/v4l2/stereo_camera.h"
 #include "agvslam/io/calibration_io.h"
@@ -105,16 +107,29 @@ DatasetSource::DatasetSource(const SourceSetup& setup, const SourceConfig& confi
 }
 
 bool DatasetSource::load_next() {
-  if (next_index_ > last_) {
-    if (lap_ + 1 < playback_.laps) {
-      ++lap_;
-    } else if (!loop_) {
-      return false;
-    }
-    next_index_ = first_;
-  }
   const auto t0 = std::chrono::steady_clock::now();
-  pending_.frame = dataset_->frame(next_index_);  // rectified, CV_8UC1
+  // A frame whose image is unreadable (corrupt, truncated, empty, another size) is skipped, logged and counted:
+  // one bad file must not end a run, as one corrupt camera frame does not. A range with no readable frame at all
+  // is an error.
+  for (std::size_t unreadable = 0;;) {
+    if (next_index_ > last_) {
+      if (lap_ + 1 < playback_.laps) {
+        ++lap_;
+      } else if (!loop_) {
+        return false;
+      }
+      next_index_ = first_;
+    }
+    try {
+      pending_.frame = dataset_->frame(next_index_);  // rectified, CV_8UC1
+      break;
+    } catch (const InputError& e) {
+      if (++unreadable > last_ - first_) throw;
+      ++skipped_;
+      spdlog::warn("dataset: frame {} skipped ({} so far): {}", next_index_, skipped_, e.what());
+      ++next_index_;
+    }
+  }
   pending_.frame.t_ns += lap_ * lap_ns_;
   pending_.blank = playback_.blank && next_index_ >= playback_.blank->first && next_index_ <= playback_.blank->second;
   if (pending_.blank) {
@@ -158,8 +173,10 @@ FrameSource::Grab DatasetSource::grab(CapturedFrame& out, int timeout_ms) {
 SourceStats DatasetSource::stats() const {
   SourceStats s;
   s.frames = delivered_;
+  s.dropped = skipped_;
   s.connected = true;
-  s.line = "dataset: " + std::to_string(delivered_) + " frames played" + (ended_ ? ", ended" : "");
+  s.line = "dataset: " + std::to_string(delivered_) + " frames played" +
+           (skipped_ > 0 ? ", " + std::to_string(skipped_) + " unreadable skipped" : "") + (ended_ ? ", ended" : "");
   return s;
 }
 

@@ -79,6 +79,43 @@ TEST(DatasetSource, LoopsOverTheRangeAndCountsDeliveredFrames) {
   fs::remove_all(dir);
 }
 
+// Unreadable images (empty, truncated, not an image, another size) are skipped and counted, in a loop too; a range
+// with nothing readable is an error that names a file.
+TEST(DatasetSource, SkipsAndCountsUnreadableFramesButNotAWholeUnreadableRange) {
+  const std::string dir = tiny_dataset(8);
+  test::write_text(dir + "/image_0/000001.png", "");
+  const std::string png = test::read_text(dir + "/image_1/000003.png");
+  test::write_text(dir + "/image_1/000003.png", png.substr(0, png.size() / 2));
+  test::write_text(dir + "/image_0/000004.png", "not a PNG at all");
+  cv::imwrite(dir + "/image_1/000006.png", cv::Mat(24, 32, CV_8UC1, cv::Scalar(61)));
+  {
+    const DaemonConfig c = dataset_config(dir, 0, /*loop=*/true);
+    DatasetSource source(prepare_source(c), c.source);
+    CapturedFrame f;
+    std::vector<int64_t> seen;
+    for (int i = 0; i < 6; ++i) {
+      ASSERT_EQ(source.grab(f, 100), FrameSource::Grab::kFrame);
+      seen.push_back(f.source_index);
+      EXPECT_EQ(f.frame.left.at<uint8_t>(10, 10), 10 * f.source_index);
+    }
+    EXPECT_EQ(seen, (std::vector<int64_t>{0, 2, 5, 7, 0, 2}));
+    EXPECT_EQ(source.stats().dropped, 5U);  // 1, 3, 4, 6 and, in the second lap, 1 again
+    EXPECT_NE(source.stats().line.find("5 unreadable skipped"), std::string::npos) << source.stats().line;
+  }
+  {
+    const DaemonConfig c = dataset_config(dir, 0, /*loop=*/false, "3:4");
+    DatasetSource source(prepare_source(c), c.source);
+    CapturedFrame f;
+    try {
+      source.grab(f, 100);
+      ADD_FAILURE() << "a range of unreadable frames played";
+    } catch (const InputError& e) {
+      EXPECT_NE(std::string(e.what()).find("000004.png"), std::string::npos) << e.what();
+    }
+  }
+  fs::remove_all(dir);
+}
+
 TEST(DatasetSource, ReleasesFramesOnAnAbsoluteScheduleAndReturnsWithinTheTimeout) {
   const std::string dir = tiny_dataset(4);
   DaemonConfig c = dataset_config(dir, 1.0);

@@ -63,7 +63,7 @@ struct CapturedFrame {
 
 struct SourceStats {
   uint64_t frames = 0;    // frames delivered
-  uint64_t dropped = 0;   // frames the source itself lost (V4L2: sequence gaps, unpaired, corrupt)
+  uint64_t dropped = 0;   // frames the source itself lost (V4L2: sequence gaps, unpaired, corrupt; dataset: unreadable)
   bool connected = true;  // false while a camera is lost / being reopened
   uint64_t losses = 0;    // camera lost (error, stall, removal)
   uint64_t reopens = 0;   // and opened again
@@ -121,6 +121,7 @@ class DatasetSource final : public FrameSource {
   CapturedFrame pending_;  // decoded, waiting for its due time
   int64_t start_mono_ns_ = -1;
   uint64_t delivered_ = 0;
+  uint64_t skipped_ = 0;  // frames that could not be read (counted as dropped by the source)
 };
 
 // The V4L2 stereo camera.
