@@ -62,7 +62,10 @@ const params::Table<DdsConfig>& dds_params() {
   return table;
 }
 
-void DdsConfig::validate(const std::string& source) const { dds_params().validate(source, *this); }
+void DdsConfig::validate(const std::string& source) const {
+  dds_params().validate(source, *this);
+  security.validate(source);
+}
 
 std::string DdsConfig::describe() const { return dds_params().describe(*this); }
 
