@@ -35,7 +35,7 @@
 # Keys are ECDSA P-256 (what Cyclone DDS's and Fast DDS's built-in plugins accept besides RSA-2048).
 set -euo pipefail
 
-usage() { sed -n '2,36p' "$0"; }
+usage() { sed -n '2,35p' "$0"; }
 die() {
   echo "make-keystore.sh: $*" >&2
   exit 2
@@ -70,6 +70,13 @@ if [ -n "$domain" ]; then
   [[ $domain =~ ^[0-9]+$ ]] && [ "$domain" -le 230 ] || die "--domain: expected an integer in [0, 230] (DDS Security documents), got '$domain'"
 fi
 [ ${#enclaves[@]} -gt 0 ] || enclaves=("/$ns/agvslamd:daemon" "/$ns/reader:reader")
+
+for spec in "${enclaves[@]}"; do  # all checked before anything is written
+  [[ $spec == *:* ]] || die "$spec: expected ENCLAVE:ROLE, e.g. /$ns/agvslamd:daemon"
+  [[ ${spec%:*} =~ ^(/[A-Za-z_][A-Za-z0-9_]*)+$ ]] ||
+    die "${spec%:*}: expected an enclave name such as /agvslam/agvslamd ('/'-separated ROS names)"
+  [[ ${spec##*:} =~ ^(daemon|reader|input)$ ]] || die "$spec: expected a role daemon, reader or input"
+done
 
 mkdir -p "$keystore"
 keystore=$(cd "$keystore" && pwd)
@@ -162,8 +169,6 @@ ros_sub=(ros_discovery_info rt/parameter_events "rq/*")
 
 make_enclave() {
   local name=$1 role=$2
-  [[ $name =~ ^(/[A-Za-z_][A-Za-z0-9_]*)+$ ]] ||
-    die "$name: expected an enclave name such as /agvslam/agvslamd ('/'-separated ROS names)"
   local dir=$encl$name
   if [ -f "$dir/permissions.p7s" ] && [ $force -eq 0 ]; then
     echo "make-keystore.sh: $dir exists (kept; --force recreates it)"
@@ -183,7 +188,6 @@ make_enclave() {
       publish=$(topics_xml "rt/$ns/in/*")
       subscribe=""
       ;;
-    *) die "$name:$role: expected a role daemon, reader or input" ;;
   esac
   mkdir -p "$dir"
   # The subject is CN=<enclave name>, as SROS2 writes it; '/' is escaped for openssl's -subj syntax.
@@ -228,6 +232,5 @@ make_enclave() {
 }
 
 for spec in "${enclaves[@]}"; do
-  [[ $spec == *:* ]] || die "$spec: expected ENCLAVE:ROLE, e.g. /$ns/agvslamd:daemon"
   make_enclave "${spec%:*}" "${spec##*:}"
 done
