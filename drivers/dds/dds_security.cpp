@@ -18,6 +18,7 @@
 #include <sstream>
 
 #include "agvslam/core/error.h"
+#include "agvslam/drivers/dds/dds_config.h"
 
 #ifndef AGVSLAM_DDS_SECURITY_PLUGIN_DIR
 #define AGVSLAM_DDS_SECURITY_PLUGIN_DIR ""
@@ -223,22 +224,8 @@ std::string plugin_dir(const DdsSecurityConfig& config) {
   return config.plugin_dir.empty() ? default_security_plugin_dir() : config.plugin_dir;
 }
 
-// ROS enclave names: '/'-separated ROS name tokens.
-bool valid_enclave(const std::string& e) {
-  if (e.size() < 2 || e.front() != '/' || e.back() == '/') return false;
-  char prev = '/';
-  for (const char c : e.substr(1)) {
-    if (c == '/') {
-      if (prev == '/') return false;
-    } else if (std::isalnum(static_cast<unsigned char>(c)) == 0 && c != '_') {
-      return false;
-    } else if (prev == '/' && std::isdigit(static_cast<unsigned char>(c)) != 0) {
-      return false;
-    }
-    prev = c;
-  }
-  return true;
-}
+// ROS enclave names: '/' then a ROS name, e.g. /agvslam/agvslamd.
+bool valid_enclave(const std::string& e) { return e.size() > 1 && e.front() == '/' && is_ros_name(e.substr(1)); }
 
 }  // namespace
 

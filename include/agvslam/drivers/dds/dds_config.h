@@ -48,6 +48,10 @@ struct DdsConfig {
   std::string status_topic() const { return "rt/" + topic_namespace + "/status"; }
 };
 
+// ROS 2 name tokens (letters, digits, underscores; not starting with a digit) separated by single '/', without a
+// leading or trailing '/': a topic namespace such as robot1/slam.
+bool is_ros_name(const std::string& name);
+
 // The settings of the `dds` section (every field above, named alike).
 const params::Table<DdsConfig>& dds_params();
 
