@@ -1,7 +1,7 @@
 // DDS Security with a keystore made by deploy/make-keystore.sh (SROS2 layout), Cyclone DDS's built-in plugins.
-//  - Start-up checks, in this process: a tampered permissions file, a certificate of another CA, a missing key,
-//    a permissions grant that has expired are refused with an InputError naming the file; an enclave whose
-//    permissions do not allow publishing the pose cannot create the pose writer.
+//  - Start-up checks, in this process: a tampered permissions file, a certificate of another CA or one that has
+//    expired, a missing or foreign key, a permissions grant that has expired are refused with an InputError naming the
+//    file; an enclave whose permissions do not allow publishing the pose cannot create the pose writer.
 //  - Two and more processes in a private network namespace (unshare -n, lo up), with agvslam-pose-replay as the
 //    daemon's publisher and agvslam-echo as subscribers: an authenticated reader receives every sample; a reader
 //    without credentials and one with credentials of another CA receive nothing; a publisher without credentials
@@ -154,6 +154,24 @@ TEST_F(DdsSecurity, CertificateOfAnotherCaIsRefusedAtStartUp) {
   EXPECT_NE(error.find(enclave + "cert.pem: expected a certificate issued by the identity CA"), std::string::npos)
       << error;
   EXPECT_NE(error.find("unable to get local issuer certificate"), std::string::npos) << error;
+}
+
+TEST_F(DdsSecurity, ExpiredCertificateIsRefusedAtStartUp) {
+  const std::string ks = copy_keystore("expired_cert");
+  const std::string enclave = ks + "/enclaves/agvslam/reader/";
+  std::string out;
+  // The enclave's own key, certified by the keystore's CA until yesterday.
+  ASSERT_EQ(run_command("openssl req -new -key " + enclave + "key.pem -subj '/CN=\\/agvslam\\/reader' -out " + enclave +
+                            "req.pem && openssl x509 -req -days -1 -in " + enclave + "req.pem -CA " + ks +
+                            "/public/ca.cert.pem -CAkey " + ks + "/private/ca.key.pem -set_serial 7 -out " + enclave +
+                            "cert.pem",
+                        &out),
+            0)
+      << out;
+  const std::string error = start_up_error(config(ks, "/agvslam/reader", 5));
+  EXPECT_NE(error.find(enclave + "cert.pem: expected a certificate issued by the identity CA"), std::string::npos)
+      << error;
+  EXPECT_NE(error.find("certificate has expired"), std::string::npos) << error;
 }
 
 TEST_F(DdsSecurity, MissingOrForeignKeyIsRefusedAtStartUp) {
