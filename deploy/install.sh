@@ -13,7 +13,8 @@
 #                                   cyclonedds-loopback.xml; files that exist are kept, the new version is put
 #                                   beside them as *.new
 #   PREFIX/share/agvslam/           agvslam.dbc (the CAN frames), params/ (all shipped params), the udev rule
-#                                   example, README.md
+#                                   example, README.md, make-keystore.sh (the keystore of the config's
+#                                   dds_security section)
 #   /etc/systemd/system/agvslamd.service   deploy/agvslamd.service with PREFIX in ExecStart
 #   /etc/udev/rules.d/99-agvslam-camera.rules   only with --udev (edit the serial numbers first)
 #   system user and group `agvslam`, member of `video` (the service runs as it)
@@ -85,6 +86,7 @@ ln -sfn "../..$prefix/share/agvslam/params/vocabulary" "$etc/vocabulary"
 
 echo "install.sh: shared files -> $share"
 install -m 0644 "$src/deploy/agvslam.dbc" "$share/agvslam.dbc"
+install -m 0755 "$src/deploy/make-keystore.sh" "$share/make-keystore.sh"
 install -m 0644 "$src/deploy/99-agvslam-camera.rules" "$share/99-agvslam-camera.rules"
 install -m 0644 "$src/README.md" "$share/README.md"
 cp -r "$src/params/." "$share/params/"

@@ -3,10 +3,8 @@
 #include <cctype>
 
 namespace agvslam::drivers::dds {
-namespace {
 
-// ROS 2 name tokens: letters, digits, underscores, separated by single '/', not starting with a digit.
-bool valid_ros_namespace(const std::string& ns) {
+bool is_ros_name(const std::string& ns) {
   if (ns.empty() || ns.front() == '/' || ns.back() == '/') return false;
   char prev = '/';
   for (char c : ns) {
@@ -21,8 +19,6 @@ bool valid_ros_namespace(const std::string& ns) {
   }
   return true;
 }
-
-}  // namespace
 
 const params::Table<DdsConfig>& dds_params() {
   using params::Range;
@@ -47,7 +43,7 @@ const params::Table<DdsConfig>& dds_params() {
               {"queue_capacity", &DdsConfig::queue_capacity, Range::closed(1, 1024), "samples"},
           })
           .check(
-              "topic_namespace", [](const DdsConfig& c) { return valid_ros_namespace(c.topic_namespace); },
+              "topic_namespace", [](const DdsConfig& c) { return is_ros_name(c.topic_namespace); },
               "a ROS name without leading or trailing '/' (letters, digits, '_', '/'), e.g. agvslam")
           .check(
               "publish_pose", [](const DdsConfig& c) { return c.publish_pose || c.publish_odom || c.publish_status; },
@@ -62,7 +58,10 @@ const params::Table<DdsConfig>& dds_params() {
   return table;
 }
 
-void DdsConfig::validate(const std::string& source) const { dds_params().validate(source, *this); }
+void DdsConfig::validate(const std::string& source) const {
+  dds_params().validate(source, *this);
+  security.validate(source);
+}
 
 std::string DdsConfig::describe() const { return dds_params().describe(*this); }
 

@@ -72,7 +72,22 @@ Participant::Participant(const DdsConfig& config) {
                      " (check dds.network_interface / dds.config_uri)");
     }
   }
-  participant_ = DdsEntity(dds_check(dds_create_participant(domain, nullptr, nullptr), where + ": create participant"));
+  if (!config.security.enabled) {
+    participant_ =
+        DdsEntity(dds_check(dds_create_participant(domain, nullptr, nullptr), where + ": create participant"));
+    return;
+  }
+  // Our own checks first: Cyclone's refusal is a bare return code (the reason goes to its log only).
+  const EnclaveFiles files = check_enclave(config.security);
+  const SecurityQos qos(config.security, files);
+  const dds_entity_t p = dds_create_participant(domain, qos.get(), nullptr);
+  if (p < 0) {
+    throw DdsError(where + ": DDS Security refused the participant with the credentials of enclave " +
+                   config.security.enclave + " in " + config.security.keystore + ": " + dds_strretcode(p) +
+                   " (the files passed agvslam's checks; Cyclone DDS's log on stderr names the reason, e.g. a "
+                   "permissions grant without this domain id)");
+  }
+  participant_ = DdsEntity(p);
 }
 
 Participant::~Participant() {

@@ -42,6 +42,8 @@ struct Options {
   int domain = 0;
   std::string interface;
   std::string ns = "agvslam";
+  std::string keystore;
+  std::string enclave;
   long count = 0;
   double timeout_s = 0.0;
   bool json = false;
@@ -57,7 +59,11 @@ int run(const Options& o) {
   cfg.domain_id = o.domain;
   cfg.network_interface = o.interface;
   cfg.topic_namespace = o.ns;
+  cfg.security.enabled = !o.keystore.empty();
+  cfg.security.keystore = o.keystore;
+  if (!o.enclave.empty()) cfg.security.enclave = o.enclave;
   cfg.validate("agvslam-echo options");
+  if (cfg.security.enabled) spdlog::info("agvslam-echo: {}", cfg.security.describe());
   const bool all = o.topic == "all";
   spdlog::info("agvslam-echo: topic {}, {}, count {}, timeout {} s, output {}", o.topic, cfg.describe(), o.count,
                o.timeout_s, o.json ? "json" : "text");
@@ -152,6 +158,10 @@ int main(int argc, char** argv) {
   app.add_option("--interface", o.interface,
                  "network interface for DDS (default: Cyclone's choice, or CYCLONEDDS_URI)");
   app.add_option("--namespace", o.ns, "topic namespace: rt/<ns>/pose ...")->capture_default_str();
+  app.add_option("--keystore", o.keystore,
+                 "DDS Security: an SROS2 keystore (deploy/make-keystore.sh); none: plain DDS");
+  app.add_option("--enclave", o.enclave, "DDS Security: the enclave whose credentials to use")
+      ->default_str(agvslam::drivers::dds::DdsSecurityConfig{}.enclave);
   app.add_option("--count", o.count, "stop after N samples (0: run until interrupted)")->capture_default_str();
   app.add_option("--timeout", o.timeout_s, "give up after S seconds (0: never)")->capture_default_str();
   app.add_flag("--json", o.json, "one JSON object per sample, then a summary line");

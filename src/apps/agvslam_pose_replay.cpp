@@ -50,6 +50,8 @@ struct Options {
   int domain = 0;
   std::string interface;
   std::string ns = "agvslam";
+  std::string keystore;
+  std::string enclave;
   int wait_subscribers = 0;
   double wait_timeout_s = 10.0;
   bool sync = false;
@@ -87,7 +89,11 @@ bool open_dds(const Options& o, std::unique_ptr<dds::DdsPosePublisher>& pub) {
   cfg.domain_id = o.domain;
   cfg.network_interface = o.interface;
   cfg.topic_namespace = o.ns;
+  cfg.security.enabled = !o.keystore.empty();
+  cfg.security.keystore = o.keystore;
+  if (!o.enclave.empty()) cfg.security.enclave = o.enclave;
   cfg.validate("agvslam-pose-replay options");
+  if (cfg.security.enabled) spdlog::info("agvslam-pose-replay: {}", cfg.security.describe());
   spdlog::info("agvslam-pose-replay: {}{}", cfg.describe(), o.sync ? ", writes on the caller's thread" : "");
   pub = std::make_unique<dds::DdsPosePublisher>(cfg, !o.sync);
   if (o.wait_subscribers <= 0) return true;
@@ -243,6 +249,10 @@ int main(int argc, char** argv) {
   app.add_option("--domain", o.domain, "DDS domain id")->capture_default_str();
   app.add_option("--interface", o.interface, "network interface for DDS");
   app.add_option("--namespace", o.ns, "topic namespace")->capture_default_str();
+  app.add_option("--keystore", o.keystore,
+                 "DDS Security: an SROS2 keystore (deploy/make-keystore.sh); none: plain DDS");
+  app.add_option("--enclave", o.enclave, "DDS Security: the enclave whose credentials to use")
+      ->default_str(agvslam::drivers::dds::DdsSecurityConfig{}.enclave);
   app.add_option("--wait-subscribers", o.wait_subscribers, "wait for N subscribers on every topic before sending")
       ->capture_default_str();
   app.add_option("--wait-timeout", o.wait_timeout_s, "seconds to wait for them")->capture_default_str();

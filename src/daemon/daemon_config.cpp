@@ -340,6 +340,7 @@ void DaemonConfig::validate() const {
   base_link_params().validate(p, base_link);
   covariance_params().validate(p, covariance);
   dds_section_params().validate(p, outputs);
+  drivers::dds::dds_security_params().validate(p, outputs.dds.security);
   can_section_params().validate(p, outputs);
   odometry_params().validate(p, odometry);
   if (odometry.source == OdometrySource::kCan) {
@@ -401,6 +402,7 @@ std::vector<std::string> DaemonConfig::describe() const {
   out.push_back(base_link.describe());
   out.push_back(covariance.describe());
   out.push_back(dds_section_params().describe(outputs));
+  out.push_back(outputs.dds.security.describe());
   out.push_back(can_section_params().describe(outputs));
   out.push_back(odometry_params().describe(odometry));
   if (odometry.source == OdometrySource::kCan) out.push_back(can_odometry_section_params().describe(odometry));
@@ -427,7 +429,9 @@ std::vector<std::string> DaemonConfig::describe() const {
 
 drivers::dds::DdsConfig load_dds_config(const std::string& path, const std::string& section) {
   drivers::dds::DdsConfig c;
-  drivers::dds::dds_params().read(params::File(path), section, c);
+  const params::File file(path);
+  drivers::dds::dds_params().read(file, section, c);
+  drivers::dds::dds_security_params().read(file, c.security);
   c.validate(path);
   return c;
 }
@@ -456,6 +460,7 @@ DaemonConfig load_daemon_config(const std::string& path) {
                              base_link_params().reader(c.base_link),
                              covariance_params().reader(c.covariance),
                              dds_section_params().reader(c.outputs),
+                             drivers::dds::dds_security_params().reader(c.outputs.dds.security),
                              can_section_params().reader(c.outputs),
                              odometry_params().reader(c.odometry),
                              can_odometry_section_params().reader(c.odometry),
@@ -465,14 +470,16 @@ DaemonConfig load_daemon_config(const std::string& path) {
                              map_params().reader(c.map),
                              files_params().reader(c.files)});
   const fs::path dir = fs::absolute(fs::path(path)).parent_path();
-  for (std::string* f :
-       {&c.source.dataset, &c.calibration_file, &c.stage_files.features, &c.stage_files.slam, &c.stage_files.dynamic,
-        &c.stage_files.stereo, &c.stage_files.place, &c.stage_files.semantic, &c.trajectory.file,
-        &c.trajectory.final_file, &c.log.file, &c.log.pose_log, &c.map.file, &c.odometry.can.dbc}) {
+  for (std::string* f : {&c.source.dataset, &c.calibration_file, &c.stage_files.features, &c.stage_files.slam,
+                         &c.stage_files.dynamic, &c.stage_files.stereo, &c.stage_files.place, &c.stage_files.semantic,
+                         &c.trajectory.file, &c.trajectory.final_file, &c.log.file, &c.log.pose_log, &c.map.file,
+                         &c.odometry.can.dbc, &c.outputs.dds.security.keystore}) {
     *f = resolve(dir, *f);
   }
   c.files.write_roots = write_roots(c.files.write_dirs, dir);
   c.validate();
+  // The DDS Security keystore: a missing, tampered or expired file stops the daemon here, naming it.
+  if (c.outputs.dds_enabled && c.outputs.dds.security.enabled) drivers::dds::check_enclave(c.outputs.dds.security);
   // The DBC, its message and signals: wrong ones stop the daemon here, not when the first frame arrives.
   if (c.odometry.source == OdometrySource::kCan)
     drivers::can::CanOdometryDecoder(c.odometry.can, c.outputs.can.layout(), path);

@@ -67,10 +67,11 @@ int64_t stamp_ns(const json& header) {
 
 // Runs `daemon_config` with agvslam-echo subscribed to every topic, both in a private network namespace; the
 // echo's JSON lines land in dir/echo.jsonl. Returns the daemon's exit status.
-int run_with_echo(const std::string& netns, const std::string& dir, const std::string& daemon_config) {
+int run_with_echo(const std::string& netns, const std::string& dir, const std::string& daemon_config,
+                  const std::string& echo_options = "") {
   const std::string script = "ip link set lo up && (" + test::tool_path("agvslam-echo") +
-                             " --json --interface lo --namespace agvslamd_test --timeout 300 > " + dir +
-                             "/echo.jsonl 2> " + dir + "/echo.err & e=$!; " + test::tool_path("agvslamd") +
+                             " --json --interface lo --namespace agvslamd_test --timeout 300 " + echo_options + " > " +
+                             dir + "/echo.jsonl 2> " + dir + "/echo.err & e=$!; " + test::tool_path("agvslamd") +
                              " --config " + daemon_config + " --json " + dir + "/stats.json > " + dir +
                              "/daemon.out 2> " + dir + "/daemon.err; rc=$?; sleep 1; kill -INT $e; wait $e; exit $rc)";
   write_text(dir + "/run.sh", script + "\n");
@@ -202,6 +203,34 @@ TEST(Agvslamd, DatasetPlayedLosslesslyPublishesEveryPoseOverDdsAndMatchesTheRunn
   EXPECT_EQ(stats.at("processed"), 80);
   EXPECT_EQ(stats.at("dropped_queue"), 0);
   EXPECT_EQ(stats.at("stop_reason"), "end of the dataset");
+  fs::remove_all(dir);
+}
+
+// DDS Security end to end: agvslamd with the agvslamd enclave of a keystore from deploy/make-keystore.sh, agvslam-echo
+// with the reader enclave's credentials receives every sample.
+TEST(Agvslamd, WithDdsSecurityAnAuthenticatedReaderReceivesEverySample) {
+  AGVSLAM_REQUIRE_NETNS(netns);
+  const std::string seq = test::daemon_sim_sequence();
+  const std::string dir = test::make_temp_dir("agvslamd-dds-security");
+  std::string out;
+  ASSERT_EQ(
+      test::run_command(
+          std::string(AGVSLAM_SOURCE_DIR) + "/deploy/make-keystore.sh --namespace agvslamd_test " + dir + "/ks", &out),
+      0)
+      << out;
+  write_text(dir + "/d.yaml", "source:\n  type: dataset\n  dataset: " + seq + "\n  rate: 0\n" + stages_yaml() +
+                                  "pipeline:\n  mapping: inline\n" + kMount +
+                                  "dds:\n  network_interface: lo\n  topic_namespace: agvslamd_test\n"
+                                  "  wait_for_subscribers: 1\n  wait_timeout_s: 60\n"
+                                  "dds_security:\n  enabled: true\n  keystore: ks\n"
+                                  "  enclave: /agvslamd_test/agvslamd\nlog:\n  pose_log: " +
+                                  dir + "/poses.jsonl\n");
+  ASSERT_EQ(run_with_echo(netns, dir, dir + "/d.yaml", "--keystore " + dir + "/ks --enclave /agvslamd_test/reader"), 0)
+      << read_text(dir + "/daemon.err");
+  EXPECT_NE(read_text(dir + "/daemon.err").find("dds_security: enabled=true"), std::string::npos);
+  const Published p = collect(dir);
+  ASSERT_EQ(p.log.size(), 80U);
+  expect_every_sample_received(p);
   fs::remove_all(dir);
 }
 

@@ -239,6 +239,56 @@ TEST(DaemonConfig, DdsAndCanSectionsLoadAlone) {
   fs::remove_all(dir);
 }
 
+TEST(DaemonConfig, DdsSecurityKeystoreFollowsTheFileAndABadOneStopsTheStart) {
+  const std::string dir = test::make_temp_dir("agvslamd-config-security");
+  std::string out;
+  ASSERT_EQ(test::run_command(std::string(AGVSLAM_SOURCE_DIR) + "/deploy/make-keystore.sh " + dir + "/ks", &out), 0)
+      << out;
+  const std::string head = "source:\n  type: dataset\n  dataset: /x\ndds_security:\n";
+  write_text(dir + "/s.yaml", head + "  enabled: true\n  keystore: ks\n  enclave: /agvslam/agvslamd\n");
+  const DaemonConfig c = load_daemon_config(dir + "/s.yaml");
+  EXPECT_TRUE(c.outputs.dds.security.enabled);
+  EXPECT_EQ(c.outputs.dds.security.keystore, dir + "/ks");
+  std::string all;
+  for (const auto& line : c.describe()) all += line + "\n";
+  EXPECT_NE(all.find("dds_security: enabled=true, keystore=" + dir + "/ks, enclave=/agvslam/agvslamd"),
+            std::string::npos)
+      << all;
+  // The shipped file runs plain DDS and says so.
+  all.clear();
+  for (const auto& line : load_daemon_config(params("agvslamd.yaml")).describe()) all += line + "\n";
+  EXPECT_NE(all.find("dds_security: enabled=false"), std::string::npos) << all;
+
+  for (const auto& [yaml, field] : std::vector<std::pair<std::string, std::string>>{
+           {"  enabled: true\n", "dds_security.keystore"},
+           {"  enabled: true\n  keystore: ks\n  enclave: agvslam\n", "dds_security.enclave"},
+           {"  enabled: yes please\n", "dds_security.enabled"},
+           {"  keystor: ks\n", "keystor"}}) {
+    write_text(dir + "/bad.yaml", head + yaml);
+    try {
+      load_daemon_config(dir + "/bad.yaml");
+      ADD_FAILURE() << yaml;
+    } catch (const InputError& e) {
+      EXPECT_NE(std::string(e.what()).find(field), std::string::npos) << e.what();
+    }
+  }
+
+  // A permissions file changed after signing stops the start, naming it.
+  const std::string p7s = dir + "/ks/enclaves/agvslam/agvslamd/permissions.p7s";
+  std::string text = test::read_text(p7s);
+  text.replace(text.find("<default>DENY</default>"), 23, "<default>ALLOW</default>");
+  write_text(p7s, text);
+  try {
+    load_daemon_config(dir + "/s.yaml");
+    ADD_FAILURE() << "a tampered permissions file was accepted";
+  } catch (const InputError& e) {
+    EXPECT_NE(std::string(e.what()).find(p7s + ": expected this enclave's permissions document signed by"),
+              std::string::npos)
+        << e.what();
+  }
+  fs::remove_all(dir);
+}
+
 TEST(BaseLinkConfig, ForwardLookingCameraMapsTheOpticalAxesToReps103) {
   BaseLinkConfig b;
   b.x_m = 0.3;

@@ -8,6 +8,7 @@
 #include <unistd.h>
 
 #include <filesystem>
+#include <map>
 #include <nlohmann/json.hpp>
 
 #include "agvslam/core/error.h"
@@ -99,6 +100,47 @@ TEST(PoseOutputs, PoseOnlyWhileTrackingStatusAlwaysFilesAsPublished) {
               s.latency_ns = lines[1].at("sample").at("latency_ns").get<int64_t>();
               return s;
             }()));
+  std::filesystem::remove_all(dir);
+}
+
+// With DDS Security the daemon's two publishers (status; pose and odometry) use the agvslamd enclave of a keystore
+// from deploy/make-keystore.sh; agvslam-echo with the reader enclave's credentials receives what they publish. The
+// reader runs in another process: in this process's domain Cyclone 0.10 refuses a reader with other credentials.
+TEST(PoseOutputs, WithDdsSecurityAnAuthenticatedReaderReceivesPoseOdomAndStatus) {
+  const std::string dir = test::make_temp_dir("agvslamd-outputs-security");
+  std::string out_text;
+  ASSERT_EQ(test::run_command(std::string(AGVSLAM_SOURCE_DIR) + "/deploy/make-keystore.sh " + dir + "/ks", &out_text),
+            0)
+      << out_text;
+  DaemonConfig c;
+  c.path = "test.yaml";
+  c.outputs.dds_enabled = true;
+  c.outputs.dds.domain_id = 100 + static_cast<int>((getpid() + 50) % 100);
+  c.outputs.dds.network_interface = "lo";
+  c.outputs.dds.security.enabled = true;
+  c.outputs.dds.security.keystore = dir + "/ks";
+  c.outputs.dds.security.enclave = "/agvslam/agvslamd";
+  c.outputs.can_enabled = false;
+  test::ChildProcess echo({test::tool_path("agvslam-echo"), "--json", "--interface", "lo", "--domain",
+                           std::to_string(c.outputs.dds.domain_id), "--keystore", dir + "/ks", "--enclave",
+                           "/agvslam/reader", "--count", "9", "--timeout", "30"},
+                          dir + "/echo.jsonl", dir + "/echo.err");
+  ASSERT_TRUE(echo.started());
+  PoseOutputs out(c);
+  ASSERT_TRUE(out.wait_for_subscribers(1, std::chrono::seconds(20))) << test::read_text(dir + "/echo.err");
+  for (std::size_t i = 0; i < 3; ++i) {
+    OutputItem item;
+    item.sample = drivers::synthetic_pose_sample(i, dds::realtime_now_ns());
+    item.sample.tracking_state = drivers::TrackingState::kTracking;
+    out.publish(item);
+  }
+  out.flush(std::chrono::seconds(5));
+  ASSERT_EQ(echo.wait(std::chrono::seconds(30)), 0) << test::read_text(dir + "/echo.err");
+  std::map<std::string, int> per_topic;
+  for (const auto& line : test::read_json_lines(dir + "/echo.jsonl")) {
+    if (line.contains("topic")) ++per_topic[line.at("topic").get<std::string>()];
+  }
+  EXPECT_EQ(per_topic, (std::map<std::string, int>{{"odom", 3}, {"pose", 3}, {"status", 3}}));
   std::filesystem::remove_all(dir);
 }
 

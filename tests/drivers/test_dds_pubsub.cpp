@@ -14,11 +14,13 @@
 #include "agvslam/drivers/dds/publisher.h"
 #include "agvslam/drivers/dds/subscriber.h"
 #include "common/test_data.h"
+#include "dds_test_util.h"
 
 namespace {
 
 using namespace agvslam::drivers;
 using namespace agvslam::drivers::dds;
+using agvslam::test::read_json_lines;
 namespace fs = std::filesystem;
 
 // A domain id of this process's own, so concurrent test runs on one host do not meet.
@@ -105,31 +107,6 @@ TEST(DdsPubSub, BadInterfaceIsAnErrorNamingIt) {
 }
 
 // ---- two processes in a network namespace ----
-
-// The command prefix that runs a shell in a fresh network namespace with lo up, or "" when not permitted.
-std::string netns_prefix() {
-  if (agvslam::test::run_command("unshare -n true") == 0) return "unshare -n";
-  if (agvslam::test::run_command("unshare -rn true") == 0) return "unshare -rn";
-  return "";
-}
-
-#define REQUIRE_NETNS(prefix)                                                                               \
-  const std::string prefix = netns_prefix();                                                                \
-  if (prefix.empty()) {                                                                                     \
-    if (agvslam::test::running_in_ci()) FAIL() << "unshare -n is not permitted here and CI=true";           \
-    GTEST_SKIP() << "unshare -n (a private network namespace) is not permitted here; run as root or where " \
-                    "unprivileged user namespaces are enabled";                                             \
-  }
-
-std::vector<nlohmann::json> read_json_lines(const std::string& path) {
-  std::vector<nlohmann::json> out;
-  std::ifstream in(path);
-  std::string line;
-  while (std::getline(in, line)) {
-    if (!line.empty()) out.push_back(nlohmann::json::parse(line));
-  }
-  return out;
-}
 
 TEST(DdsTwoProcess, EverySamplePublishedArrivesInOrderWithExactValues) {
   REQUIRE_NETNS(ns);

@@ -4,6 +4,7 @@
 #include <string>
 
 #include "agvslam/core/param_table.h"
+#include "agvslam/drivers/dds/dds_security.h"
 
 namespace agvslam::drivers::dds {
 
@@ -34,8 +35,10 @@ struct DdsConfig {
   int max_blocking_ms = 20;
   // Samples waiting for the publisher thread; when full the oldest is dropped (and counted).
   int queue_capacity = 8;
+  // DDS Security credentials (the `dds_security` section; its own table, dds_security_params()).
+  DdsSecurityConfig security;
 
-  // Throws InputError(source, "dds.<key>", "expected ...") for a value out of range.
+  // Throws InputError(source, "dds.<key>" or "dds_security.<key>", "expected ...") for a value out of range.
   void validate(const std::string& source) const;
   // One line for the start-up echo.
   std::string describe() const;
@@ -44,6 +47,10 @@ struct DdsConfig {
   std::string odom_topic() const { return "rt/" + topic_namespace + "/odom"; }
   std::string status_topic() const { return "rt/" + topic_namespace + "/status"; }
 };
+
+// ROS 2 name tokens (letters, digits, underscores; not starting with a digit) separated by single '/', without a
+// leading or trailing '/': a topic namespace such as robot1/slam.
+bool is_ros_name(const std::string& name);
 
 // The settings of the `dds` section (every field above, named alike).
 const params::Table<DdsConfig>& dds_params();
