@@ -135,27 +135,30 @@ cv::Mat decode_raw_image(CdrReader& in, const std::string& source, const std::st
   std::size_t data_bytes = 0;
   const uint8_t* data = in.byte_sequence("data", data_bytes);
 
-  int type = 0, conversion = -1;  // conversion: cvtColor code to grey, -1 = none
-  if (encoding == "mono8" || encoding == "8UC1") {
-    type = CV_8UC1;
-  } else if (encoding == "mono16" || encoding == "16UC1") {
-    type = CV_16UC1;
-  } else if (encoding == "bgr8" || encoding == "8UC3") {
-    type = CV_8UC3;
-    conversion = cv::COLOR_BGR2GRAY;
-  } else if (encoding == "rgb8") {
-    type = CV_8UC3;
-    conversion = cv::COLOR_RGB2GRAY;
-  } else if (encoding == "bgra8" || encoding == "8UC4") {
-    type = CV_8UC4;
-    conversion = cv::COLOR_BGRA2GRAY;
-  } else if (encoding == "rgba8") {
-    type = CV_8UC4;
-    conversion = cv::COLOR_RGBA2GRAY;
-  } else {
+  // sensor_msgs/image_encodings names; conversion: cvtColor code to grey, -1 = none.
+  struct Encoding {
+    const char* name;
+    int type, conversion;
+  };
+  static const Encoding kEncodings[] = {
+      {"mono8", CV_8UC1, -1},
+      {"8UC1", CV_8UC1, -1},
+      {"mono16", CV_16UC1, -1},
+      {"16UC1", CV_16UC1, -1},
+      {"bgr8", CV_8UC3, cv::COLOR_BGR2GRAY},
+      {"8UC3", CV_8UC3, cv::COLOR_BGR2GRAY},
+      {"rgb8", CV_8UC3, cv::COLOR_RGB2GRAY},
+      {"bgra8", CV_8UC4, cv::COLOR_BGRA2GRAY},
+      {"8UC4", CV_8UC4, cv::COLOR_BGRA2GRAY},
+      {"rgba8", CV_8UC4, cv::COLOR_RGBA2GRAY},
+  };
+  const auto known =
+      std::find_if(std::begin(kEncodings), std::end(kEncodings), [&](const Encoding& e) { return encoding == e.name; });
+  if (known == std::end(kEncodings)) {
     throw InputError(source, context + " field 'encoding'",
                      "expected mono8, mono16, bgr8, rgb8, bgra8 or rgba8, found '" + encoding + "'");
   }
+  const int type = known->type, conversion = known->conversion;
   if (width == 0 || height == 0) {
     throw InputError(source, context + " field 'width'/'height'",
                      "expected a non-empty image, found " + std::to_string(width) + "x" + std::to_string(height));

@@ -289,6 +289,43 @@ TEST(RosbagDataset, TopicChoiceAutomaticOrByQuery) {
   expect_input_error([&] { open_dataset(dir.path() + "?left=/a&right=/b"); }, {"no metadata.yaml"});
 }
 
+// A recording split into two .db3 files (ros2 bag record --max-bag-size): each file numbers its topics itself.
+TEST(RosbagDataset, SplitRecordingReadsEveryFileWithItsOwnTopicIds) {
+  TempDir dir("agvslam-rosbag");
+  std::vector<cv::Mat> lefts, rights;
+  for (int part = 0; part < 2; ++part) {
+    BagWriter writer(dir.file("part" + std::to_string(part)), "recording_part" + std::to_string(part));
+    // The second file registers the topics in the other order: other ids for the same names.
+    const int first = writer.topic(part == 0 ? "/left/image" : "/right/image", "sensor_msgs/msg/Image");
+    const int second = writer.topic(part == 0 ? "/right/image" : "/left/image", "sensor_msgs/msg/Image");
+    const int left_id = part == 0 ? first : second, right_id = part == 0 ? second : first;
+    for (int i = 0; i < 3; ++i) {
+      const int64_t t = kT0Ns + (3 * part + i) * kPeriodNs;
+      lefts.push_back(noise_image(48, 64, CV_8UC1, 100 + 2 * (3 * part + i)));
+      rights.push_back(noise_image(48, 64, CV_8UC1, 101 + 2 * (3 * part + i)));
+      writer.write(left_id, t, test::encode_image(t, lefts.back(), "mono8"));
+      writer.write(right_id, t, test::encode_image(t, rights.back(), "mono8"));
+    }
+  }
+  fs::rename(dir.file("part1/recording_part1_0.db3"), dir.file("part0/recording_part1_0.db3"));
+  {
+    std::ifstream in(dir.file("part0/metadata.yaml"));
+    std::string text((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
+    const std::string files = "  relative_file_paths:\n    - recording_part0_0.db3\n";
+    ASSERT_NE(text.find(files), std::string::npos);
+    text.replace(text.find(files), files.size(), files + "    - recording_part1_0.db3\n");
+    std::ofstream(dir.file("part0/metadata.yaml")) << text;
+  }
+  const auto bag = open_dataset(dir.file("part0"), write_calib(dir));
+  ASSERT_EQ(bag->size(), 6u);
+  for (std::size_t i = 0; i < 6; ++i) {
+    EXPECT_EQ(bag->timestamp_ns(i), kT0Ns + static_cast<int64_t>(i) * kPeriodNs);
+    const StereoFrame frame = bag->frame(i);
+    expect_same_image(frame.left, lefts[i], "left " + std::to_string(i));
+    expect_same_image(frame.right, rights[i], "right " + std::to_string(i));
+  }
+}
+
 // ---------------------------------------------------------------------------------------------------------------
 // Bad input
 
