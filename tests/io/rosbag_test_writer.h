@@ -1,7 +1,8 @@
 #pragma once
 // Test-side writer of rosbag2 recordings in the layout `ros2 bag record` produces with the sqlite3 storage
-// (Humble): BAG/metadata.yaml + BAG/<name>_0.db3 with the tables topics(id, name, type, serialization_format,
-// offered_qos_profiles) and messages(id, topic_id, timestamp, data), data CDR-serialised. Its own encoder, kept
+// (Humble, schema 3): BAG/metadata.yaml + BAG/<name>_0.db3 with the tables schema, metadata (empty), topics(id,
+// name, type, serialization_format, offered_qos_profiles) and messages(id, topic_id, timestamp, data), data
+// CDR-serialised. Its own encoder, kept
 // apart from the reader under test so that a shared mistake cannot hide.
 
 #include <sqlite3.h>
@@ -149,6 +150,7 @@ class BagWriter {
     exec(
         "CREATE TABLE schema(schema_version INTEGER PRIMARY KEY, ros_distro TEXT NOT NULL);"
         "INSERT INTO schema VALUES (3, 'humble');"
+        "CREATE TABLE metadata(id INTEGER PRIMARY KEY, metadata_version INTEGER NOT NULL, metadata TEXT NOT NULL);"
         "CREATE TABLE topics(id INTEGER PRIMARY KEY, name TEXT NOT NULL, type TEXT NOT NULL, "
         "serialization_format TEXT NOT NULL, offered_qos_profiles TEXT NOT NULL);"
         "CREATE TABLE messages(id INTEGER PRIMARY KEY, topic_id INTEGER NOT NULL, timestamp INTEGER NOT NULL, "
