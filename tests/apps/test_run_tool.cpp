@@ -218,14 +218,7 @@ TEST(RunTool, RosbagOfKittiExcerptGivesTheFolderTrajectory) {
   EXPECT_NE(wrong.text.find("left=/camera/left"), std::string::npos) << wrong.text;
 
   // A damaged message (frame 5's left image cut short) is skipped and counted, the run goes on.
-  sqlite3* db = nullptr;
-  ASSERT_EQ(sqlite3_open((dir + "/bag/recording_0.db3").c_str(), &db), SQLITE_OK);
-  ASSERT_EQ(sqlite3_exec(db,
-                         "UPDATE messages SET data = substr(data, 1, 100) WHERE id = (SELECT id FROM messages "
-                         "WHERE topic_id = 1 ORDER BY timestamp LIMIT 1 OFFSET 5)",
-                         nullptr, nullptr, nullptr),
-            SQLITE_OK);
-  sqlite3_close(db);
+  ASSERT_TRUE(test::truncate_message(dir + "/bag/recording_0.db3", 1, 5, false, 100));
   const RunOutput damaged =
       run_tool("--dataset " + dir + "/bag --out " + dir + "/damaged.txt --json " + dir + "/damaged.json" + common);
   ASSERT_EQ(damaged.rc, 0) << damaged.text;

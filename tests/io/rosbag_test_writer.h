@@ -232,6 +232,20 @@ inline std::vector<double> rectified_p(double fx, double fy, double cx, double c
   return {fx, 0, cx, tx, 0, fy, cy, 0, 0, 0, 1, 0};
 }
 
+// Cuts the data of one message of topic_id (the `nth` by messages.timestamp, ascending or descending) to its first
+// `bytes` bytes, as a recording cut short would leave it. False when sqlite refuses.
+inline bool truncate_message(const std::string& db_path, int topic_id, int nth, bool descending, int bytes) {
+  sqlite3* db = nullptr;
+  if (sqlite3_open(db_path.c_str(), &db) != SQLITE_OK) return false;
+  const std::string sql = "UPDATE messages SET data = substr(data, 1, " + std::to_string(bytes) +
+                          ") WHERE id = (SELECT id FROM messages WHERE topic_id = " + std::to_string(topic_id) +
+                          " ORDER BY timestamp " + (descending ? "DESC" : "ASC") + " LIMIT 1 OFFSET " +
+                          std::to_string(nth) + ")";
+  const bool ok = sqlite3_exec(db, sql.c_str(), nullptr, nullptr, nullptr) == SQLITE_OK && sqlite3_changes(db) == 1;
+  sqlite3_close(db);
+  return ok;
+}
+
 // The first `frames` frames of a KITTI-layout dataset as a bag: left sensor_msgs/Image mono8, right
 // CompressedImage png (stamped with the dataset's times, recorded 3 ms later), camera_info on both sides from its
 // rectified calibration, and the given odometry messages on /odom.

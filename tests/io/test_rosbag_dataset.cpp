@@ -364,17 +364,8 @@ TEST(RosbagDataset, BadBagsNameTheFileTopicAndField) {
 
   // A truncated message: frame(i) throws (the daemon's source skips and counts it), other frames read.
   const std::string truncated = copy_of("truncated");
-  {
-    sqlite3* db = nullptr;
-    ASSERT_EQ(sqlite3_open((truncated + "/recording_0.db3").c_str(), &db), SQLITE_OK);
-    // Frame 2's left image (the third by header stamp) loses its pixel data.
-    ASSERT_EQ(sqlite3_exec(db,
-                           "UPDATE messages SET data = substr(data, 1, 60) WHERE id = (SELECT id FROM messages "
-                           "WHERE topic_id = 1 ORDER BY timestamp DESC LIMIT 1 OFFSET 2)",
-                           nullptr, nullptr, nullptr),
-              SQLITE_OK);
-    sqlite3_close(db);
-  }
+  // Frame 2's left image (recorded third from last) loses its pixel data.
+  ASSERT_TRUE(test::truncate_message(truncated + "/recording_0.db3", 1, 2, true, 60));
   const auto damaged = open_dataset(truncated);
   ASSERT_EQ(damaged->size(), 5u);
   EXPECT_NO_THROW(damaged->frame(1));
