@@ -429,19 +429,29 @@ RosbagDataset::RosbagDataset(const std::string& bag_dir, const std::string& cali
   left_topic_ = chosen.left;
   right_topic_ = chosen.right;
   if (left_topic_.empty() || right_topic_.empty()) {
-    std::vector<std::string> lefts, rights;
+    // image_transport recordings often hold T and T/compressed side by side: T is the same picture, lossless.
+    const std::string suffix = "/compressed";
+    std::vector<std::string> candidates, lefts, rights;
     for (const TopicInfo& t : image_topics) {
-      if (t.name == chosen.left || t.name == chosen.right) continue;
+      const bool has_raw_twin = t.type == kCompressedImageType && t.name.size() > suffix.size() &&
+                                t.name.compare(t.name.size() - suffix.size(), suffix.size(), suffix) == 0 &&
+                                find_topic(image_topics, t.name.substr(0, t.name.size() - suffix.size()));
+      if (has_raw_twin || t.name == chosen.left || t.name == chosen.right) continue;
+      candidates.push_back(t.name);
       if (names_side(t.name, "left")) lefts.push_back(t.name);
       if (names_side(t.name, "right")) rights.push_back(t.name);
     }
     if (left_topic_.empty() && lefts.size() == 1) left_topic_ = lefts.front();
     if (right_topic_.empty() && rights.size() == 1) right_topic_ = rights.front();
-    if ((left_topic_.empty() || right_topic_.empty()) && image_topics.size() == 2 && lefts.empty() && rights.empty()) {
-      left_topic_ = image_topics[0].name;
-      right_topic_ = image_topics[1].name;
-      spdlog::warn("{}: no image topic names a side; {} taken as the left camera, {} as the right one", bag_dir,
-                   left_topic_, right_topic_);
+    if (lefts.empty() && rights.empty()) {
+      if (left_topic_.empty() && right_topic_.empty() && candidates.size() == 2) {
+        left_topic_ = candidates[0];
+        right_topic_ = candidates[1];
+        spdlog::warn("{}: no image topic names a side; {} taken as the left camera, {} as the right one", bag_dir,
+                     left_topic_, right_topic_);
+      } else if ((left_topic_.empty() != right_topic_.empty()) && candidates.size() == 1) {
+        (left_topic_.empty() ? left_topic_ : right_topic_) = candidates[0];  // the other one was chosen
+      }
     }
     if (left_topic_.empty() || right_topic_.empty()) {
       throw InputError(bag_dir, "image topics",

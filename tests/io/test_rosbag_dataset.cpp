@@ -273,6 +273,24 @@ TEST(RosbagDataset, TopicChoiceAutomaticOrByQuery) {
   const auto swapped = open_dataset(dir.file("numbered") + "?left=/cam1/image_raw&right=/cam0/image_raw", calib);
   expect_same_image(swapped->frame(0).left, numbered.right[0], "cam1 as left");
 
+  // Raw and compressed twins (image_transport): the raw topics are taken.
+  {
+    BagWriter writer(dir.file("twins"));
+    const cv::Mat image = noise_image(48, 64, CV_8UC1, 5);
+    for (const char* side : {"/left", "/right"}) {
+      const int raw = writer.topic(std::string(side) + "/image_raw", "sensor_msgs/msg/Image");
+      const int png = writer.topic(std::string(side) + "/image_raw/compressed", "sensor_msgs/msg/CompressedImage");
+      writer.write(raw, 1, test::encode_image(1000, image, "mono8"));
+      writer.write(png, 1, test::encode_png_image(1000, image));
+    }
+  }
+  const auto twins = open_dataset(dir.file("twins"), calib);
+  EXPECT_EQ(dynamic_cast<const RosbagDataset&>(*twins).left_topic(), "/left/image_raw");
+  EXPECT_EQ(dynamic_cast<const RosbagDataset&>(*twins).right_topic(), "/right/image_raw");
+  // One side chosen: the other is the remaining image topic.
+  const auto half = open_dataset(dir.file("numbered") + "?right=/cam0/image_raw", calib);
+  EXPECT_EQ(dynamic_cast<const RosbagDataset&>(*half).left_topic(), "/cam1/image_raw");
+
   // Three image topics, two on the left: ambiguous, the error lists the topics and the way out.
   {
     BagWriter writer(dir.file("three"));

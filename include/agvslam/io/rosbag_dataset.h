@@ -27,7 +27,8 @@
 //   Topics: the left and right image topics are found when the bag has exactly one image topic whose name has a
 //   path element containing "left" and one containing "right" (/stereo/left/image_rect, /cam_right/image_raw/
 //   compressed), or exactly two image topics (then the first by name is the left one: cam0 / cam1, infra1 /
-//   infra2). The odometry topic is the bag's only nav_msgs/msg/Odometry topic. Choose them explicitly by appending
+//   infra2); a CompressedImage topic T/compressed recorded beside its Image topic T is left aside (T is lossless).
+//   The odometry topic is the bag's only nav_msgs/msg/Odometry topic. Choose them explicitly by appending
 //   a query to the folder: BAG?left=/cam/left/image_raw&right=/cam/right/image_raw&odom=/wheel/odom (quote it in
 //   the shell; any subset of the keys).
 //   Left and right images are paired by header stamp (closest partner within half a frame period); unpaired ones
