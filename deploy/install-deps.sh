@@ -11,6 +11,7 @@ packages=(
   libyaml-cpp-dev libspdlog-dev libfmt-dev libcli11-dev nlohmann-json3-dev
   libgtest-dev libgmock-dev libbenchmark-dev
   cyclonedds-dev cyclonedds-tools can-utils iproute2 util-linux  # pose outputs: DDS (idlc), CAN tools, netns tests
+  libsqlite3-dev  # rosbag2 recordings (.db3) as a dataset
   libssl-dev openssl  # DDS Security: the keystore checks (libcrypto), deploy/make-keystore.sh
   libv4l-dev v4l-utils qemu-system-x86 busybox-static kmod cpio  # V4L2 camera (libv4l2); VM harness (tests/vm)
   clang-format  # the layout in .clang-format, checked by the format test

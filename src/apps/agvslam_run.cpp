@@ -8,7 +8,8 @@
 //               [--save-map FILE] [--load-map FILE --mode localise|map] [--blank A:B] [--repeat N]
 //               [--map-dataset DIR] [--semantic MODEL|off] [--params-semantic params/semantic.yaml]
 //
-// Reads KITTI-layout folders (also what agvslam-sim writes) and EuRoC ASL folders through agvslam::io, and runs
+// Reads KITTI-layout folders (also what agvslam-sim writes), EuRoC ASL folders and rosbag2 recordings (sqlite3
+// storage) through agvslam::io, and runs
 // them through agvslamd's pipeline (agvslam/daemon/pipeline.h) with its outputs off and lossless queues (every
 // frame processed): a reader thread, with --dynamic detector a detector thread (detection of frame k+1 overlaps
 // tracking of frame k), and the tracking thread. --dynamic gt takes the dataset's ground-truth masks (simulator
@@ -821,7 +822,9 @@ int main(int argc, char** argv) {
   spdlog::set_default_logger(spdlog::stderr_color_mt("agvslam-run"));
   CLI::App app{"agvslam-run: stereo SLAM with dynamic-region removal (paper 004) over a dataset folder"};
   Options o;
-  app.add_option("--dataset", o.dataset, "sequence folder: KITTI layout (also agvslam-sim output) or EuRoC ASL")
+  app.add_option("--dataset", o.dataset,
+                 "sequence folder: KITTI layout (also agvslam-sim output), EuRoC ASL, or a rosbag2 recording "
+                 "(BAG or 'BAG?left=TOPIC&right=TOPIC&odom=TOPIC', agvslam/io/rosbag_dataset.h)")
       ->required();
   app.add_option("--out", o.out, "trajectory file to write (every tracked frame)")->required();
   app.add_option("--calib", o.calib,

@@ -50,7 +50,7 @@ SourceSetup prepare_source(const DaemonConfig& config) {
       throw InputError(
           config.path, calib ? "calibration.file" : "source.dataset",
           std::string(calib ? "expected a calibration file agvslam::io reads: "
-                            : "expected a dataset folder (KITTI layout, agvslam-sim output or EuRoC ASL): ") +
+                            : "expected a dataset folder (KITTI layout, agvslam-sim output, EuRoC ASL or rosbag2): ") +
               e.what());
     }
     std::size_t first = 0, last = 0;

@@ -10,6 +10,7 @@
 
 #include "agvslam/core/error.h"
 #include "agvslam/io/calibration_io.h"
+#include "agvslam/io/rosbag_dataset.h"
 #include "agvslam/io/trajectory_io.h"
 #include "text_util.h"
 
@@ -410,7 +411,20 @@ std::optional<Trajectory> EurocDataset::ground_truth() const {
 
 // ---------------------------------------------------------------------------------------------------------------
 
-std::unique_ptr<StereoDataset> open_dataset(const std::string& root, const std::string& calib_override) {
+std::unique_ptr<StereoDataset> open_dataset(const std::string& path, const std::string& calib_override) {
+  // "BAG?left=..&right=..": a rosbag2 folder with its topic choice (a folder whose name holds '?' stays whole).
+  std::error_code ec;
+  const std::size_t query_at = fs::exists(path, ec) ? std::string::npos : path.find('?');
+  const std::string root = path.substr(0, query_at);
+  if (is_file(fs::path(root) / "metadata.yaml")) {
+    const RosbagTopics topics =
+        query_at == std::string::npos ? RosbagTopics{} : parse_rosbag_topics(path.substr(query_at + 1), path);
+    return std::make_unique<RosbagDataset>(root, calib_override, topics);
+  }
+  if (query_at != std::string::npos && is_folder(root)) {
+    throw InputError(path, "topic choice",
+                     "expected a rosbag2 folder (with metadata.yaml) before '?', " + root + " has no metadata.yaml");
+  }
   require_folder(root);
   fs::path base = fs::path(root).lexically_normal();
   if (base.filename().empty()) base = base.parent_path();  // "seq/mav0/" -> "seq/mav0"
@@ -423,8 +437,8 @@ std::unique_ptr<StereoDataset> open_dataset(const std::string& root, const std::
     return std::make_unique<KittiDataset>(root, calib_override);
   }
   throw InputError(root, "layout",
-                   "expected a KITTI odometry folder (image_0/ + image_1/ or image_l/ + image_r/) or an EuRoC ASL "
-                   "folder (mav0/cam0/, mav0/cam1/)");
+                   "expected a KITTI odometry folder (image_0/ + image_1/ or image_l/ + image_r/), an EuRoC ASL "
+                   "folder (mav0/cam0/, mav0/cam1/) or a rosbag2 folder (metadata.yaml + .db3)");
 }
 
 void parse_frame_range(const std::string& text, std::size_t size, const std::string& source, const std::string& field,

@@ -8,7 +8,9 @@
 #include <regex>
 #include <sstream>
 
+#include "agvslam/io/dataset.h"
 #include "common/test_data.h"
+#include "io/rosbag_test_writer.h"
 
 namespace agvslam {
 namespace {
@@ -178,6 +180,52 @@ TEST(RunTool, FrameRangeAndFirstLine) {
   ASSERT_EQ(r.rc, 0) << r.text;
   EXPECT_EQ(r.text.rfind("FRAMES 20 TRACKED ", 0), 0u) << r.text;
   EXPECT_EQ(count_lines(dir + "/t.txt"), static_cast<std::size_t>(r.tracked));
+}
+
+// A rosbag2 recording of the KITTI 06 excerpt's first 20 frames (left Image mono8, right CompressedImage png,
+// camera_info on both sides) runs like the folder itself: the same trajectory, stamp for stamp.
+TEST(RunTool, RosbagOfKittiExcerptGivesTheFolderTrajectory) {
+  AGVSLAM_REQUIRE_SHARED(data, "data/kitti06_f000-050");
+  const std::string dir = test::make_temp_dir("agvslam-run-rosbag");
+  const io::KittiDataset kitti(data);
+  test::write_kitti_bag(kitti, 20, dir + "/bag");
+  const std::string common = " --dynamic off --mapping inline --params-slam " AGVSLAM_SOURCE_DIR
+                             "/params/slam.yaml --params-features " AGVSLAM_SOURCE_DIR "/params/features_kitti.yaml";
+  const RunOutput folder = run_tool("--dataset " + data + " --frames 0:19 --out " + dir + "/folder.txt" + common);
+  ASSERT_EQ(folder.rc, 0) << folder.text;
+  const RunOutput bag = run_tool("--dataset " + dir + "/bag --out " + dir + "/bag.txt" + common);
+  ASSERT_EQ(bag.rc, 0) << bag.text;
+  EXPECT_EQ(bag.frames, 20);
+  EXPECT_EQ(bag.tracked, folder.tracked);
+  EXPECT_EQ(bag.lost, 0);
+  auto read = [](const std::string& path) {
+    std::ifstream f(path);
+    return std::string((std::istreambuf_iterator<char>(f)), std::istreambuf_iterator<char>());
+  };
+  const std::string folder_trajectory = read(dir + "/folder.txt");
+  EXPECT_EQ(count_lines(dir + "/bag.txt"), 20u);
+  EXPECT_EQ(read(dir + "/bag.txt"), folder_trajectory);
+
+  // The topics chosen by name give the same; a wrong topic exits 2 naming it.
+  const RunOutput chosen = run_tool("--dataset '" + dir +
+                                    "/bag?left=/kitti/camera_gray_left/image_raw&right=/kitti/camera_gray_right/"
+                                    "image_raw/compressed' --out " +
+                                    dir + "/chosen.txt" + common);
+  ASSERT_EQ(chosen.rc, 0) << chosen.text;
+  EXPECT_EQ(read(dir + "/chosen.txt"), folder_trajectory);
+  const RunOutput wrong = run_tool("--dataset '" + dir + "/bag?left=/camera/left' --out " + dir + "/w.txt", true);
+  EXPECT_EQ(wrong.rc, 2);
+  EXPECT_NE(wrong.text.find("left=/camera/left"), std::string::npos) << wrong.text;
+
+  // A damaged message (frame 5's left image cut short) is skipped and counted, the run goes on.
+  ASSERT_TRUE(test::truncate_message(dir + "/bag/recording_0.db3", 1, 5, false, 100));
+  const RunOutput damaged =
+      run_tool("--dataset " + dir + "/bag --out " + dir + "/damaged.txt --json " + dir + "/damaged.json" + common);
+  ASSERT_EQ(damaged.rc, 0) << damaged.text;
+  EXPECT_EQ(damaged.frames, 19);
+  std::ifstream f(dir + "/damaged.json");
+  const nlohmann::json j = nlohmann::json::parse(f);
+  EXPECT_EQ(j["frames"]["skipped_unreadable"], 1);
 }
 
 }  // namespace

@@ -9,6 +9,7 @@
 //   EuRoC ASL layout: mav0/cam0|cam1/data.csv + data/ + sensor.yaml. Left and right are paired by time
 //     stamp; a frame listed in a CSV whose image is missing, or that has no partner, is skipped with a
 //     warning. Images are rectified with maps computed from the two sensor.yaml files.
+//   rosbag2 recordings (metadata.yaml + .db3): rosbag_dataset.h.
 
 #include <memory>
 #include <optional>
@@ -25,7 +26,7 @@ class StereoDataset {
  public:
   virtual ~StereoDataset() = default;
 
-  virtual std::string kind() const = 0;  // "kitti" or "euroc"
+  virtual std::string kind() const = 0;  // "kitti", "euroc" or "rosbag2"
   virtual const std::string& root() const = 0;
   virtual std::size_t size() const = 0;
   virtual double rate_hz() const = 0;
@@ -42,6 +43,9 @@ class StereoDataset {
   // CV_8UC1, the id (objects.txt) of the object seen at each pixel, 0 = none; empty Mat when the dataset has none.
   virtual cv::Mat ground_truth_instances(std::size_t /*i*/) const { return {}; }
   virtual cv::Mat ground_truth_disparity_px(std::size_t /*i*/) const { return {}; }  // CV_32FC1, 0 = none
+  // Wheel odometry recorded with the images (a rosbag2 nav_msgs/msg/Odometry topic), by time; empty when the
+  // dataset has none.
+  virtual std::vector<OdometryRate> wheel_odometry() const { return {}; }
 };
 
 class KittiDataset final : public StereoDataset {
@@ -115,8 +119,9 @@ class EurocDataset final : public StereoDataset {
   std::size_t skipped_ = 0;
 };
 
-// Detects the layout (mav0/ -> EuRoC, image_0|image_l -> KITTI) and opens it. Throws InputError naming the
-// folder and what was expected when neither is found.
+// Detects the layout (metadata.yaml -> rosbag2, mav0/ -> EuRoC, image_0|image_l -> KITTI) and opens it. A
+// rosbag2 folder may carry its topic choice as a query: BAG?left=TOPIC&right=TOPIC&odom=TOPIC (rosbag_dataset.h).
+// Throws InputError naming the folder and what was expected when none is found.
 std::unique_ptr<StereoDataset> open_dataset(const std::string& root, const std::string& calib_override = "");
 
 // "A:B" (inclusive, either side may be empty) -> [first, last] clipped to `size` frames; throws
