@@ -1,0 +1,96 @@
+#pragma once
+// Retirement of map points on objects that move after they were mapped (RetirementConfig in slam_config.h).
+//
+// A parked forklift, a pallet or a standing person is static when the AGV first sees it, so its points enter the
+// map; when it moves, those points are wrong. After each tracked frame, every local map point predicted in view
+// gives one outcome for its window (MapPoint::retirement):
+//   - matched: evidence of motion when its reprojection error against the tracked pose exceeds the chi-square
+//     bound (chi2_mono / chi2_stereo), none otherwise;
+//   - not matched: the images are probed at its projection (probe_stereo): a surface at its depth inside the
+//     dynamic mask is evidence that the object it lies on moves; a surface behind it outside the mask is evidence
+//     that it left (the camera sees through where it was); a surface at its depth outside the mask is no
+//     evidence; a surface in front of it (an occluder) or a patch without texture gives no outcome at all, so a
+//     point that is merely hidden keeps its window.
+// A point with evidence in min_frames of its last window_frames outcomes is retired: its keyframes' keypoints are
+// blocked (KeyFrame::retire_keypoint) and it is set bad, so it leaves the map, relocalisation, loop closing and
+// any map saved afterwards.
+
+#include <cstdint>
+#include <opencv2/core.hpp>
+#include <vector>
+
+#include "agvslam/slam/frame.h"
+#include "agvslam/slam/optimizer.h"
+#include "agvslam/slam/slam_config.h"
+
+namespace agvslam::slam {
+
+class Map;
+class MapPoint;
+
+enum class RetirementReason { kMask, kMotion, kAbsent };
+const char* to_string(RetirementReason reason);
+
+// Points retired, by reason.
+struct RetirementCounts {
+  uint64_t mask = 0;    // in the dynamic mask with a surface at their depth
+  uint64_t motion = 0;  // matched beyond the chi-square bound
+  uint64_t absent = 0;  // not found, a surface seen behind them
+  uint64_t total() const { return mask + motion + absent; }
+  RetirementCounts& operator+=(const RetirementCounts& o) {
+    mask += o.mask;
+    motion += o.motion;
+    absent += o.absent;
+    return *this;
+  }
+};
+
+// What the rectified stereo pair shows at a left-image pixel, against an expected disparity.
+enum class SurfaceAt {
+  kUnknown,  // no texture, outside the images, or no disparity that matches
+  kAtDepth,  // a surface within the tolerance of the expected disparity
+  kBehind,   // the best match is at a smaller disparity (farther), none at the expected one
+  kInFront,  // the best match is at a larger disparity (nearer), none at the expected one
+};
+const char* to_string(SurfaceAt surface);
+
+// Compares the left patch at (u_px, v_px) with right patches along the row over disparities 0 .. 2 x
+// expected_disparity_px + tolerance_px (zero-mean normalised correlation, sub-pixel by a parabola).
+SurfaceAt probe_stereo(const cv::Mat& left, const cv::Mat& right, double u_px, double v_px,
+                       double expected_disparity_px, double tolerance_px, const RetirementConfig& config);
+
+// The images of the frame being tracked (CV_8UC1, rectified; mask non-zero = moving object, may be empty).
+struct FrameImages {
+  cv::Mat left, right, dynamic_mask;
+};
+
+class PointRetirement {
+ public:
+  PointRetirement(const RetirementConfig& config, const StereoIntrinsics& intrinsics);
+
+  // One match the pose of `frame` was estimated with (inlier or outlier of the motion-only BA).
+  struct Match {
+    MapPointPtr point;
+    int keypoint;
+  };
+  // After `frame` was tracked (its pose is final): outcomes for the matched points and for the unmatched points of
+  // `local_points` that project into the image within their scale-invariance range; retires those whose window
+  // holds enough evidence (with the map mutex held). Returns the points retired on this frame, by reason.
+  RetirementCounts update(const Frame& frame, const std::vector<Match>& matches,
+                          const std::vector<MapPoint*>& local_points, const FrameImages& images, Map& map);
+
+  // Removes `point` from its keyframes (blocking their keypoints) and from the map.
+  static void retire(MapPoint& point, Map& map);
+
+ private:
+  enum class Outcome { kNoEvidence, kMask, kMotion, kAbsent };
+  // Adds one outcome to the point's window; true (and the reason with the most evidence) when the window now holds
+  // min_frames of evidence.
+  bool record(MapPoint& point, uint64_t frame_id, Outcome outcome, RetirementReason& reason) const;
+
+  RetirementConfig config_;
+  StereoIntrinsics intrinsics_;
+  uint16_t window_bits_;
+};
+
+}  // namespace agvslam::slam
