@@ -72,7 +72,9 @@ SurfaceAt probe_stereo(const cv::Mat& left, const cv::Mat& right, double u_px, d
     if (r_var <= 1e-9) continue;
     zncc[static_cast<std::size_t>(d)] = cross / (n * std::sqrt(var * r_var));
   }
-  // A surface at the expected depth: any disparity within the tolerance correlates.
+  // A surface at the expected depth when any disparity within the tolerance correlates (a repeated texture may
+  // correlate better elsewhere: that is no evidence against the point); otherwise the best disparity says where
+  // the surface is.
   const int lo = std::max(0, static_cast<int>(std::ceil(expected_disparity_px - tolerance_px)));
   const int hi = std::min(d_max, static_cast<int>(std::floor(expected_disparity_px + tolerance_px)));
   for (int d = lo; d <= hi; ++d) {

@@ -48,14 +48,15 @@ struct RetirementCounts {
 // What the rectified stereo pair shows at a left-image pixel, against an expected disparity.
 enum class SurfaceAt {
   kUnknown,  // no texture, outside the images, or no disparity that matches
-  kAtDepth,  // a surface within the tolerance of the expected disparity
-  kBehind,   // the best match is at a smaller disparity (farther), none at the expected one
-  kInFront,  // the best match is at a larger disparity (nearer), none at the expected one
+  kAtDepth,  // a disparity within the tolerance of the expected one correlates
+  kBehind,   // none does; the best match is at a smaller disparity (farther)
+  kInFront,  // none does; the best match is at a larger disparity (nearer)
 };
 const char* to_string(SurfaceAt surface);
 
 // Compares the left patch at (u_px, v_px) with right patches along the row over disparities 0 .. 2 x
-// expected_disparity_px + tolerance_px (zero-mean normalised correlation, sub-pixel by a parabola).
+// expected_disparity_px + tolerance_px (zero-mean normalised correlation, sub-pixel by a parabola); a correlation
+// of probe_min_zncc or more counts as a match.
 SurfaceAt probe_stereo(const cv::Mat& left, const cv::Mat& right, double u_px, double v_px,
                        double expected_disparity_px, double tolerance_px, const RetirementConfig& config);
 
