@@ -324,8 +324,8 @@ class ProgressBar {
 class FrameLog {
  public:
   // Stages in the order of the timing table.
-  static constexpr const char* kStageOrder[] = {"extract", "stereo", "map_wait", "frame", "local_map", "keyframe",
-                                                "inline_mapping", "tracking", "tracking_cpu", "detector", "detector_cpu",
+  static constexpr const char* kStageOrder[] = {"extract", "stereo", "map_wait", "frame", "local_map", "retire",
+                                                "retire_cpu", "keyframe", "inline_mapping", "tracking", "tracking_cpu", "detector", "detector_cpu",
                                                 "frontend_sum", "frontend_cpu", "frame_interval", "read"};
 
   FrameLog(bool inline_mapping, std::size_t last, std::size_t total_frames)
@@ -393,6 +393,8 @@ class FrameLog {
     series["map_wait"].add(r.timings.map_wait_ms);
     series["frame"].add(r.timings.frame_ms);
     series["local_map"].add(r.timings.local_map_ms);
+    series["retire"].add(r.timings.retire_ms);
+    series["retire_cpu"].add(r.timings.retire_cpu_ms);
     series["keyframe"].add(r.timings.keyframe_ms);
     if (inline_mapping_) series["inline_mapping"].add(r.timings.inline_mapping_ms);
     series["tracking"].add(r.timings.total_ms);

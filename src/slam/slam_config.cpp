@@ -144,7 +144,7 @@ const params::Table<RetirementConfig>& retirement_params() {
           {"chi2_stereo", &R::chi2_stereo, Range::above(0), "", "chi-square with 3 DOF"},
           {"depth_chi2", &R::depth_chi2, Range::above(0), "", "chi-square with 1 DOF"},
           {"probe_sigma_px", &R::probe_sigma_px, Range::above(0), "px"},
-          {"probe_half_size_px", &R::probe_half_size_px, Range::closed(1, 15), "px"},
+          {"probe_half_size_px", &R::probe_half_size_px, Range::closed(1, 3), "px"},  // the reference patch holds 7 x 7
           {"probe_min_zncc", &R::probe_min_zncc, Range::left_open(0, 1)},
           {"probe_min_contrast", &R::probe_min_contrast, Range::at_least(0), "grey levels"},
       })

@@ -129,7 +129,11 @@ TrackingState Tracking::track(Frame& frame, TrackTimings& timings, TrackingCount
     } else {
       has_velocity_ = false;
     }
+    const auto t_retire = Clock::now();
+    const double cpu_retire = thread_cpu_ms();
     retire_moved_points(images, counts);
+    timings.retire_cpu_ms = thread_cpu_ms() - cpu_retire;
+    timings.retire_ms = ms_since(t_retire);
     const auto t_kf = Clock::now();
     if (need_new_keyframe()) {
       create_new_keyframe();

@@ -232,9 +232,11 @@ TEST_F(SyntheticMap, ABoxThatStartsMovingInTheMaskIsRetiredWithinAFewFrames) {
     *scene.box_x += 0.02;
     total += step(id, render(scene, *geometry_, true, id), wall_noise_and([](std::size_t) { return std::nullopt; }, 100 + static_cast<uint32_t>(id)));
   }
-  // Points near the box's trailing edge leave the box surface as it slides; most are retired by the mask.
+  // Points near the box's trailing edge leave the box surface as it slides; most are retired by the mask. At half
+  // a texture cell per frame a patch still resembles the last frame's, so the evidence starts once the surface has
+  // moved on by about a cell.
   EXPECT_EQ(retired_box(), box_points());
-  EXPECT_LE(frames_moving, 4u);
+  EXPECT_LE(frames_moving, 8u);
   EXPECT_GE(total.mask, box_points() * 3 / 4);
   EXPECT_EQ(retired_wall(), 0u);
   // Their keyframe keypoints are blocked: nothing can bring them back.
@@ -249,29 +251,45 @@ TEST_F(SyntheticMap, ABoxThatStartsMovingInTheMaskIsRetiredWithinAFewFrames) {
 }
 
 TEST_F(SyntheticMap, ABoxCarriedAwayIsRetiredBecauseTheWallIsSeenBehindIt) {
-  Scene scene;  // the box is gone, nothing is masked
-  RetirementCounts total;
+  Scene scene;
+  scene.box_x = 0.0;
   uint64_t id = 1;
-  for (; retired_box() < box_points() && id <= 10; ++id) {
+  // Standing and matched: the points learn what their surface looks like.
+  for (; id <= 3; ++id) {
+    step(id, render(scene, *geometry_, false, id), [](std::size_t) { return Eigen::Vector3d::Zero(); });
+  }
+  scene.box_x.reset();  // carried away, nothing is masked
+  RetirementCounts total;
+  const uint64_t gone = id;
+  for (; id < gone + 6; ++id) {
     total += step(id, render(scene, *geometry_, false, id), wall_noise_and([](std::size_t) { return std::nullopt; }, static_cast<uint32_t>(id)));
   }
-  EXPECT_EQ(retired_box(), box_points());
-  EXPECT_LE(id - 1, 6u) << "frames";
-  EXPECT_EQ(total.absent, box_points());
+  // A point where the wall behind happens to look like the box (ZNCC >= 0.8 on this smooth texture, one cell per
+  // 6 px) cannot be told from one that is still there.
+  EXPECT_GE(retired_box(), box_points() - 1);
+  EXPECT_EQ(total.absent, retired_box());
   EXPECT_EQ(retired_wall(), 0u);
 }
 
 TEST_F(SyntheticMap, ABoxThatDriftsWhileMatchedIsRetiredByItsReprojectionError) {
   Scene scene;
   scene.box_x = 0.0;
-  RetirementCounts total;
-  // Matched 6 px off its map position (the box moved 4 cm but its keypoints still match by descriptor).
-  for (uint64_t id = 1; id <= 4; ++id) {
-    total += step(id, render(scene, *geometry_, false, id),
-                  wall_noise_and([](std::size_t) { return Eigen::Vector3d(6.0, 0.0, 6.0); }, static_cast<uint32_t>(id)));
+  for (uint64_t id = 1; id <= 3; ++id) {
+    step(id, render(scene, *geometry_, false, id), [](std::size_t) { return Eigen::Vector3d::Zero(); });
   }
-  EXPECT_EQ(retired_box(), box_points());
-  EXPECT_EQ(total.motion, box_points());
+  // Moved 8 cm (two texture cells) and matched there, 12 px off its map position (its keypoints still match by
+  // descriptor).
+  scene.box_x = 0.08;
+  RetirementCounts total;
+  for (uint64_t id = 4; id <= 7; ++id) {
+    total += step(id, render(scene, *geometry_, false, id),
+                  wall_noise_and([](std::size_t) { return Eigen::Vector3d(12.0, 0.0, 12.0); }, static_cast<uint32_t>(id)));
+  }
+  // Motion counts only where the image no longer shows the point's surface at its predicted pixel (a mismatched
+  // static point still shows it): a patch flatter than probe_min_contrast, or one the smooth texture makes look
+  // alike after the move, gives no evidence.
+  EXPECT_GE(retired_box(), box_points() * 9 / 10);
+  EXPECT_EQ(total.motion, retired_box());
   EXPECT_EQ(retired_wall(), 0u);
 }
 
@@ -320,9 +338,33 @@ TEST_F(SyntheticMap, StaticNoisyPointsAndPointsOccludedForAWhileStay) {
   EXPECT_EQ(retired_wall() + retired_box(), 0u);
 }
 
+TEST_F(SyntheticMap, StaticPointsInAFalseMaskRegionOrMismatchedStay) {
+  Scene scene;
+  scene.box_x = 0.0;
+  uint64_t id = 1;
+  for (; id <= 3; ++id) {
+    step(id, render(scene, *geometry_, false, id), [](std::size_t) { return Eigen::Vector3d::Zero(); });
+  }
+  // For 12 frames a detector flags the left half of the static scene (its keypoints are not extracted there), and
+  // the right half's points are matched 6 px off (a repeated texture): nothing moved, nothing may be retired.
+  const int u_half = static_cast<int>(geometry_->camera.cx);
+  for (int f = 0; f < 12; ++f, ++id) {
+    FrameImages im = render(scene, *geometry_, false, id);
+    im.dynamic_mask.colRange(0, u_half).setTo(255);
+    step(id, im, [&](std::size_t k) -> std::optional<Eigen::Vector3d> {
+      if (geometry_->camera.project(points_w_[k]).x() < u_half + 8) return std::nullopt;
+      return Eigen::Vector3d(6.0, 0.0, 6.0);
+    });
+  }
+  EXPECT_EQ(retired_wall() + retired_box(), 0u);
+}
+
 TEST_F(SyntheticMap, RetiredKeypointsStayBlockedInASavedMap) {
-  Scene scene;  // the box is gone
-  for (uint64_t id = 1; retired_box() < box_points() && id <= 10; ++id) {
+  Scene scene;
+  scene.box_x = 0.0;
+  step(1, render(scene, *geometry_, false, 1), [](std::size_t) { return Eigen::Vector3d::Zero(); });
+  scene.box_x.reset();  // carried away
+  for (uint64_t id = 2; retired_box() < box_points() && id <= 10; ++id) {
     step(id, render(scene, *geometry_, false, id), wall_noise_and([](std::size_t) { return std::nullopt; }, static_cast<uint32_t>(id)));
   }
   ASSERT_EQ(keyframe_->retired_keypoint_count(), box_points());

@@ -11,6 +11,7 @@
 // distance range, observations as (keyframe id, keypoint index), reference keyframe id, counters).
 
 #include <Eigen/Core>
+#include <array>
 #include <cstdint>
 #include <memory>
 #include <vector>
@@ -98,6 +99,11 @@ class MapPoint : public std::enable_shared_from_this<MapPoint> {
     uint16_t motion = 0;  // matched beyond the chi-square bound
     uint16_t absent = 0;  // not matched, a surface seen behind it
     uint64_t last_frame = UINT64_MAX;  // the frame of the newest outcome (one per frame)
+    // What the left image showed at its projection the last time it was matched within the chi-square bound
+    // (grey levels, row-major, (2 probe_half_size_px + 1)^2 of them): a point whose surface still looks like this
+    // has not moved, whatever the mask or the stereo probe say.
+    std::array<uint8_t, 49> reference_patch{};
+    bool has_reference = false;
   } retirement;
 
   // Local-mapping-thread scratch.

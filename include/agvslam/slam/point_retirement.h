@@ -2,21 +2,27 @@
 // Retirement of map points on objects that move after they were mapped (RetirementConfig in slam_config.h).
 //
 // A parked forklift, a pallet or a standing person is static when the AGV first sees it, so its points enter the
-// map; when it moves, those points are wrong. After each tracked frame, every local map point predicted in view
-// gives one outcome for its window (MapPoint::retirement):
-//   - matched: evidence of motion when its reprojection error against the tracked pose exceeds the chi-square
-//     bound (chi2_mono / chi2_stereo), none otherwise;
-//   - not matched: the images are probed at its projection (probe_stereo): a surface at its depth inside the
-//     dynamic mask is evidence that the object it lies on moves; a surface behind it outside the mask is evidence
-//     that it left (the camera sees through where it was); a surface at its depth outside the mask is no
-//     evidence; a surface in front of it (an occluder) or a patch without texture gives no outcome at all, so a
-//     point that is merely hidden keeps its window.
+// map; when it moves, those points are wrong. Each point keeps a reference appearance: the left image's patch at its
+// projection when it was last matched within the chi-square bound (and whenever the image still looks like it
+// there). After each tracked frame, every local map point with a reference that is predicted in view gives one
+// outcome for its window (MapPoint::retirement):
+//   - the image at its predicted pixel still looks like the reference: its surface is there, no evidence (a static
+//     point in a detector's false mask region, one the matcher missed, or one matched to the wrong keypoint);
+//   - it does not (the point's own disagreement), and it was matched beyond the chi-square bound (chi2_mono /
+//     chi2_stereo): evidence of motion;
+//   - it does not and it was not matched: the images are probed at its projection (probe_stereo): a surface at its
+//     depth inside the dynamic mask is evidence that the object it lies on moves; a surface behind it is evidence
+//     that it left (the camera sees through where it was); a surface at its depth outside the mask is no evidence;
+//     a surface in front of it (an occluder) or a patch without texture gives no outcome at all, so a point that
+//     is merely hidden keeps its window.
+// Only points whose surface changed reach the stereo probe, which is the costly part.
 // A point with evidence in min_frames of its last window_frames outcomes is retired: its keyframes' keypoints are
 // blocked (KeyFrame::retire_keypoint) and it is set bad, so it leaves the map, relocalisation, loop closing and
 // any map saved afterwards.
 
 #include <cstdint>
 #include <opencv2/core.hpp>
+#include <optional>
 #include <vector>
 
 #include "agvslam/slam/frame.h"
@@ -88,6 +94,11 @@ class PointRetirement {
   // Adds one outcome to the point's window; true (and the reason with the most evidence) when the window now holds
   // min_frames of evidence.
   bool record(MapPoint& point, uint64_t frame_id, Outcome outcome, RetirementReason& reason) const;
+
+  // Whether the left image at (u_px, v_px) correlates with the point's reference appearance (probe_min_zncc), which
+  // then becomes the new reference; nullopt when it has none, the patch leaves the image or either patch has no
+  // texture.
+  std::optional<bool> looks_as_before(MapPoint& point, const cv::Mat& left, double u_px, double v_px) const;
 
   RetirementConfig config_;
   StereoIntrinsics intrinsics_;

@@ -40,6 +40,8 @@ struct TrackTimings {
   double map_wait_ms = 0;      // waiting for the map mutex (held by the local mapper)
   double frame_ms = 0;         // motion model / reference keyframe / recovery, with its motion-only BA
   double local_map_ms = 0;     // local map update, projection search and motion-only BA
+  double retire_ms = 0;        // retirement of map points that moved (point_retirement.h)
+  double retire_cpu_ms = 0;    // ... its CPU time in this thread
   double keyframe_ms = 0;      // keyframe decision and creation
   double inline_mapping_ms = 0;  // local mapping run in this thread (SystemConfig::threaded_mapping = false only)
   double total_ms = 0;         // all of track_stereo (including inline mapping)
