@@ -640,14 +640,12 @@ void report_counts(const Options& o, const Settings& s, const FrameLog& log, con
   const slam::MapCounts& map = results.map_counts;
   std::printf("counts: %zu frames, %zu tracked, %zu lost, %zu recovered, %zu resets; %zu keyframes, %zu map points "
               "(%.1f MB); mapping: %llu keyframes processed, %llu skipped (queue full), max queue %zu, %llu culled "
-              "keyframes, %llu created / %llu culled points; retired points (moved objects): %llu mask, %llu motion, "
-              "%llu absent\n",
+              "keyframes, %llu created / %llu culled points; retired points (moved objects): %llu mask, %llu absent\n",
               log.frames, log.tracked, log.lost, log.recovered, log.resets, map.keyframes, map.map_points,
               static_cast<double>(map.memory_bytes) / 1e6, static_cast<unsigned long long>(m.keyframes_processed),
               static_cast<unsigned long long>(m.keyframes_skipped), log.max_queue,
               static_cast<unsigned long long>(m.keyframes_culled), static_cast<unsigned long long>(m.points_created),
               static_cast<unsigned long long>(m.points_culled), static_cast<unsigned long long>(results.retired.mask),
-              static_cast<unsigned long long>(results.retired.motion),
               static_cast<unsigned long long>(results.retired.absent));
 }
 
@@ -707,8 +705,7 @@ void write_json(const Options& o, const Input& in, const FrameLog& log, const Sl
   if (o.repeat > 1) j["laps"] = {{"keyframes", log.laps_keyframes}, {"map_points", log.laps_points}};
   j["map"] = {{"keyframes", map.keyframes}, {"map_points", map.map_points}, {"observations", map.observations},
               {"memory_bytes", map.memory_bytes}};
-  j["retired_points"] = {{"mask", results.retired.mask}, {"motion", results.retired.motion},
-                         {"absent", results.retired.absent}};
+  j["retired_points"] = {{"mask", results.retired.mask}, {"absent", results.retired.absent}};
   j["local_mapping"] = {{"keyframes_processed", m.keyframes_processed}, {"keyframes_skipped", m.keyframes_skipped},
                         {"keyframes_culled", m.keyframes_culled}, {"points_created", m.points_created},
                         {"points_fused", m.points_fused}, {"points_culled", m.points_culled}, {"ba_runs", m.ba_runs},

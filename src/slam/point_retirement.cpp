@@ -14,7 +14,6 @@ namespace agvslam::slam {
 const char* to_string(RetirementReason reason) {
   switch (reason) {
     case RetirementReason::kMask: return "mask";
-    case RetirementReason::kMotion: return "motion";
     case RetirementReason::kAbsent: return "absent";
   }
   return "?";
@@ -110,15 +109,11 @@ bool PointRetirement::record(MapPoint& point, uint64_t frame_id, Outcome outcome
   w.last_frame = frame_id;
   w.frames = static_cast<uint16_t>(((w.frames << 1) | 1u) & window_bits_);
   w.mask = static_cast<uint16_t>(((w.mask << 1) | (outcome == Outcome::kMask ? 1u : 0u)) & window_bits_);
-  w.motion = static_cast<uint16_t>(((w.motion << 1) | (outcome == Outcome::kMotion ? 1u : 0u)) & window_bits_);
   w.absent = static_cast<uint16_t>(((w.absent << 1) | (outcome == Outcome::kAbsent ? 1u : 0u)) & window_bits_);
   if (outcome == Outcome::kNoEvidence) return false;
-  const int mask = __builtin_popcount(w.mask), motion = __builtin_popcount(w.motion),
-            absent = __builtin_popcount(w.absent);
-  if (mask + motion + absent < config_.min_frames) return false;
-  reason = mask >= motion && mask >= absent ? RetirementReason::kMask
-           : motion >= absent               ? RetirementReason::kMotion
-                                            : RetirementReason::kAbsent;
+  const int mask = __builtin_popcount(w.mask), absent = __builtin_popcount(w.absent);
+  if (absent == 0 || mask + absent < config_.min_frames) return false;
+  reason = mask > absent ? RetirementReason::kMask : RetirementReason::kAbsent;
   return true;
 }
 
@@ -207,25 +202,16 @@ RetirementCounts PointRetirement::update(const Frame& frame, const std::vector<M
     const double chi2 = reprojection_chi2(intrinsics_, p_c, {kp.pt.x, kp.pt.y}, frame.u_right[i],
                                           g.inv_level_sigma2[static_cast<std::size_t>(kp.octave)], &in_front);
     const double bound = frame.u_right[i] >= 0 ? config_.chi2_stereo : config_.chi2_mono;
-    Outcome outcome = Outcome::kNoEvidence;
-    if (in_front && chi2 <= bound) {
-      // Found where the map predicts it: what the image shows there becomes its reference appearance.
-      if (!frame.outlier[i]) {
-        const Eigen::Vector2d uv = project(p_c);
-        p.retirement.has_reference =
-            read_patch(images.left, uv.x(), uv.y(), config_.probe_half_size_px, p.retirement.reference_patch);
-      }
-    } else {
-      // Matched away from its prediction: a moved point, or a mismatch (a repeated texture). A mismatched static
-      // point still looks as before where the map predicts it; a moved one does not.
-      if (!in_front) continue;
+    // Matched away from its prediction: a moved point or a mismatch (a repeated texture), no outcome either way.
+    if (!in_front || chi2 > bound) continue;
+    // Found where the map predicts it: what the image shows there becomes its reference appearance.
+    if (!frame.outlier[i]) {
       const Eigen::Vector2d uv = project(p_c);
-      const std::optional<bool> same = looks_as_before(p, images.left, uv.x(), uv.y());
-      if (!same) continue;
-      outcome = *same ? Outcome::kNoEvidence : Outcome::kMotion;
+      p.retirement.has_reference =
+          read_patch(images.left, uv.x(), uv.y(), config_.probe_half_size_px, p.retirement.reference_patch);
     }
-    RetirementReason reason;
-    if (record(p, frame.id, outcome, reason)) to_retire.emplace_back(&p, reason);
+    RetirementReason unused;
+    record(p, frame.id, Outcome::kNoEvidence, unused);
   }
 
   const bool has_mask = !images.dynamic_mask.empty();
@@ -278,7 +264,6 @@ RetirementCounts PointRetirement::update(const Frame& frame, const std::vector<M
     retire(*point, map);
     switch (reason) {
       case RetirementReason::kMask: ++counts.mask; break;
-      case RetirementReason::kMotion: ++counts.motion; break;
       case RetirementReason::kAbsent: ++counts.absent; break;
     }
   }

@@ -95,10 +95,9 @@ TEST_P(RetirementScenario, PointsOnActorsThatLeftAreGoneAndTheSavedMapStillLocal
     }
   }
   std::printf("[ retire   ] %s: %zu map points made, %zu on actors, %zu on actors that moved later and left; "
-              "retired %llu by mask, %llu by motion, %llu absent\n",
+              "retired %llu by mask, %llu absent\n",
               GetParam().c_str(), points_seen, on_actor.size(), must_be_gone.size(),
               static_cast<unsigned long long>(slam.retirement_counts().mask),
-              static_cast<unsigned long long>(slam.retirement_counts().motion),
               static_cast<unsigned long long>(slam.retirement_counts().absent));
   // The scenario must put points on a mover, or this test proves nothing.
   ASSERT_GE(must_be_gone.size(), 10u);

@@ -96,7 +96,6 @@ class MapPoint : public std::enable_shared_from_this<MapPoint> {
   struct RetirementWindow {
     uint16_t frames = 0;
     uint16_t mask = 0;    // in the dynamic mask with a surface at its depth
-    uint16_t motion = 0;  // matched beyond the chi-square bound
     uint16_t absent = 0;  // not matched, a surface seen behind it
     uint64_t last_frame = UINT64_MAX;  // the frame of the newest outcome (one per frame)
     // What the left image showed at its projection the last time it was matched within the chi-square bound

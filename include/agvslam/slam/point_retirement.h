@@ -8,17 +8,19 @@
 // outcome for its window (MapPoint::retirement):
 //   - the image at its predicted pixel still looks like the reference: its surface is there, no evidence (a static
 //     point in a detector's false mask region, one the matcher missed, or one matched to the wrong keypoint);
-//   - it does not (the point's own disagreement), and it was matched beyond the chi-square bound (chi2_mono /
-//     chi2_stereo): evidence of motion;
 //   - it does not and it was not matched: the images are probed at its projection (probe_stereo): a surface at its
 //     depth inside the dynamic mask is evidence that the object it lies on moves; a surface behind it is evidence
 //     that it left (the camera sees through where it was); a surface at its depth outside the mask is no evidence;
 //     a surface in front of it (an occluder) or a patch without texture gives no outcome at all, so a point that
 //     is merely hidden keeps its window.
+// A match beyond the chi-square bound gives no outcome: on a static point it is a mismatch as often as not, and a
+// point on an object that moved is seen through once the object has gone.
 // Only points whose surface changed reach the stereo probe, which is the costly part.
-// A point with evidence in min_frames of its last window_frames outcomes is retired: its keyframes' keypoints are
-// blocked (KeyFrame::retire_keypoint) and it is set bad, so it leaves the map, relocalisation, loop closing and
-// any map saved afterwards.
+// A point with evidence in min_frames of its last window_frames outcomes, at least one of them a surface seen
+// behind it, is retired: its keyframes' keypoints are blocked (KeyFrame::retire_keypoint) and it is set bad, so it
+// leaves the map, relocalisation, loop closing and any map saved afterwards. A masked surface at the point's depth
+// alone is not enough: a mover passing in front of a static point within the disparity tolerance looks the same
+// as the point's own object moving; only free space seen where the point was tells them apart.
 
 #include <cstdint>
 #include <opencv2/core.hpp>
@@ -34,18 +36,16 @@ namespace agvslam::slam {
 class Map;
 class MapPoint;
 
-enum class RetirementReason { kMask, kMotion, kAbsent };
+enum class RetirementReason { kMask, kAbsent };
 const char* to_string(RetirementReason reason);
 
 // Points retired, by reason.
 struct RetirementCounts {
-  uint64_t mask = 0;    // in the dynamic mask with a surface at their depth
-  uint64_t motion = 0;  // matched beyond the chi-square bound
-  uint64_t absent = 0;  // not found, a surface seen behind them
-  uint64_t total() const { return mask + motion + absent; }
+  uint64_t mask = 0;    // mostly in the dynamic mask with a surface at their depth
+  uint64_t absent = 0;  // mostly not found, a surface seen behind them
+  uint64_t total() const { return mask + absent; }
   RetirementCounts& operator+=(const RetirementCounts& o) {
     mask += o.mask;
-    motion += o.motion;
     absent += o.absent;
     return *this;
   }
@@ -90,9 +90,9 @@ class PointRetirement {
   static void retire(MapPoint& point, Map& map);
 
  private:
-  enum class Outcome { kNoEvidence, kMask, kMotion, kAbsent };
+  enum class Outcome { kNoEvidence, kMask, kAbsent };
   // Adds one outcome to the point's window; true (and the reason with the most evidence) when the window now holds
-  // min_frames of evidence.
+  // min_frames of evidence, one of them a surface seen behind the point.
   bool record(MapPoint& point, uint64_t frame_id, Outcome outcome, RetirementReason& reason) const;
 
   // Whether the left image at (u_px, v_px) correlates with the point's reference appearance (probe_min_zncc), which
