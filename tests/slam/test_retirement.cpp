@@ -195,7 +195,12 @@ class SyntheticMap : public ::testing::Test {
   std::vector<Eigen::Vector3d> points_w_;
   std::size_t n_wall_ = 0;
   std::vector<MapPointPtr> points_;
-  PointRetirement retirement_{RetirementConfig{}, StereoIntrinsics{460, 460, 376, 240, 460 * 0.12}};
+  static RetirementConfig enabled_config() {
+    RetirementConfig c;
+    c.enabled = true;  // off by default (params/slam.yaml); these tests are about the capability
+    return c;
+  }
+  PointRetirement retirement_{enabled_config(), StereoIntrinsics{460, 460, 376, 240, 460 * 0.12}};
 };
 
 TEST(ProbeStereo, TellsASurfaceAtTheDepthBehindAndInFront) {

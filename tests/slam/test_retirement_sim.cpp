@@ -25,6 +25,7 @@ SystemConfig deterministic_config() {
   SystemConfig c;
   c.frame_rate_hz = 20;
   c.threaded_mapping = false;
+  c.slam.retirement.enabled = true;  // off by default (params/slam.yaml); this test is about the capability
   c.vocabulary = std::make_shared<const place::Vocabulary>(
       place::Vocabulary::load(AGVSLAM_SOURCE_DIR "/params/vocabulary/agvslam_orb_k10l5.bin"));
   c.direct_index_level = 2;
