@@ -25,6 +25,8 @@ const char* to_string(SurfaceAt surface) {
   switch (surface) {
     case SurfaceAt::kUnknown:
       return "unknown";
+    case SurfaceAt::kNoMatch:
+      return "no match";
     case SurfaceAt::kAtDepth:
       return "at depth";
     case SurfaceAt::kBehind:
@@ -78,21 +80,12 @@ SurfaceAt probe_stereo(const cv::Mat& left, const cv::Mat& right, double u_px, d
     const double r_var = rs2 / n - (rs / n) * (rs / n);
     if (r_var > 1e-9) zncc[static_cast<std::size_t>(d)] = cross / (n * std::sqrt(var * r_var));
   };
-  // A surface at the expected depth when any disparity within the tolerance correlates (a repeated texture may
-  // correlate better elsewhere: that is no evidence against the point); only otherwise is the whole range
-  // searched for where the surface is, which a point on a static surface (most probes) never needs.
-  const int lo = std::max(0, static_cast<int>(std::ceil(expected_disparity_px - tolerance_px)));
-  const int hi = std::min(d_max, static_cast<int>(std::floor(expected_disparity_px + tolerance_px)));
-  for (int d = lo; d <= hi; ++d) {
-    correlate(d);
-    if (zncc[static_cast<std::size_t>(d)] >= config.probe_min_zncc) return SurfaceAt::kAtDepth;
-  }
-  for (int d = 0; d <= d_max; ++d) {
-    if (d < lo || d > hi) correlate(d);
-  }
+  for (int d = 0; d <= d_max; ++d) correlate(d);
   const auto best_it = std::max_element(zncc.begin(), zncc.end());
-  if (*best_it < config.probe_min_zncc) return SurfaceAt::kUnknown;
+  if (*best_it < config.probe_min_zncc) return SurfaceAt::kNoMatch;
   const int best = static_cast<int>(best_it - zncc.begin());
+  // The surface is where the correlation peaks: the probe runs only where the image no longer looks like the
+  // point's reference, so a better correlation elsewhere on the row is no longer the point's own surface.
   double d_best = best;
   if (best > 0 && best < d_max) {
     const double a = zncc[static_cast<std::size_t>(best - 1)], b = *best_it,
@@ -117,10 +110,12 @@ bool PointRetirement::record(MapPoint& point, uint64_t frame_id, Outcome outcome
   w.frames = static_cast<uint16_t>(((w.frames << 1) | 1u) & window_bits_);
   w.mask = static_cast<uint16_t>(((w.mask << 1) | (outcome == Outcome::kMask ? 1u : 0u)) & window_bits_);
   w.absent = static_cast<uint16_t>(((w.absent << 1) | (outcome == Outcome::kAbsent ? 1u : 0u)) & window_bits_);
+  w.no_match = static_cast<uint16_t>(((w.no_match << 1) | (outcome == Outcome::kNoMatch ? 1u : 0u)) & window_bits_);
   if (outcome == Outcome::kNoEvidence) return false;
   const int mask = __builtin_popcount(w.mask), absent = __builtin_popcount(w.absent);
-  if (absent == 0 || mask + absent < config_.min_frames) return false;
-  reason = mask > absent ? RetirementReason::kMask : RetirementReason::kAbsent;
+  const int no_match = __builtin_popcount(w.no_match);
+  if (absent == 0 || mask + absent + no_match < config_.min_frames) return false;
+  reason = mask > absent + no_match ? RetirementReason::kMask : RetirementReason::kAbsent;
   return true;
 }
 
@@ -210,7 +205,9 @@ RetirementCounts PointRetirement::update(const Frame& frame, const std::vector<M
                                           g.inv_level_sigma2[static_cast<std::size_t>(kp.octave)], &in_front);
     const double bound = frame.u_right[i] >= 0 ? config_.chi2_stereo : config_.chi2_mono;
     // Matched away from its prediction: a moved point or a mismatch (a repeated texture), no outcome either way.
-    if (!in_front || chi2 > bound) continue;
+    // A keypoint without stereo depth confirms the direction only: a surface behind a point that left lies on the
+    // same ray, so such a match leaves the point to the appearance test below.
+    if (!in_front || chi2 > bound || frame.u_right[i] < 0) continue;
     // Found where the map predicts it: what the image shows there becomes its reference appearance.
     if (!frame.outlier[i]) {
       const Eigen::Vector2d uv = project(p_c);
@@ -255,6 +252,8 @@ RetirementCounts PointRetirement::update(const Frame& frame, const std::vector<M
       const bool in_mask = has_mask && images.dynamic_mask.at<uint8_t>(static_cast<int>(v), static_cast<int>(u)) != 0;
       if (surface == SurfaceAt::kBehind) {
         outcome = Outcome::kAbsent;
+      } else if (surface == SurfaceAt::kNoMatch) {
+        outcome = Outcome::kNoMatch;
       } else if (surface == SurfaceAt::kAtDepth) {
         outcome = in_mask ? Outcome::kMask : Outcome::kNoEvidence;
       } else {

@@ -97,6 +97,7 @@ class MapPoint : public std::enable_shared_from_this<MapPoint> {
     uint16_t frames = 0;
     uint16_t mask = 0;                 // in the dynamic mask with a surface at its depth
     uint16_t absent = 0;               // not matched, a surface seen behind it
+    uint16_t no_match = 0;             // not matched, its textured patch matches no disparity
     uint64_t last_frame = UINT64_MAX;  // the frame of the newest outcome (one per frame)
     // What the left image showed at its projection the last time it was matched within the chi-square bound
     // (grey levels, row-major, (2 probe_half_size_px + 1)^2 of them): a point whose surface still looks like this

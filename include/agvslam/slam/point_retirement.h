@@ -12,9 +12,13 @@
 //     depth inside the dynamic mask is evidence that the object it lies on moves; a surface behind it is evidence
 //     that it left (the camera sees through where it was); a surface at its depth outside the mask is no evidence;
 //     a surface in front of it (an occluder) or a patch without texture gives no outcome at all, so a point that
-//     is merely hidden keeps its window.
+//     is merely hidden keeps its window. A textured patch that matches nothing in the right image at any disparity
+//     (the surface behind lies beyond the search range or its patch spans a depth edge) is evidence too, but only
+//     alongside a surface seen behind the point.
 // A match beyond the chi-square bound gives no outcome: on a static point it is a mismatch as often as not, and a
-// point on an object that moved is seen through once the object has gone.
+// point on an object that moved is seen through once the object has gone. A match to a keypoint without stereo
+// depth is treated as no match: it confirms the point's direction, not its depth (a standing camera sees the
+// surface behind a point that left at the same pixel).
 // Only points whose surface changed reach the stereo probe, which is the costly part.
 // A point with evidence in min_frames of its last window_frames outcomes, at least one of them a surface seen
 // behind it, is retired: its keyframes' keypoints are blocked (KeyFrame::retire_keypoint) and it is set bad, so it
@@ -42,7 +46,7 @@ const char* to_string(RetirementReason reason);
 // Points retired, by reason.
 struct RetirementCounts {
   uint64_t mask = 0;    // mostly in the dynamic mask with a surface at their depth
-  uint64_t absent = 0;  // mostly not found, a surface seen behind them
+  uint64_t absent = 0;  // mostly not found: a surface seen behind them, or no stereo match
   uint64_t total() const { return mask + absent; }
   RetirementCounts& operator+=(const RetirementCounts& o) {
     mask += o.mask;
@@ -53,16 +57,17 @@ struct RetirementCounts {
 
 // What the rectified stereo pair shows at a left-image pixel, against an expected disparity.
 enum class SurfaceAt {
-  kUnknown,  // no texture, outside the images, or no disparity that matches
-  kAtDepth,  // a disparity within the tolerance of the expected one correlates
-  kBehind,   // none does; the best match is at a smaller disparity (farther)
-  kInFront,  // none does; the best match is at a larger disparity (nearer)
+  kUnknown,  // no texture, or outside the images
+  kNoMatch,  // textured, but no disparity in the range correlates
+  kAtDepth,  // the best match is within the tolerance of the expected disparity
+  kBehind,   // the best match is at a smaller disparity (farther)
+  kInFront,  // the best match is at a larger disparity (nearer)
 };
 const char* to_string(SurfaceAt surface);
 
 // Compares the left patch at (u_px, v_px) with right patches along the row over disparities 0 .. 2 x
-// expected_disparity_px + tolerance_px (zero-mean normalised correlation, sub-pixel by a parabola); a correlation
-// of probe_min_zncc or more counts as a match.
+// expected_disparity_px + tolerance_px (zero-mean normalised correlation, sub-pixel by a parabola); the surface is
+// at the best correlation if that reaches probe_min_zncc.
 SurfaceAt probe_stereo(const cv::Mat& left, const cv::Mat& right, double u_px, double v_px,
                        double expected_disparity_px, double tolerance_px, const RetirementConfig& config);
 
@@ -90,7 +95,7 @@ class PointRetirement {
   static void retire(MapPoint& point, Map& map);
 
  private:
-  enum class Outcome { kNoEvidence, kMask, kAbsent };
+  enum class Outcome { kNoEvidence, kMask, kAbsent, kNoMatch };
   // Adds one outcome to the point's window; true (and the reason with the most evidence) when the window now holds
   // min_frames of evidence, one of them a surface seen behind the point.
   bool record(MapPoint& point, uint64_t frame_id, Outcome outcome, RetirementReason& reason) const;
