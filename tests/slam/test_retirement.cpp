@@ -199,7 +199,7 @@ class SyntheticMap : public ::testing::Test {
   std::vector<MapPointPtr> points_;
   static RetirementConfig enabled_config() {
     RetirementConfig c;
-    c.enabled = true;  // off by default (params/slam.yaml); these tests are about the capability
+    c.enabled = true;  // the default; these tests are about the capability whatever the default
     return c;
   }
   PointRetirement retirement_{enabled_config(), StereoIntrinsics{460, 460, 376, 240, 460 * 0.12}};

@@ -33,7 +33,7 @@ SystemConfig deterministic_config(double frame_rate_hz) {
   SystemConfig c;
   c.frame_rate_hz = frame_rate_hz;
   c.threaded_mapping = false;
-  c.slam.retirement.enabled = true;  // off by default (params/slam.yaml); this test is about the capability
+  c.slam.retirement.enabled = true;  // the default; this test is about the capability whatever the default
   c.vocabulary = std::make_shared<const place::Vocabulary>(
       place::Vocabulary::load(AGVSLAM_SOURCE_DIR "/params/vocabulary/agvslam_orb_k10l5.bin"));
   c.direct_index_level = 2;

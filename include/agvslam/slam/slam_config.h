@@ -138,7 +138,7 @@ struct LoopClosingConfig {
 // min_frames of its last window_frames conclusive frames, one of them a surface behind it, is retired: removed from
 // the map and its keyframes, whose keypoints never carry a point again.
 struct RetirementConfig {
-  bool enabled = false;             // off by default: params/slam.yaml says why
+  bool enabled = true;              // params/slam.yaml says why
   int window_frames = 6;            // conclusive frames remembered per point
   int min_frames = 3;               // ... of which this many with evidence retire it
   double chi2_mono = 9.210;         // 99 % of chi-square with 2 DOF: a match within it renews the reference
