@@ -355,9 +355,9 @@ class FrameLog {
  public:
   // Stages in the order of the timing table.
   static constexpr const char* kStageOrder[] = {
-      "extract",      "stereo",         "map_wait",     "frame",          "local_map",
-      "keyframe",     "inline_mapping", "tracking",     "tracking_cpu",   "detector",
-      "detector_cpu", "frontend_sum",   "frontend_cpu", "frame_interval", "read"};
+      "extract",      "stereo",       "map_wait",       "frame",          "local_map",    "retire",
+      "retire_cpu",   "keyframe",     "inline_mapping", "tracking",       "tracking_cpu", "detector",
+      "detector_cpu", "frontend_sum", "frontend_cpu",   "frame_interval", "read"};
 
   FrameLog(bool inline_mapping, std::size_t last, std::size_t total_frames)
       : inline_mapping_(inline_mapping), last_(last), total_frames_(total_frames) {}
@@ -425,6 +425,8 @@ class FrameLog {
     series["map_wait"].add(r.timings.map_wait_ms);
     series["frame"].add(r.timings.frame_ms);
     series["local_map"].add(r.timings.local_map_ms);
+    series["retire"].add(r.timings.retire_ms);
+    series["retire_cpu"].add(r.timings.retire_cpu_ms);
     series["keyframe"].add(r.timings.keyframe_ms);
     if (inline_mapping_) series["inline_mapping"].add(r.timings.inline_mapping_ms);
     series["tracking"].add(r.timings.total_ms);
@@ -492,6 +494,7 @@ class FrameLog {
 struct SlamResults {
   agvslam::Trajectory trajectory;
   slam::LocalMappingStats mapping;
+  slam::RetirementCounts retired;  // map points on objects that moved
   slam::LoopClosingStats loops;
   std::vector<slam::KeyframeMappingTimes> mapping_history;
   slam::MapCounts map_counts;
@@ -547,6 +550,7 @@ bool play(const Options& o, const Settings& s, const Input& in, FrameLog& log, S
   if (results.skipped_frames > 0) spdlog::warn("{} unreadable frames skipped", results.skipped_frames);
   results.trajectory = system.trajectory();
   results.mapping = system.mapping_stats();
+  results.retired = system.retirement_counts();
   results.loops = system.loop_stats();
   if (!o.save_map.empty()) results.save_map = save_map(system, o.save_map);
   results.mapping_history = system.local_mapping().timing_history();
@@ -696,12 +700,13 @@ void report_counts(const Options& o, const Settings& s, const FrameLog& log, con
   std::printf(
       "counts: %zu frames, %zu tracked, %zu lost, %zu recovered, %zu resets; %zu keyframes, %zu map points "
       "(%.1f MB); mapping: %llu keyframes processed, %llu skipped (queue full), max queue %zu, %llu culled "
-      "keyframes, %llu created / %llu culled points\n",
+      "keyframes, %llu created / %llu culled points; retired points (moved objects): %llu mask, %llu absent\n",
       log.frames, log.tracked, log.lost, log.recovered, log.resets, map.keyframes, map.map_points,
       static_cast<double>(map.memory_bytes) / 1e6, static_cast<unsigned long long>(m.keyframes_processed),
       static_cast<unsigned long long>(m.keyframes_skipped), log.max_queue,
       static_cast<unsigned long long>(m.keyframes_culled), static_cast<unsigned long long>(m.points_created),
-      static_cast<unsigned long long>(m.points_culled));
+      static_cast<unsigned long long>(m.points_culled), static_cast<unsigned long long>(results.retired.mask),
+      static_cast<unsigned long long>(results.retired.absent));
 }
 
 // Local mapping's per-keyframe times (ms) by step.
@@ -769,6 +774,7 @@ void write_json(const Options& o, const Input& in, const FrameLog& log, const Sl
               {"map_points", map.map_points},
               {"observations", map.observations},
               {"memory_bytes", map.memory_bytes}};
+  j["retired_points"] = {{"mask", results.retired.mask}, {"absent", results.retired.absent}};
   j["local_mapping"] = {{"keyframes_processed", m.keyframes_processed},
                         {"keyframes_skipped", m.keyframes_skipped},
                         {"keyframes_culled", m.keyframes_culled},

@@ -54,6 +54,16 @@ void KeyFrame::erase_map_point_match(const MapPoint* point) {
   if (idx >= 0) map_points_[static_cast<std::size_t>(idx)].reset();
 }
 
+void KeyFrame::retire_keypoint(std::size_t index) {
+  if (retired_.empty()) retired_.assign(keypoints.size(), 0);
+  retired_[index] = 1;
+  map_points_[index].reset();
+}
+
+std::size_t KeyFrame::retired_keypoint_count() const {
+  return static_cast<std::size_t>(std::count(retired_.begin(), retired_.end(), uint8_t{1}));
+}
+
 int KeyFrame::tracked_map_points(int min_observations) const {
   int n = 0;
   for (const MapPointPtr& p : map_points_) {

@@ -129,7 +129,12 @@ void LocalMapping::process_new_keyframe(KeyFrame& kf) {
     const MapPointPtr p = kf.map_point(i);
     if (!p) continue;
     if (p->bad()) {
-      kf.erase_map_point_match(i);
+      // A point retired while this keyframe waited: the keyframe saw the moved object too.
+      if (p->retired()) {
+        kf.retire_keypoint(i);
+      } else {
+        kf.erase_map_point_match(i);
+      }
       continue;
     }
     if (!p->is_in(&kf)) {
@@ -211,6 +216,7 @@ void LocalMapping::create_new_map_points(KeyFrame& kf) {
     for (const auto& [i1, i2] : matches) {
       const std::size_t s1 = static_cast<std::size_t>(i1), s2 = static_cast<std::size_t>(i2);
       if (kf.map_point(s1) || kf2->map_point(s2)) continue;
+      if (kf.keypoint_retired(s1) || kf2->keypoint_retired(s2)) continue;  // saw an object that has moved
       const cv::KeyPoint& kp1 = kf.keypoints[s1];
       const cv::KeyPoint& kp2 = kf2->keypoints[s2];
       const bool stereo1 = kf.u_right[s1] >= 0, stereo2 = kf2->u_right[s2] >= 0;

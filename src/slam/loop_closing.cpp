@@ -417,7 +417,7 @@ void LoopClosing::correct_loop(KeyFrame& kf, LoopEvent& event) {
     const MapPointPtr current = kf.map_point(i);
     if (current) {
       if (current != loop_point && !current->bad()) current->replace(loop_point, map_);
-    } else if (!loop_point->is_in(&kf)) {
+    } else if (!loop_point->is_in(&kf) && !kf.keypoint_retired(i)) {
       kf.add_map_point(loop_point, i);
       loop_point->add_observation(&kf, static_cast<int>(i));
       loop_point->compute_distinctive_descriptor();

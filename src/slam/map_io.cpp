@@ -64,6 +64,7 @@ namespace {
 
 constexpr char kMagic[8] = {'A', 'G', 'V', 'S', 'M', 'A', 'P', '\0'};
 constexpr uint64_t kNone = std::numeric_limits<uint64_t>::max();
+constexpr uint64_t kRetired = kNone - 1;  // a keypoint that saw a retired map point
 
 uint32_t crc32_of(const void* data, std::size_t size) {
   uLong crc = crc32(0L, Z_NULL, 0);
@@ -246,7 +247,7 @@ std::string encode_map(const Map& map, const MapFileContext& context) {
     for (std::size_t i = 0; i < n; ++i) {
       const MapPointPtr& p = kf->map_point(i);
       const bool linked = p && saved_points.count(p.get()) && p->index_in(kf.get()) == static_cast<int>(i);
-      w.put<uint64_t>(linked ? p->id : kNone);
+      w.put<uint64_t>(linked ? p->id : kf->keypoint_retired(i) ? kRetired : kNone);
     }
     w.put<uint64_t>(saved_kf(kf->parent()));
     uint8_t flags = 0;
@@ -360,10 +361,10 @@ MapFileSummary check_map_file(const std::string& bytes, const std::string& sourc
   uint32_t header_size = 0;
   std::memcpy(&s.version, h + 8, 4);
   std::memcpy(&header_size, h + 12, 4);
-  if (s.version != kMapFormatVersion) {
+  if (s.version < kMapFormatOldestReadable || s.version > kMapFormatVersion) {
     throw InputError(source, "version",
-                     "expected map format version " + std::to_string(kMapFormatVersion) + ", the file has version " +
-                         std::to_string(s.version));
+                     "expected map format version " + std::to_string(kMapFormatOldestReadable) + " to " +
+                         std::to_string(kMapFormatVersion) + ", the file has version " + std::to_string(s.version));
   }
   if (header_size != kMapHeaderBytes) {
     throw InputError(source, "header size",
@@ -554,6 +555,10 @@ MapFileSummary decode_map(const std::string& bytes, const std::string& source, c
     const std::string where = "keyframe " + std::to_string(kf.id);
     for (std::size_t i = 0; i < l.point_ids.size(); ++i) {
       if (l.point_ids[i] == kNone) continue;
+      if (l.point_ids[i] == kRetired) {
+        kf.retire_keypoint(i);
+        continue;
+      }
       const auto it = point_by_id.find(l.point_ids[i]);
       if (it == point_by_id.end() || it->second->index_in(&kf) != static_cast<int>(i)) {
         throw InputError(source, where + " keypoint " + std::to_string(i),

@@ -410,9 +410,11 @@ int Matcher::fuse(KeyFrame& kf, const std::vector<MapPointPtr>& points, float ra
           existing->replace(point, map);
         }
       }
-    } else {
+    } else if (!kf.keypoint_retired(sb)) {  // a retired keypoint saw an object that has moved
       point->add_observation(&kf, best);
       kf.add_map_point(point, sb);
+    } else {
+      continue;
     }
     ++fused;
   }
@@ -657,6 +659,8 @@ int Matcher::fuse_with_pose(KeyFrame& kf, const SE3d& T_c_w, const std::vector<M
     const MapPointPtr& existing = kf.map_point(sb);
     if (existing) {
       if (!existing->bad()) replace[k] = existing;
+    } else if (kf.keypoint_retired(sb)) {
+      continue;
     } else {
       point->add_observation(&kf, best_j);
       kf.add_map_point(point, sb);

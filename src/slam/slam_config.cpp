@@ -147,6 +147,28 @@ const params::Table<LoopClosingConfig>& loop_closing_params() {
   return table;
 }
 
+const params::Table<RetirementConfig>& retirement_params() {
+  using R = RetirementConfig;
+  static const params::Table<R> table =
+      params::Table<R>("retirement",
+                       {
+                           {"enabled", &R::enabled},
+                           {"window_frames", &R::window_frames, Range::closed(1, 16), "frames"},
+                           {"min_frames", &R::min_frames, Range::at_least(1), "frames"},
+                           {"chi2_mono", &R::chi2_mono, Range::above(0), "", "chi-square with 2 DOF"},
+                           {"chi2_stereo", &R::chi2_stereo, Range::above(0), "", "chi-square with 3 DOF"},
+                           {"depth_chi2", &R::depth_chi2, Range::above(0), "", "chi-square with 1 DOF"},
+                           {"probe_sigma_px", &R::probe_sigma_px, Range::above(0), "px"},
+                           {"probe_half_size_px", &R::probe_half_size_px, Range::closed(1, 3),
+                            "px"},  // the reference patch holds 7 x 7
+                           {"probe_min_zncc", &R::probe_min_zncc, Range::left_open(0, 1)},
+                           {"probe_min_contrast", &R::probe_min_contrast, Range::at_least(0), "grey levels"},
+                       })
+          .check(
+              "min_frames", [](const R& r) { return r.min_frames <= r.window_frames; }, "at most window_frames");
+  return table;
+}
+
 }  // namespace
 
 void TrackingConfig::validate(const std::string& source) const { tracking_params().validate(source, *this); }
@@ -166,25 +188,29 @@ std::string RelocalisationConfig::describe() const { return relocalisation_param
 void LoopClosingConfig::validate(const std::string& source) const { loop_closing_params().validate(source, *this); }
 std::string LoopClosingConfig::describe() const { return loop_closing_params().describe(*this); }
 
+void RetirementConfig::validate(const std::string& source) const { retirement_params().validate(source, *this); }
+std::string RetirementConfig::describe() const { return retirement_params().describe(*this); }
+
 void SlamConfig::validate(const std::string& source) const {
   tracking.validate(source);
   mapping.validate(source);
   optimizer.validate(source);
   relocalisation.validate(source);
   loop_closing.validate(source);
+  retirement.validate(source);
 }
 
 std::vector<std::string> SlamConfig::describe() const {
-  return {tracking.describe(), mapping.describe(), optimizer.describe(), relocalisation.describe(),
-          loop_closing.describe()};
+  return {tracking.describe(),       mapping.describe(),      optimizer.describe(),
+          relocalisation.describe(), loop_closing.describe(), retirement.describe()};
 }
 
 SlamConfig load_slam_config(const std::string& path) {
   SlamConfig c;
-  params::read_sections(
-      params::File(path),
-      {tracking_params().reader(c.tracking), mapping_params().reader(c.mapping), optimizer_params().reader(c.optimizer),
-       relocalisation_params().reader(c.relocalisation), loop_closing_params().reader(c.loop_closing)});
+  params::read_sections(params::File(path),
+                        {tracking_params().reader(c.tracking), mapping_params().reader(c.mapping),
+                         optimizer_params().reader(c.optimizer), relocalisation_params().reader(c.relocalisation),
+                         loop_closing_params().reader(c.loop_closing), retirement_params().reader(c.retirement)});
   c.validate(path);
   return c;
 }

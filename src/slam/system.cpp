@@ -214,7 +214,11 @@ TrackResult System::track_stereo(int64_t t_ns, const cv::Mat& left, const cv::Ma
   frame_.assign(r.frame_id, t_ns, geometry_, keypoints_.keypoints, keypoints_.descriptors, depth_.u_right_px,
                 depth_.depth_m);
   TrackingCounts counts;
-  r.state = tracking_->track(frame_, r.timings, counts);
+  r.state = tracking_->track(frame_, r.timings, counts, FrameImages{left, right, dynamic_mask});
+  if (counts.retired.total() > 0) {
+    std::lock_guard<std::mutex> lock(retired_mutex_);
+    retired_ += counts.retired;
+  }
   const bool was_reset = r.counts.reset;
   r.counts = counts;
   r.counts.reset = r.counts.reset || was_reset;
@@ -250,6 +254,11 @@ TrackResult System::track_stereo(int64_t t_ns, const cv::Mat& left, const cv::Ma
   r.timings.total_ms = ms_since(t_start);
   r.timings.total_cpu_ms = thread_cpu_ms() - cpu_start;
   return r;
+}
+
+RetirementCounts System::retirement_counts() const {
+  std::lock_guard<std::mutex> lock(retired_mutex_);
+  return retired_;
 }
 
 Trajectory System::trajectory() {

@@ -34,9 +34,13 @@ const char* to_string(TrackingState state) {
 
 Tracking::Tracking(const SlamConfig& config, FrameGeometryPtr geometry, Map& map, LocalMapping& mapper,
                    double frame_rate_hz)
-    : config_(config), geometry_(std::move(geometry)), map_(map), mapper_(mapper) {
-  const PinholeCamera& cam = geometry_->camera;
-  intrinsics_ = {cam.fx, cam.fy, cam.cx, cam.cy, geometry_->bf};
+    : config_(config),
+      geometry_(std::move(geometry)),
+      intrinsics_{geometry_->camera.fx, geometry_->camera.fy, geometry_->camera.cx, geometry_->camera.cy,
+                  geometry_->bf},
+      map_(map),
+      mapper_(mapper),
+      retirement_(config.retirement, intrinsics_) {
   const int rate = std::max(1, static_cast<int>(std::lround(frame_rate_hz)));
   max_frames_ = config_.tracking.keyframe_max_frames > 0 ? config_.tracking.keyframe_max_frames : rate;
   min_frames_ = config_.tracking.keyframe_min_frames;
@@ -61,7 +65,7 @@ void Tracking::start_relocalising() {
   map_loaded_ = true;
 }
 
-TrackingState Tracking::track(Frame& frame, TrackTimings& timings, TrackingCounts& counts) {
+TrackingState Tracking::track(Frame& frame, TrackTimings& timings, TrackingCounts& counts, const FrameImages& images) {
   std::swap(current_, frame);
   counts.features = static_cast<int>(current_.size());
   counts.stereo_features =
@@ -129,6 +133,11 @@ TrackingState Tracking::track(Frame& frame, TrackTimings& timings, TrackingCount
     } else {
       has_velocity_ = false;
     }
+    const auto t_retire = Clock::now();
+    const double cpu_retire = thread_cpu_ms();
+    retire_moved_points(images, counts);
+    timings.retire_cpu_ms = thread_cpu_ms() - cpu_retire;
+    timings.retire_ms = ms_since(t_retire);
     const auto t_kf = Clock::now();
     if (need_new_keyframe()) {
       create_new_keyframe();
@@ -527,9 +536,11 @@ bool Tracking::track_local_map(int& inliers) {
   search_local_points();
   optimize_current_pose();
   inliers = 0;
+  pose_matches_.clear();
   for (std::size_t i = 0; i < current_.size(); ++i) {
     MapPointPtr& p = current_.map_points[i];
     if (!p) continue;
+    pose_matches_.push_back({p, static_cast<int>(i)});
     if (!current_.outlier[i]) {
       p->increase_found();
       if (!p->observations().empty()) ++inliers;
@@ -543,6 +554,16 @@ bool Tracking::track_local_map(int& inliers) {
           ? std::max(50, config_.tracking.min_local_map_inliers)
           : config_.tracking.min_local_map_inliers;
   return inliers >= needed;
+}
+
+void Tracking::retire_moved_points(const FrameImages& images, TrackingCounts& counts) {
+  if (localisation_only_) return;
+  counts.retired = retirement_.update(current_, pose_matches_, local_points_, images, map_);
+  pose_matches_.clear();
+  if (counts.retired.total() == 0) return;
+  for (MapPointPtr& p : current_.map_points) {
+    if (p && p->bad()) p.reset();
+  }
 }
 
 bool Tracking::need_new_keyframe() {

@@ -70,6 +70,11 @@ class KeyFrame : public std::enable_shared_from_this<KeyFrame> {
   void erase_map_point_match(std::size_t index) { map_points_[index].reset(); }
   void erase_map_point_match(const MapPoint* point);
   void replace_map_point_match(std::size_t index, const MapPointPtr& point) { map_points_[index] = point; }
+  // Keypoints that observed a retired map point (an object that moved away): they never carry a map point again,
+  // so neither fusion nor triangulation brings the object back from keyframes made while it stood there.
+  void retire_keypoint(std::size_t index);
+  bool keypoint_retired(std::size_t index) const { return !retired_.empty() && retired_[index] != 0; }
+  std::size_t retired_keypoint_count() const;
   // Map points that are not bad and are seen by at least min_observations keyframes.
   int tracked_map_points(int min_observations) const;
 
@@ -131,6 +136,7 @@ class KeyFrame : public std::enable_shared_from_this<KeyFrame> {
   SE3d T_c_w_ = SE3d::Identity();
   SE3d T_w_c_ = SE3d::Identity();
   std::vector<MapPointPtr> map_points_;
+  std::vector<uint8_t> retired_;  // per keypoint, allocated on the first retirement
   std::vector<std::pair<KeyFrame*, int>> connections_;
   std::vector<KeyFrame*> ordered_neighbours_;
   std::vector<int> ordered_weights_;

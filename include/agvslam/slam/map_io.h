@@ -19,7 +19,8 @@
 //      counters    u64 next keyframe id, next map point id, origin keyframe id
 //      keyframes   (ascending id) u64 id, frame id, i64 t_ns, f64[12] T_c_w (3x4 row-major), u32 N,
 //                  N x {f32 x y size angle response, i32 octave class_id}, N x 32 descriptor bytes, N x f32
-//                  u_right, N x f32 depth, N x u64 map point id (all ones = none), u64 parent id (all ones =
+//                  u_right, N x f32 depth, N x u64 map point id (all ones = none, all ones but the last bit =
+//                  a retired keypoint that saw an object which moved: version 2), u64 parent id (all ones =
 //                  none), u8 flags (1 origin, 2 protected from culling, 4 spanning-tree parent still to be
 //                  chosen), u32 + ids of loop edges, u32 + (u64 id, i32 weight) covisibility connections,
 //                  u32 + (u64 id, i32 weight) ordered covisible neighbours
@@ -46,7 +47,9 @@
 
 namespace agvslam::slam {
 
-inline constexpr uint32_t kMapFormatVersion = 1;
+inline constexpr uint32_t kMapFormatVersion = 2;
+// Version 1 files (before retired keypoints) read the same way.
+inline constexpr uint32_t kMapFormatOldestReadable = 1;
 inline constexpr std::size_t kMapHeaderBytes = 64;
 
 // What a map file must agree with to be loaded (and what is written into it).

@@ -11,6 +11,7 @@
 // distance range, observations as (keyframe id, keypoint index), reference keyframe id, counters).
 
 #include <Eigen/Core>
+#include <array>
 #include <cstdint>
 #include <memory>
 #include <vector>
@@ -55,6 +56,10 @@ class MapPoint : public std::enable_shared_from_this<MapPoint> {
   void erase_observation(KeyFrame* kf, Map& map);
 
   bool bad() const { return bad_; }
+  // Set by point retirement (point_retirement.h) before set_bad: the point lay on an object that moved, so the
+  // keypoints that saw it must not take a point again (a keyframe still in the mapper's queue blocks its own).
+  void mark_retired() { retired_ = true; }
+  bool retired() const { return retired_; }
   // Marks the point bad, removes it from its keyframes and from the map.
   void set_bad(Map& map);
   // Moves this point's observations to `other` (where other is not already seen) and sets this one bad; frames
@@ -86,6 +91,21 @@ class MapPoint : public std::enable_shared_from_this<MapPoint> {
     uint64_t last_frame_seen = UINT64_MAX;      // already matched in this frame
   } track;
 
+  // Tracking-thread record of the retirement evidence (point_retirement.h): one bit per conclusive frame, the
+  // newest in bit 0; `frames` marks the frames with an outcome, the others the frames with that evidence.
+  struct RetirementWindow {
+    uint16_t frames = 0;
+    uint16_t mask = 0;                 // in the dynamic mask with a surface at its depth
+    uint16_t absent = 0;               // not matched, a surface seen behind it
+    uint16_t no_match = 0;             // not matched, its textured patch matches no disparity
+    uint64_t last_frame = UINT64_MAX;  // the frame of the newest outcome (one per frame)
+    // What the left image showed at its projection the last time it was matched within the chi-square bound
+    // (grey levels, row-major, (2 probe_half_size_px + 1)^2 of them): a point whose surface still looks like this
+    // has not moved, whatever the mask or the stereo probe say.
+    std::array<uint8_t, 49> reference_patch{};
+    bool has_reference = false;
+  } retirement;
+
   // Local-mapping-thread scratch.
   struct MappingScratch {
     uint64_t ba_local_for_kf = UINT64_MAX;
@@ -96,6 +116,7 @@ class MapPoint : public std::enable_shared_from_this<MapPoint> {
   std::vector<Observation> observations_;
   int n_obs_ = 0;
   bool bad_ = false;
+  bool retired_ = false;
   MapPointPtr replaced_;
 };
 

@@ -131,12 +131,35 @@ struct LoopClosingConfig {
   std::string describe() const;
 };
 
+// Section `retirement`: map points on objects that move after they were mapped (a parked forklift drives off, a
+// pallet is carried away) leave the map. Each frame, every local map point predicted in view gives evidence: it
+// lies in the dynamic mask with the image showing a surface at its depth (the object it lies on moves), or it is
+// not matched and the image shows a surface behind where it should be (it left). A point with evidence in
+// min_frames of its last window_frames conclusive frames, one of them a surface behind it, is retired: removed from
+// the map and its keyframes, whose keypoints never carry a point again.
+struct RetirementConfig {
+  bool enabled = true;              // params/slam.yaml says why
+  int window_frames = 6;            // conclusive frames remembered per point
+  int min_frames = 3;               // ... of which this many with evidence retire it
+  double chi2_mono = 9.210;         // 99 % of chi-square with 2 DOF: a match within it renews the reference
+  double chi2_stereo = 11.345;      // 99 % of chi-square with 3 DOF: the same with stereo
+  double depth_chi2 = 6.635;        // 99 % of chi-square with 1 DOF: disparity agreement of the image probe
+  double probe_sigma_px = 1.0;      // the probe's own disparity noise (integer search + parabola), px
+  int probe_half_size_px = 3;       // probe patch (2 h + 1)^2 px in the left and right image
+  double probe_min_zncc = 0.8;      // a patch pair at this correlation or above shows a surface at that disparity
+  double probe_min_contrast = 4.0;  // grey-level standard deviation below which a patch says nothing
+
+  void validate(const std::string& source) const;
+  std::string describe() const;
+};
+
 struct SlamConfig {
   TrackingConfig tracking;
   LocalMappingConfig mapping;
   OptimizerConfig optimizer;
   RelocalisationConfig relocalisation;
   LoopClosingConfig loop_closing;
+  RetirementConfig retirement;
 
   void validate(const std::string& source) const;
   std::vector<std::string> describe() const;

@@ -134,6 +134,8 @@ class System {
   Map& map() { return map_; }
   LocalMapping& local_mapping() { return *mapper_; }
   LocalMappingStats mapping_stats() const { return mapper_->stats(); }
+  // Map points retired since the start because the object they lay on moved (point_retirement.h), by reason.
+  RetirementCounts retirement_counts() const;
   // Loop closing (null without a vocabulary or with slam.loop_closing.enabled = false).
   LoopClosing* loop_closing() { return loop_.get(); }
   LoopClosingStats loop_stats() const { return loop_ ? loop_->stats() : LoopClosingStats{}; }
@@ -166,6 +168,8 @@ class System {
   bool reset_requested_ = false;
   std::mutex reset_mutex_;
   bool shut_down_ = false;
+  mutable std::mutex retired_mutex_;
+  RetirementCounts retired_;
 
   struct TrajectoryEntry {
     int64_t t_ns;

@@ -22,6 +22,7 @@
 #include "agvslam/slam/matcher.h"
 #include "agvslam/slam/optimizer.h"
 #include "agvslam/slam/place_recognition.h"
+#include "agvslam/slam/point_retirement.h"
 #include "agvslam/slam/slam_config.h"
 
 namespace agvslam::slam {
@@ -39,6 +40,8 @@ struct TrackTimings {
   double map_wait_ms = 0;        // waiting for the map mutex (held by the local mapper)
   double frame_ms = 0;           // motion model / reference keyframe / recovery, with its motion-only BA
   double local_map_ms = 0;       // local map update, projection search and motion-only BA
+  double retire_ms = 0;          // retirement of map points that moved (point_retirement.h)
+  double retire_cpu_ms = 0;      // ... its CPU time in this thread
   double keyframe_ms = 0;        // keyframe decision and creation
   double inline_mapping_ms = 0;  // local mapping run in this thread (SystemConfig::threaded_mapping = false only)
   double total_ms = 0;           // all of track_stereo (including inline mapping)
@@ -56,6 +59,7 @@ struct TrackingCounts {
   bool recovered = false;             // tracked again after being lost (by relocalisation or recovery)
   int relocalisation_candidates = 0;  // BoW candidates tried while lost
   bool reset = false;                 // the map was reset on this frame
+  RetirementCounts retired;           // map points retired on this frame (point_retirement.h), by reason
 };
 
 class Tracking {
@@ -63,8 +67,9 @@ class Tracking {
   Tracking(const SlamConfig& config, FrameGeometryPtr geometry, Map& map, LocalMapping& mapper, double frame_rate_hz);
 
   // Tracks `frame` (its features are set; its pose is overwritten). On success the frame has a pose. The
-  // previous frame is kept internally (the frame object is swapped in, not copied).
-  TrackingState track(Frame& frame, TrackTimings& timings, TrackingCounts& counts);
+  // previous frame is kept internally (the frame object is swapped in, not copied). `images` (the frame's stereo
+  // pair and dynamic mask; empty: none) let map points on objects that moved be retired; they are not kept.
+  TrackingState track(Frame& frame, TrackTimings& timings, TrackingCounts& counts, const FrameImages& images = {});
 
   TrackingState state() const { return state_; }
   // Pose of the last frame (valid when state() == kOk).
@@ -96,6 +101,8 @@ class Tracking {
   bool relocalise(int& matches, TrackingCounts& counts);
   void drop_outlier_matches();
   bool track_local_map(int& inliers);
+  // Retirement of map points on objects that moved (mapping mode only: localisation leaves the map as it is).
+  void retire_moved_points(const FrameImages& images, TrackingCounts& counts);
   void update_local_map();
   void search_local_points();
   int optimize_current_pose();
@@ -142,6 +149,8 @@ class Tracking {
   std::vector<int> observation_keypoint_;
   std::vector<uint8_t> observation_outlier_;
   std::vector<MapPointPtr> matches_;
+  PointRetirement retirement_;
+  std::vector<PointRetirement::Match> pose_matches_;  // every match of the last local-map pose optimisation
 };
 
 }  // namespace agvslam::slam
