@@ -244,6 +244,7 @@ const Table<OutlineConfig>& outline_params() {
           {"static_competition", &C::static_competition},
           {"max_hole_invalid_fraction", &C::max_hole_invalid_fraction, Range::closed(0, 1)},
           {"min_hole_fill_px", &C::min_hole_fill_px, Range::closed(0, 1000000), "px"},
+          {"weak_texture_dn", &C::weak_texture_dn, Range::closed(0, 255), "grey levels per px", "0: off"},
           {"erode_px", &C::erode_px, Range::closed(0, 10), "px"},
           {"min_pixels", &C::min_pixels, Range::closed(0, 1000000), "px"},
           {"min_dynamic_fraction", &C::min_dynamic_fraction, Range::closed(0, 1)},

@@ -147,10 +147,10 @@ void RoiOutliner::collect_static_seeds(const DetectorResult& result, const cv::R
   }
 }
 
-void RoiOutliner::outline_roi(const DetectorResult& result, RoiSegmentation& seg) {
-  seg.outline_stats =
-      outliner_.outline(seg.disparity_px, seg.roi.tl(), group_pts_, group_disp_, static_pts_, static_disp_,
-                        result.ground_plane.valid ? &result.ground_plane : nullptr, calibration_.bf(), seg.outline);
+void RoiOutliner::outline_roi(const StereoFrame& frame, const DetectorResult& result, RoiSegmentation& seg) {
+  seg.outline_stats = outliner_.outline(seg.disparity_px, seg.roi.tl(), group_pts_, group_disp_, static_pts_,
+                                        static_disp_, result.ground_plane.valid ? &result.ground_plane : nullptr,
+                                        calibration_.bf(), seg.outline, frame.left(seg.roi));
 }
 
 bool RoiOutliner::sides_to_widen(const StereoFrame& frame, const DetectorResult& result, const RoiSegmentation& seg,
@@ -377,7 +377,7 @@ void RoiOutliner::outline_by_disparity(const StereoFrame& frame, const cv::Mat& 
                                        FrameRegions& regions, const RoiMatch& match, RoiSegmentation& seg,
                                        DetectorResult& result, OutlineTimes& times) {
   collect_static_seeds(result, seg.roi);
-  outline_roi(result, seg);
+  outline_roi(frame, result, seg);
   // An outline cut by the ROI's left or right side: widen the ROI there, match the new strip, outline again.
   for (int round = 0;
        round < options_.extend_max_rounds && seg.outline_stats.object_pixels > 0 && !context_.full_frame_disparity;
@@ -387,7 +387,7 @@ void RoiOutliner::outline_by_disparity(const StereoFrame& frame, const cv::Mat& 
     const auto t_widen = Clock::now();
     widen(frame, match, left, right, seg);
     times.widen_ms += ms_since(t_widen);
-    outline_roi(result, seg);
+    outline_roi(frame, result, seg);
   }
   reshape(frame, seg);
   objects.cut_growth(result, seg);
