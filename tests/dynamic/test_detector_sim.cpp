@@ -31,6 +31,16 @@ StereoFrame render(const sim::Simulator& simulator, int i, sim::SimFrame& render
   return frame;
 }
 
+// The detector's mask against the frame's ground truth, from its second frame on.
+void add_frame(const DetectorResult& result, const sim::SimFrame& rendered, Score& score) {
+  if (!result.has_previous) return;
+  const int tp = cv::countNonZero(result.mask.image & rendered.mask);
+  score.tp += tp;
+  score.fp += result.mask.pixel_count() - tp;
+  score.fn += cv::countNonZero(rendered.mask) - tp;
+  ++score.frames;
+}
+
 Score run(const std::string& scenario, int first, int last) {
   sim::ScenarioOptions options;
   options.name = scenario;
@@ -43,12 +53,7 @@ Score run(const std::string& scenario, int first, int last) {
   Score score;
   for (int i = first; i <= last; ++i) {
     detector.detect(render(simulator, i, rendered), result);
-    if (!result.has_previous) continue;
-    const int tp = cv::countNonZero(result.mask.image & rendered.mask);
-    score.tp += tp;
-    score.fp += result.mask.pixel_count() - tp;
-    score.fn += cv::countNonZero(rendered.mask) - tp;
-    ++score.frames;
+    add_frame(result, rendered, score);
   }
   std::printf("%s frames %d..%d: precision %.3f recall %.3f (tp %ld fp %ld fn %ld)\n", scenario.c_str(), first, last,
               score.precision(), score.recall(), score.tp, score.fp, score.fn);
@@ -148,20 +153,12 @@ TEST(DynamicDetectorSim, FollowingAForkliftOutlinesItsPlainCounterweight) {
   sim::SimFrame rendered;
   DetectorResult result;
   Score with, without;
-  auto add = [&](Score& s) {
-    if (!result.has_previous) return;
-    const int tp = cv::countNonZero(result.mask.image & rendered.mask);
-    s.tp += tp;
-    s.fp += result.mask.pixel_count() - tp;
-    s.fn += cv::countNonZero(rendered.mask) - tp;
-    ++s.frames;
-  };
   for (int i = 284; i <= 300; ++i) {
     const StereoFrame frame = render(simulator, i, rendered);
     detector.detect(frame, result);
-    add(with);
+    add_frame(result, rendered, with);
     without_fill.detect(frame, result);
-    add(without);
+    add_frame(result, rendered, without);
   }
   std::printf("follow seed 202 frames 284..300: precision %.3f recall %.3f (without the fill: %.3f %.3f)\n",
               with.precision(), with.recall(), without.precision(), without.recall());
