@@ -288,6 +288,7 @@ const Table<PhotometricCheckConfig>& photometric_params() {
           {"min_samples", &C::min_samples, Range::closed(3, 100000)},
           {"multiframe_max_motion_px", &C::multiframe_max_motion_px, Range::left_open(0, 20), "px"},
           {"multiframe_min_disparity_px", &C::multiframe_min_disparity_px, Range::closed(0, 1000), "px", "0: any"},
+          {"far_multiframe_tracks", &C::far_multiframe_tracks},
           {"region_inset_px", &C::region_inset_px, Range::closed(0, 20), "px"},
       });
   return table;

@@ -115,24 +115,27 @@ void ObjectOutliner::fill_unmeasured(const cv::Mat& disparity_px, const cv::Mat&
   const double z = bf_px_m / d_object;
   const float lo = static_cast<float>(bf_px_m / (z + config_.depth_band_m));
   const float hi = z > config_.depth_band_m ? static_cast<float>(bf_px_m / (z - config_.depth_band_m)) : 1e9f;
-  // Per pixel: 1 unmeasured or at the object's depth (may join), 2 measured floor, 0 measured elsewhere or object.
+  // Per pixel: 1 unmeasured or at the object's depth (may join), 2 measured floor at its depth (where it stands), 0
+  // measured elsewhere or object.
+  // The band x < d at the image's left border has no match in the right image at all: left_band.h decides there.
   constexpr uint8_t kOther = 0, kJoinable = 1, kFloor = 2;
   passable_.create(disparity_px.size(), CV_8UC1);
   const float weak = static_cast<float>(config_.weak_texture_dn);
+  const int band_end = std::min(w, std::max(0, static_cast<int>(std::ceil(d_object)) - origin.x));
   for (int y = 0; y < h; ++y) {
     const float* d = disparity_px.ptr<float>(y);
     const float* t = texture_.ptr<float>(y);
     const uint8_t* m = mask.ptr<uint8_t>(y);
     uint8_t* p = passable_.ptr<uint8_t>(y);
     for (int x = 0; x < w; ++x) {
-      if (m[x]) {
+      if (m[x] || x < band_end) {
         p[x] = kOther;
       } else if (t[x] < weak || !(d[x] > 0)) {
         p[x] = kJoinable;
-      } else if (is_floor(x, y, d[x])) {
-        p[x] = kFloor;
+      } else if (d[x] < lo || d[x] > hi) {
+        p[x] = kOther;  // another depth: the floor behind a person's legs, a rack beside them
       } else {
-        p[x] = d[x] >= lo && d[x] <= hi ? kJoinable : kOther;
+        p[x] = is_floor(x, y, d[x]) ? kFloor : kJoinable;
       }
     }
   }

@@ -344,13 +344,18 @@ void RoiOutliner::check_photometric(const StereoFrame& frame, const cv::Mat& pre
   // A coasted outline has no dynamic point of this frame behind it: it must show its motion frame to frame (a
   // person who has just stopped still differs from the multi-frame reference).
   if (seg.coasted) moves_with_background = !(seg.outline_motion.apparent_motion_px >= 0) || moves_with_background;
-  if (moves_with_background && !seg.coasted && result.multiframe.valid &&
-      seg.outline_stats.median_disparity_px >= pc.multiframe_min_disparity_px) {
-    seg.outline_motion_multiframe = region_motion(frame.left, result.multiframe.reference_left, calibration_.left,
-                                                  calibration_.bf(), result.multiframe.T_cur_ref, seg.outline,
-                                                  seg.disparity_px, seg.roi.tl(), pc, pc.multiframe_max_motion_px);
-    moves_with_background =
-        seg.outline_motion_multiframe.apparent_motion_px >= 0 && seg.outline_motion_multiframe.moves_with_background;
+  if (moves_with_background && !seg.coasted && result.multiframe.valid) {
+    const OutlineStats& st = seg.outline_stats;
+    if (st.median_disparity_px >= pc.multiframe_min_disparity_px) {
+      seg.outline_motion_multiframe = region_motion(frame.left, result.multiframe.reference_left, calibration_.left,
+                                                    calibration_.bf(), result.multiframe.T_cur_ref, seg.outline,
+                                                    seg.disparity_px, seg.roi.tl(), pc, pc.multiframe_max_motion_px);
+      moves_with_background =
+          seg.outline_motion_multiframe.apparent_motion_px >= 0 && seg.outline_motion_multiframe.moves_with_background;
+    } else if (pc.far_multiframe_tracks) {
+      moves_with_background = !tracks_move_together_multiframe(
+          st.multiframe_tested_inside, st.multiframe_dynamic_inside, st.median_offset_px, context_.outline);
+    }
   }
   if (moves_with_background) seg.outline_verdict = OutlineVerdict::kMovesWithBackground;
 }

@@ -21,8 +21,8 @@
 //           below weak_texture_dn grey levels per px, or that has no disparity, is unmeasured. An object stands
 //           on the floor: below the outline, a column's run of unmeasured pixels and pixels at the object's depth
 //           (within depth_band_m of the outline's median, not floor) joins it when it reaches the floor (a floor
-//           pixel, or the floor row at the object's disparity); and in a row, such a run between two outline
-//           pixels joins it. A measured pixel at another depth (the background between a person's legs) stops
+//           pixel at that depth, or the floor row at the object's disparity); and in a row, such a run between two
+//           outline pixels joins it. A measured pixel at another depth (the background between a person's legs) stops
 //           both;
 //   holes:  parts of the ROI enclosed by the object (not reaching the ROI border) that are mostly without
 //           disparity (textureless clothing, the half-occluded strip between arm and body) join it; enclosed
