@@ -137,36 +137,48 @@ TEST(DynamicDetectorSim, CoastedObjectsLieOnMovingObjects) {
   EXPECT_GE(static_cast<double>(coasted_on_moving_px), 0.8 * static_cast<double>(coasted_px));
 }
 
+// The default detector and one with `other` settings on the same frames of a scenario at its own speed: both start
+// at frame `start`, scored from `first` to `last`.
+struct Comparison {
+  Score defaults, other;
+};
+Comparison compare(const std::string& scenario, uint64_t seed, const DynamicDetectorConfig& other, int start, int first,
+                   int last) {
+  sim::ScenarioOptions options;
+  options.name = scenario;
+  options.seed = seed;
+  const sim::Simulator simulator(sim::SimConfig{}, options);
+  DynamicDetector detector(simulator.calibration()), other_detector(simulator.calibration(), other);
+  sim::SimFrame rendered;
+  DetectorResult result;
+  Comparison c;
+  for (int i = start; i <= last; ++i) {
+    const StereoFrame frame = render(simulator, i, rendered);
+    detector.detect(frame, result);
+    if (i >= first) add_frame(result, rendered, c.defaults);
+    other_detector.detect(frame, result);
+    if (i >= first) add_frame(result, rendered, c.other);
+  }
+  std::printf("%s seed %d frames %d..%d: precision %.3f recall %.3f (other settings: %.3f %.3f)\n", scenario.c_str(),
+              static_cast<int>(seed), first, last, c.defaults.precision(), c.defaults.recall(), c.other.precision(),
+              c.other.recall());
+  return c;
+}
+
 TEST(DynamicDetectorSim, FollowingAForkliftOutlinesItsPlainCounterweight) {
   // Follow, seed 202, at the scenario's own speed: a loaded forklift 2.6-2.9 m ahead drives away from the AGV along
   // the epipolar lines. Its counterweight, half of what the AGV sees of it, is plain: SGBM cannot measure it, and
   // the outline from the tracked cab stopped at its edge. Measured when written, frames 284..300 (the detector
   // starting at 284): pixel recall 0.30 without the fill of unmeasured pixels (outline.weak_texture_dn 0), 0.67
-  // with it; precision 0.75 and 0.86.
-  sim::ScenarioOptions options;
-  options.name = "follow";
-  options.seed = 202;
-  const sim::Simulator simulator(sim::SimConfig{}, options);
+  // with it; precision 0.76 and 0.86.
   DynamicDetectorConfig unfilled;
   unfilled.outline.weak_texture_dn = 0;
-  DynamicDetector detector(simulator.calibration()), without_fill(simulator.calibration(), unfilled);
-  sim::SimFrame rendered;
-  DetectorResult result;
-  Score with, without;
-  for (int i = 284; i <= 300; ++i) {
-    const StereoFrame frame = render(simulator, i, rendered);
-    detector.detect(frame, result);
-    add_frame(result, rendered, with);
-    without_fill.detect(frame, result);
-    add_frame(result, rendered, without);
-  }
-  std::printf("follow seed 202 frames 284..300: precision %.3f recall %.3f (without the fill: %.3f %.3f)\n",
-              with.precision(), with.recall(), without.precision(), without.recall());
-  ASSERT_EQ(with.frames, 16);
-  ASSERT_GT(with.tp + with.fn, 16 * 30000) << "the forklift should fill a large part of the view";
-  EXPECT_GE(with.recall(), 0.6);
-  EXPECT_GE(with.precision(), 0.8);
-  EXPECT_GE(with.recall(), without.recall() + 0.25);
+  const Comparison c = compare("follow", 202, unfilled, 284, 284, 300);
+  ASSERT_EQ(c.defaults.frames, 16);
+  ASSERT_GT(c.defaults.tp + c.defaults.fn, 16 * 30000) << "the forklift should fill a large part of the view";
+  EXPECT_GE(c.defaults.recall(), 0.6);
+  EXPECT_GE(c.defaults.precision(), 0.8);
+  EXPECT_GE(c.defaults.recall(), c.other.recall() + 0.25);
 }
 
 TEST(DynamicDetectorSim, OncomingForkliftFarAwayIsKeptByItsMultiFrameTracks) {
@@ -176,30 +188,14 @@ TEST(DynamicDetectorSim, OncomingForkliftFarAwayIsKeptByItsMultiFrameTracks) {
   // multi-frame test flags most of its tracks. Measured when written, frames 100..130 (the detector starting at
   // 96): pixel recall 0.03 with photometric.far_multiframe_tracks off, 0.42 with it (precision 0.79, 0.82; at
   // that distance the outline holds part of the forklift only).
-  sim::ScenarioOptions options;
-  options.name = "oncoming";
-  options.seed = 201;
-  const sim::Simulator simulator(sim::SimConfig{}, options);
   DynamicDetectorConfig dropped;
   dropped.photometric.far_multiframe_tracks = false;
-  DynamicDetector detector(simulator.calibration()), without(simulator.calibration(), dropped);
-  sim::SimFrame rendered;
-  DetectorResult result;
-  Score kept, photometric_only;
-  for (int i = 96; i <= 130; ++i) {
-    const StereoFrame frame = render(simulator, i, rendered);
-    detector.detect(frame, result);
-    if (i >= 100) add_frame(result, rendered, kept);
-    without.detect(frame, result);
-    if (i >= 100) add_frame(result, rendered, photometric_only);
-  }
-  std::printf("oncoming seed 201 frames 100..130: precision %.3f recall %.3f (photometric check alone: %.3f %.3f)\n",
-              kept.precision(), kept.recall(), photometric_only.precision(), photometric_only.recall());
-  ASSERT_EQ(kept.frames, 31);
-  ASSERT_GT(kept.tp + kept.fn, 31 * 1500) << "the forklift should be in view";
-  EXPECT_GE(kept.recall(), 0.3);
-  EXPECT_GE(kept.precision(), 0.7);
-  EXPECT_GE(kept.recall(), photometric_only.recall() + 0.25);
+  const Comparison c = compare("oncoming", 201, dropped, 96, 100, 130);
+  ASSERT_EQ(c.defaults.frames, 31);
+  ASSERT_GT(c.defaults.tp + c.defaults.fn, 31 * 1500) << "the forklift should be in view";
+  EXPECT_GE(c.defaults.recall(), 0.3);
+  EXPECT_GE(c.defaults.precision(), 0.7);
+  EXPECT_GE(c.defaults.recall(), c.other.recall() + 0.25);
 }
 
 TEST(DynamicDetectorSim, DrivingThroughAStaticWarehouseFlagsAlmostNothing) {
