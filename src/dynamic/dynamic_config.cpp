@@ -244,6 +244,7 @@ const Table<OutlineConfig>& outline_params() {
           {"static_competition", &C::static_competition},
           {"max_hole_invalid_fraction", &C::max_hole_invalid_fraction, Range::closed(0, 1)},
           {"min_hole_fill_px", &C::min_hole_fill_px, Range::closed(0, 1000000), "px"},
+          {"weak_texture_dn", &C::weak_texture_dn, Range::closed(0, 255), "grey levels per px", "0: off"},
           {"erode_px", &C::erode_px, Range::closed(0, 10), "px"},
           {"min_pixels", &C::min_pixels, Range::closed(0, 1000000), "px"},
           {"min_dynamic_fraction", &C::min_dynamic_fraction, Range::closed(0, 1)},
@@ -287,6 +288,7 @@ const Table<PhotometricCheckConfig>& photometric_params() {
           {"min_samples", &C::min_samples, Range::closed(3, 100000)},
           {"multiframe_max_motion_px", &C::multiframe_max_motion_px, Range::left_open(0, 20), "px"},
           {"multiframe_min_disparity_px", &C::multiframe_min_disparity_px, Range::closed(0, 1000), "px", "0: any"},
+          {"far_multiframe_tracks", &C::far_multiframe_tracks},
           {"region_inset_px", &C::region_inset_px, Range::closed(0, 20), "px"},
       });
   return table;

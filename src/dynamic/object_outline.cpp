@@ -104,6 +104,88 @@ void ObjectOutliner::flood(const cv::Mat& disparity_px) {
   }
 }
 
+void ObjectOutliner::fill_unmeasured(const cv::Mat& disparity_px, const cv::Mat& left_roi, cv::Point origin,
+                                     double bf_px_m, cv::Mat& mask) {
+  const int w = disparity_px.cols, h = disparity_px.rows;
+  const float d_object = median_disparity(disparity_px, mask);
+  if (!(d_object > 0)) return;
+  // Texture as the matcher sees it: the horizontal derivative (grey levels per px) averaged over its 5x5 block.
+  cv::Sobel(left_roi, gradient_, CV_32F, 1, 0, 3, 0.125);
+  cv::blur(cv::abs(gradient_), texture_, cv::Size(5, 5));
+  const double z = bf_px_m / d_object;
+  const float lo = static_cast<float>(bf_px_m / (z + config_.depth_band_m));
+  const float hi = z > config_.depth_band_m ? static_cast<float>(bf_px_m / (z - config_.depth_band_m)) : 1e9f;
+  // Per pixel: 1 unmeasured or at the object's depth (may join), 2 measured floor at its depth (where it stands), 0
+  // measured elsewhere or object.
+  // The band x < d at the image's left border has no match in the right image at all: left_band.h decides there.
+  constexpr uint8_t kOther = 0, kJoinable = 1, kFloor = 2;
+  passable_.create(disparity_px.size(), CV_8UC1);
+  const float weak = static_cast<float>(config_.weak_texture_dn);
+  const int band_end = std::min(w, std::max(0, static_cast<int>(std::ceil(d_object)) - origin.x));
+  for (int y = 0; y < h; ++y) {
+    const float* d = disparity_px.ptr<float>(y);
+    const float* t = texture_.ptr<float>(y);
+    const uint8_t* m = mask.ptr<uint8_t>(y);
+    uint8_t* p = passable_.ptr<uint8_t>(y);
+    for (int x = 0; x < w; ++x) {
+      if (m[x] || x < band_end) {
+        p[x] = kOther;
+      } else if (t[x] < weak || !(d[x] > 0)) {
+        p[x] = kJoinable;
+      } else if (d[x] < lo || d[x] > hi) {
+        p[x] = kOther;  // another depth: the floor behind a person's legs, a rack beside them
+      } else {
+        p[x] = is_floor(x, y, d[x]) ? kFloor : kJoinable;
+      }
+    }
+  }
+  added_.create(disparity_px.size(), CV_8UC1);
+  added_.setTo(0);
+  if (ground_ != nullptr && ground_->b > 0) {
+    // Down each column from the outline's lowest pixel to the floor: a measured floor pixel, or the row where the
+    // floor has the object's disparity (where it stands).
+    for (int x = 0; x < w; ++x) {
+      int y0 = h - 1;
+      while (y0 >= 0 && !mask.at<uint8_t>(y0, x)) --y0;
+      if (y0 < 0) continue;
+      const double floor_row = (d_object - ground_x_[static_cast<std::size_t>(x)] - ground_->c) / ground_->b;
+      const int contact = static_cast<int>(std::floor(floor_row)) - origin.y;
+      int y = y0 + 1;
+      bool reached = false;
+      for (; y < h; ++y) {
+        const uint8_t p = passable_.at<uint8_t>(y, x);
+        if (y >= contact || p == kFloor) {
+          reached = true;
+          break;
+        }
+        if (p != kJoinable) break;
+      }
+      if (!reached) continue;
+      for (int yy = y0 + 1; yy < y; ++yy) added_.at<uint8_t>(yy, x) = 255;
+    }
+  }
+  // Along each row, the runs between two pixels of the outline.
+  for (int y = 0; y < h; ++y) {
+    const uint8_t* m = mask.ptr<uint8_t>(y);
+    const uint8_t* p = passable_.ptr<uint8_t>(y);
+    uint8_t* a = added_.ptr<uint8_t>(y);
+    int last = -1;     // the last outline pixel of the row so far
+    bool open = true;  // every pixel since it may join
+    for (int x = 0; x < w; ++x) {
+      if (m[x] || a[x]) {
+        if (last >= 0 && open) {
+          for (int k = last + 1; k < x; ++k) a[k] = 255;
+        }
+        last = x;
+        open = true;
+      } else if (p[x] != kJoinable) {
+        open = false;
+      }
+    }
+  }
+  cv::bitwise_or(mask, added_, mask);
+}
+
 void ObjectOutliner::fill_enclosed(const cv::Mat& disparity_px, cv::Mat& mask) {
   // Only the mask's bounding box and a 1 px ring around it can hold an enclosed part (everything beyond is one
   // component with the ring), so the components are labelled there; the ring's side is the ROI border where the box
@@ -194,7 +276,7 @@ OutlineStats ObjectOutliner::outline(const cv::Mat& disparity_px, cv::Point orig
                                      const std::vector<float>& point_disparity_px,
                                      const std::vector<cv::Point2f>& static_px,
                                      const std::vector<float>& static_disparity_px, const DisparityPlane* ground,
-                                     double bf_px_m, cv::Mat& mask) {
+                                     double bf_px_m, cv::Mat& mask, const cv::Mat& left_roi) {
   CV_Assert(disparity_px.type() == CV_32FC1);
   CV_Assert(points_px.size() == point_disparity_px.size() && static_px.size() == static_disparity_px.size());
   OutlineStats stats;
@@ -223,6 +305,10 @@ OutlineStats ObjectOutliner::outline(const cv::Mat& disparity_px, cv::Point orig
     uint8_t* m = mask.ptr<uint8_t>(y);
     const uint8_t* l = label_.data() + static_cast<std::size_t>(y) * static_cast<std::size_t>(w);
     for (int x = 0; x < w; ++x) m[x] = l[x] == 1 ? 255 : 0;
+  }
+  if (config_.weak_texture_dn > 0 && !left_roi.empty()) {
+    CV_Assert(left_roi.type() == CV_8UC1 && left_roi.size() == disparity_px.size());
+    fill_unmeasured(disparity_px, left_roi, origin, bf_px_m, mask);
   }
   fill_enclosed(disparity_px, mask);
   if (config_.erode_px > 0) {

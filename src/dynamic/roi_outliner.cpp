@@ -147,10 +147,10 @@ void RoiOutliner::collect_static_seeds(const DetectorResult& result, const cv::R
   }
 }
 
-void RoiOutliner::outline_roi(const DetectorResult& result, RoiSegmentation& seg) {
-  seg.outline_stats =
-      outliner_.outline(seg.disparity_px, seg.roi.tl(), group_pts_, group_disp_, static_pts_, static_disp_,
-                        result.ground_plane.valid ? &result.ground_plane : nullptr, calibration_.bf(), seg.outline);
+void RoiOutliner::outline_roi(const StereoFrame& frame, const DetectorResult& result, RoiSegmentation& seg) {
+  seg.outline_stats = outliner_.outline(seg.disparity_px, seg.roi.tl(), group_pts_, group_disp_, static_pts_,
+                                        static_disp_, result.ground_plane.valid ? &result.ground_plane : nullptr,
+                                        calibration_.bf(), seg.outline, frame.left(seg.roi));
 }
 
 bool RoiOutliner::sides_to_widen(const StereoFrame& frame, const DetectorResult& result, const RoiSegmentation& seg,
@@ -344,13 +344,18 @@ void RoiOutliner::check_photometric(const StereoFrame& frame, const cv::Mat& pre
   // A coasted outline has no dynamic point of this frame behind it: it must show its motion frame to frame (a
   // person who has just stopped still differs from the multi-frame reference).
   if (seg.coasted) moves_with_background = !(seg.outline_motion.apparent_motion_px >= 0) || moves_with_background;
-  if (moves_with_background && !seg.coasted && result.multiframe.valid &&
-      seg.outline_stats.median_disparity_px >= pc.multiframe_min_disparity_px) {
-    seg.outline_motion_multiframe = region_motion(frame.left, result.multiframe.reference_left, calibration_.left,
-                                                  calibration_.bf(), result.multiframe.T_cur_ref, seg.outline,
-                                                  seg.disparity_px, seg.roi.tl(), pc, pc.multiframe_max_motion_px);
-    moves_with_background =
-        seg.outline_motion_multiframe.apparent_motion_px >= 0 && seg.outline_motion_multiframe.moves_with_background;
+  if (moves_with_background && !seg.coasted && result.multiframe.valid) {
+    const OutlineStats& st = seg.outline_stats;
+    if (st.median_disparity_px >= pc.multiframe_min_disparity_px) {
+      seg.outline_motion_multiframe = region_motion(frame.left, result.multiframe.reference_left, calibration_.left,
+                                                    calibration_.bf(), result.multiframe.T_cur_ref, seg.outline,
+                                                    seg.disparity_px, seg.roi.tl(), pc, pc.multiframe_max_motion_px);
+      moves_with_background =
+          seg.outline_motion_multiframe.apparent_motion_px >= 0 && seg.outline_motion_multiframe.moves_with_background;
+    } else if (pc.far_multiframe_tracks) {
+      moves_with_background = !tracks_move_together_multiframe(
+          st.multiframe_tested_inside, st.multiframe_dynamic_inside, st.median_offset_px, context_.outline);
+    }
   }
   if (moves_with_background) seg.outline_verdict = OutlineVerdict::kMovesWithBackground;
 }
@@ -377,7 +382,7 @@ void RoiOutliner::outline_by_disparity(const StereoFrame& frame, const cv::Mat& 
                                        FrameRegions& regions, const RoiMatch& match, RoiSegmentation& seg,
                                        DetectorResult& result, OutlineTimes& times) {
   collect_static_seeds(result, seg.roi);
-  outline_roi(result, seg);
+  outline_roi(frame, result, seg);
   // An outline cut by the ROI's left or right side: widen the ROI there, match the new strip, outline again.
   for (int round = 0;
        round < options_.extend_max_rounds && seg.outline_stats.object_pixels > 0 && !context_.full_frame_disparity;
@@ -387,7 +392,7 @@ void RoiOutliner::outline_by_disparity(const StereoFrame& frame, const cv::Mat& 
     const auto t_widen = Clock::now();
     widen(frame, match, left, right, seg);
     times.widen_ms += ms_since(t_widen);
-    outline_roi(result, seg);
+    outline_roi(frame, result, seg);
   }
   reshape(frame, seg);
   objects.cut_growth(result, seg);

@@ -1,12 +1,13 @@
 // ObjectOutliner on constructed disparity images: the object is exactly the pixels connected to its points
-// through smooth disparity, without the floor it stands on, with its textureless holes, and split from a
-// surface at its depth by static points when static competition is on.
+// through smooth disparity, without the floor it stands on, with its textureless holes and the plain surfaces
+// between it and the floor, and split from a surface at its depth by static points when static competition is on.
 #include <gtest/gtest.h>
 
 #include <opencv2/imgproc.hpp>
 
 #include "agvslam/core/error.h"
 #include "agvslam/dynamic/object_outline.h"
+#include "noise_texture.h"
 
 namespace agvslam::dynamic {
 namespace {
@@ -87,6 +88,67 @@ TEST(ObjectOutline, TexturelessHolesJoinAndEnclosedBackgroundDoesNot) {
                    &s.ground, kBf, mask);
   cv::Mat expected = expected_mask(s, cv::Rect(s.person.x, s.person.y, s.person.width, 67));  // soles: floor
   expected(cv::Rect(68, 70, 4, 20)).setTo(0);  // the gap opens onto the floor below: background
+  EXPECT_EQ(cv::countNonZero(mask != expected), 0);
+}
+
+// A vehicle seen from behind (ROI x 30..109, rows 10..89, d = 10, standing on the floor row 90): a textured cab on
+// top and a plain counterweight below, where SGBM (no texture to match) returns rows of the background's d = 4,
+// holes and the right d by turns, from side to side; only the 3 rows under the cab and above the floor, matched on
+// those edges, are right.
+struct Vehicle {
+  Scene s;
+  cv::Rect body{30, 10, 80, 80};
+  cv::Rect plain{30, 43, 80, 44};  // the counterweight between those rows
+  cv::Mat left = test::noise_texture(160, 120, 7);
+
+  Vehicle() {
+    s.disparity(body).setTo(10.0f);
+    for (int y = plain.y; y < plain.br().y; ++y) {
+      const float garbage[3] = {4.0f, 0.0f, 10.0f};
+      s.disparity(cv::Rect(plain.x, y, plain.width, 1)).setTo(garbage[((y - plain.y) / 3) % 3]);
+    }
+    left(cv::Rect(body.x, 40, body.width, 50)).setTo(90);
+  }
+  // Its dynamic points: corners of the cab only (the counterweight has none).
+  std::vector<cv::Point2f> points() const {
+    return {s.image_point(40, 20), s.image_point(70, 25), s.image_point(100, 30)};
+  }
+};
+
+TEST(ObjectOutline, APlainCounterweightJoinsDownToTheFloor) {
+  Vehicle v;
+  ObjectOutliner outliner(exact());
+  cv::Mat mask;
+  const std::vector<float> d(3, 10.0f);
+  outliner.outline(v.s.disparity, v.s.origin, v.points(), d, {}, {}, &v.s.ground, kBf, mask);
+  // The flood alone stops at the first row of background disparity under the cab.
+  EXPECT_LT(cv::countNonZero(mask(v.plain)), v.plain.area() / 4);
+  outliner.outline(v.s.disparity, v.s.origin, v.points(), d, {}, {}, &v.s.ground, kBf, mask, v.left);
+  // With the image, the counterweight (unmeasured) joins but for the few columns at its sides and rows at its
+  // bottom that are matched on the wall's and the floor's texture (with its garbage disparity); nothing beside or
+  // under the vehicle joins.
+  EXPECT_GT(cv::countNonZero(mask(v.body)), v.body.area() * 9 / 10);
+  cv::Mat outside = mask.clone();
+  outside(v.body).setTo(0);
+  EXPECT_EQ(cv::countNonZero(outside), 0);
+  // Without a floor there is nothing to reach: only rows between two outline pixels may join.
+  outliner.outline(v.s.disparity, v.s.origin, v.points(), d, {}, {}, nullptr, kBf, mask, v.left);
+  EXPECT_LT(cv::countNonZero(mask(v.plain)), v.plain.area() / 2);
+}
+
+TEST(ObjectOutline, MeasuredBackgroundBetweenTheLegsStaysOut) {
+  Scene s;
+  // Textured everywhere but the shirt; a gap between the legs showing the (textured) wall at d = 4.
+  cv::Mat left = test::noise_texture(160, 120, 11);
+  left(cv::Rect(63, 30, 14, 20)).setTo(120);
+  s.disparity(cv::Rect(63, 30, 14, 20)).setTo(0.0f);
+  s.disparity(cv::Rect(68, 70, 4, 20)).setTo(4.0f);
+  ObjectOutliner outliner(exact());
+  cv::Mat mask;
+  outliner.outline(s.disparity, s.origin, {s.image_point(61, 25), s.image_point(61, 80)}, {10.0f, 10.0f}, {}, {},
+                   &s.ground, kBf, mask, left);
+  cv::Mat expected = expected_mask(s, cv::Rect(s.person.x, s.person.y, s.person.width, 67));
+  expected(cv::Rect(68, 70, 4, 20)).setTo(0);
   EXPECT_EQ(cv::countNonZero(mask != expected), 0);
 }
 

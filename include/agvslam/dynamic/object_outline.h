@@ -15,6 +15,15 @@
 //           seed); a 4-neighbour joins when its disparity is valid, differs from the current pixel's by at
 //           most step_tolerance_px + step_tolerance_rel * d (no occlusion jump), lies within depth_band_m of
 //           its seed's depth, and is not floor (|d - ground(x, y)| <= ground_tolerance_px + rel * d);
+//   unmeasured: (left_roi given, weak_texture_dn > 0) SGBM measures nothing on a surface without texture (a
+//           vehicle's plain counterweight or rear panel): it leaves holes or carries its neighbours' disparities
+//           into it, so the flood stops at its edge. A pixel whose mean |dI/dx| over the 5x5 matching block is
+//           below weak_texture_dn grey levels per px, or that has no disparity, is unmeasured. An object stands
+//           on the floor: below the outline, a column's run of unmeasured pixels and pixels at the object's depth
+//           (within depth_band_m of the outline's median, not floor) joins it when it reaches the floor (a floor
+//           pixel at that depth, or the floor row at the object's disparity); and in a row, such a run between two
+//           outline pixels joins it. A measured pixel at another depth (the background between a person's legs) stops
+//           both;
 //   holes:  parts of the ROI enclosed by the object (not reaching the ROI border) that are mostly without
 //           disparity (textureless clothing, the half-occluded strip between arm and body) join it; enclosed
 //           parts smaller than min_hole_fill_px join whatever they hold.
@@ -42,6 +51,7 @@ struct OutlineConfig {
   bool static_competition = false;         // static points claim their surfaces (see above)
   double max_hole_invalid_fraction = 0.5;  // enclosed parts with at least this fraction without disparity join
   int min_hole_fill_px = 64;               // enclosed parts smaller than this join regardless
+  double weak_texture_dn = 1.0;            // unmeasured below this mean |dI/dx| (grey levels per px); 0 = no fill
   // SGBM fattens a foreground object by about half its block (its cost window spills over the edge onto the
   // background): the outline is eroded by this many px (0 = not; edge_refine.h re-decides the sides instead).
   int erode_px = 0;
@@ -115,11 +125,12 @@ class ObjectOutliner {
   // disparity_px: CV_32FC1 of the ROI (0 = none); origin: the ROI's top-left in the full image. points_px /
   // point_disparity_px: the object's dynamic points (full image). static_px / static_disparity_px: static
   // points (may be empty). ground: the frame's floor in disparity space (nullptr or invalid = none). bf_px_m:
-  // focal length x baseline. mask: CV_8UC1 of the ROI, 255 = object. Returns the statistics.
+  // focal length x baseline. mask: CV_8UC1 of the ROI, 255 = object. left_roi: the ROI of the left image
+  // (CV_8UC1, the disparity's size; empty = unmeasured pixels are not filled). Returns the statistics.
   OutlineStats outline(const cv::Mat& disparity_px, cv::Point origin, const std::vector<cv::Point2f>& points_px,
                        const std::vector<float>& point_disparity_px, const std::vector<cv::Point2f>& static_px,
                        const std::vector<float>& static_disparity_px, const DisparityPlane* ground, double bf_px_m,
-                       cv::Mat& mask);
+                       cv::Mat& mask, const cv::Mat& left_roi = cv::Mat());
 
  private:
   struct Seed {
@@ -134,6 +145,9 @@ class ObjectOutliner {
                 uint8_t label);
   // Breadth-first from all seeds at once through smooth disparity within each seed's depth band.
   void flood(const cv::Mat& disparity_px);
+  // Adds the unmeasured runs below the outline down to the floor and between outline pixels in a row (see above).
+  void fill_unmeasured(const cv::Mat& disparity_px, const cv::Mat& left_roi, cv::Point origin, double bf_px_m,
+                       cv::Mat& mask);
   // Fills the enclosed parts of `mask` (complement components not reaching the ROI border) that are mostly without
   // disparity or small.
   void fill_enclosed(const cv::Mat& disparity_px, cv::Mat& mask);
@@ -151,6 +165,7 @@ class ObjectOutliner {
   std::vector<float> disparities_;
   std::vector<int> disparity_bins_;
   cv::Mat holes_, hole_labels_, hole_stats_, hole_centroids_, eroded_;
+  cv::Mat gradient_, texture_, passable_, added_;
   std::vector<int> invalid_count_;
 };
 

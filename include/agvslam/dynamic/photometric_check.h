@@ -37,6 +37,11 @@ struct PhotometricCheckConfig {
   // The multi-frame reference can only keep a region (static frame to frame) whose median disparity is at least
   // this (px; 0 = any): farther regions it keeps are false (see params/dynamic.yaml).
   double multiframe_min_disparity_px = 10;
+  // ... and one farther than that stays when the sparse multi-frame test flagged its tracks (outline.aggregate_
+  // multiframe_*): frame to frame the check cannot see less than max_motion_px, which an oncoming vehicle 8-12 m
+  // away moves along the epipolar lines, while its LK-verified tracks are off over the longer baseline. Off by
+  // default: on the simulator's scene2/3 it also keeps far false regions (params/dynamic.yaml).
+  bool far_multiframe_tracks = false;
   int region_inset_px = 2;
 
   void validate(const std::string& source) const;

@@ -138,7 +138,7 @@ class RoiOutliner {
                             OutlineTimes& times);
   // Competing static seeds (outline.static_competition) inside the ROI into static_pts_ / static_disp_.
   void collect_static_seeds(const DetectorResult& result, const cv::Rect& roi);
-  void outline_roi(const DetectorResult& result, RoiSegmentation& seg);
+  void outline_roi(const StereoFrame& frame, const DetectorResult& result, RoiSegmentation& seg);
   // The sides of the ROI to widen (roi.extend_*); false when none.
   bool sides_to_widen(const StereoFrame& frame, const DetectorResult& result, const RoiSegmentation& seg, bool& left,
                       bool& right) const;
