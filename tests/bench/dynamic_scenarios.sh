@@ -55,6 +55,7 @@ sep = args.index("--")
 scenarios, seeds = args[:sep], args[sep + 1:]
 tot = {"tp": 0, "fp": 0, "fn": 0, "iou": 0.0}
 breakdown = {}
+near = {}
 misses = {}
 motion = {}
 print(f"{'sequence':<14}{'frames':>7}{'P':>8}{'R':>8}{'IoU':>8}{'TP':>6}{'FP':>6}{'FN':>6}{'FP/100f':>9}{'med ms':>8}{'p95 ms':>8}"
@@ -68,6 +69,8 @@ for sc in scenarios:
             tot["tp"] += tp; tot["fp"] += fp; tot["fn"] += fn; tot["iou"] += j["mean_iou"] * tp
             for k, v in j.get("recall_breakdown", {}).items():
                 b = breakdown.setdefault(k, [0, 0]); b[0] += v["found"]; b[1] += v["objects"]
+                if k in ("distance_lt4m", "distance_4_7m", "distance_7_12m"):
+                    b = near.setdefault(sc, [0, 0]); b[0] += v["found"]; b[1] += v["objects"]
             for band, stages in j.get("misses_by_stage", {}).items():
                 m = misses.setdefault(band, {})
                 for stage, n in stages.items():
@@ -97,6 +100,8 @@ if breakdown:
     print("scene1..5 recall by object: " + ", ".join(
         f"{label} {breakdown[k][0] / max(1, breakdown[k][1]):.3f} ({breakdown[k][0]}/{breakdown[k][1]})"
         for k, label in names if k in breakdown))
+    # Issue 37's target for a leader and oncoming vehicles is stated within 12 m, per scenario.
+    print("recall within 12 m: " + ", ".join(f"{sc} {f / max(1, n):.3f} ({f}/{n})" for sc, (f, n) in near.items()))
 track_bins = ["tracks_0", "tracks_1_2", "tracks_3_4", "tracks_5_9", "tracks_ge10"]
 if all(k in breakdown for k in track_bins):
     # A detector built on sparse tracks cannot find an object without tracked points on it: the recall it would
