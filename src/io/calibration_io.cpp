@@ -351,29 +351,38 @@ CalibKind detect_calibration_kind(const std::string& path) {
 
 // -------------------------------------------------------------------------------------------------------------------
 
-StereoCalibration load_kitti_calib(const std::string& path, cv::Size image_size) {
-  const KittiProjections P = parse_kitti_projections(path);
+StereoCalibration calibration_from_projections(const std::vector<double>& P_left, const std::vector<double>& P_right,
+                                               cv::Size image_size, const std::string& source,
+                                               const std::string& left_field, const std::string& right_field) {
+  if (P_left.size() != 12 || P_right.size() != 12) {
+    throw InputError(source, P_left.size() != 12 ? left_field : right_field, "expected a 3x4 projection matrix");
+  }
   StereoCalibration calib;
-  calib.left.fx = P.P0[0];
-  calib.left.fy = P.P0[5];
-  calib.left.cx = P.P0[2];
-  calib.left.cy = P.P0[6];
+  calib.left.fx = P_left[0];
+  calib.left.fy = P_left[5];
+  calib.left.cx = P_left[2];
+  calib.left.cy = P_left[6];
   calib.left.width = image_size.width;
   calib.left.height = image_size.height;
-  if (!(P.P1[0] > 0)) {
-    throw InputError(path, "P1", "expected a positive focal length P1[0,0], found " + format_number(P.P1[0]));
+  if (!(P_right[0] > 0)) {
+    throw InputError(source, right_field,
+                     "expected a positive focal length P[0,0], found " + format_number(P_right[0]));
   }
-  // P_i[0,3] = -fx * x_i (x_i: position of camera i along the rectified x axis); KITTI has P0[0,3] = 0.
-  calib.baseline_m = (P.P0[3] - P.P1[3]) / P.P1[0];
-  validate_calibration(calib, path, "P0/P1");
-  if (std::abs(P.P1[0] - P.P0[0]) > 1e-6 * P.P0[0] || std::abs(P.P1[6] - P.P0[6]) > 1e-3) {
-    throw InputError(path, "P1",
-                     "expected a rectified pair (P1 with the same fx and cy as P0), found fx " +
-                         format_number(P.P1[0]) + " vs " + format_number(P.P0[0]) + ", cy " + format_number(P.P1[6]) +
-                         " vs " + format_number(P.P0[6]));
+  calib.baseline_m = (P_left[3] - P_right[3]) / P_right[0];
+  validate_calibration(calib, source, left_field + "/" + right_field);
+  if (std::abs(P_right[0] - P_left[0]) > 1e-6 * P_left[0] || std::abs(P_right[6] - P_left[6]) > 1e-3) {
+    throw InputError(source, right_field,
+                     "expected a rectified pair (" + right_field + " with the same fx and cy as " + left_field +
+                         "), found fx " + format_number(P_right[0]) + " vs " + format_number(P_left[0]) + ", cy " +
+                         format_number(P_right[6]) + " vs " + format_number(P_left[6]));
   }
   calib.needs_rectification = false;
   return calib;
+}
+
+StereoCalibration load_kitti_calib(const std::string& path, cv::Size image_size) {
+  const KittiProjections P = parse_kitti_projections(path);
+  return calibration_from_projections(P.P0, P.P1, image_size, path, "P0", "P1");
 }
 
 void write_kitti_calib(const std::string& path, const StereoCalibration& calib) {

@@ -600,34 +600,10 @@ RosbagDataset::RosbagDataset(const std::string& bag_dir, const std::string& cali
                            "calibration.file); the bag has " +
                            list_topics(topics));
     }
-    const std::vector<double>& P_l = left_info->p;
-    const std::vector<double>& P_r = right_info->p;
-    calib_.left.fx = P_l[0];
-    calib_.left.fy = P_l[5];
-    calib_.left.cx = P_l[2];
-    calib_.left.cy = P_l[6];
-    calib_.left.width = left_info->width > 0 ? left_info->width : image_size_.width;
-    calib_.left.height = left_info->height > 0 ? left_info->height : image_size_.height;
-    if (!(calib_.left.fx > 0) || !(calib_.left.fy > 0) || !std::isfinite(calib_.left.cx) ||
-        !std::isfinite(calib_.left.cy)) {
-      throw InputError(left_info_topic, "field 'p'",
-                       "expected a rectified projection matrix with positive focal lengths, found fx " +
-                           std::to_string(P_l[0]) + ", fy " + std::to_string(P_l[5]));
-    }
-    const double tolerance_px = 1e-6 * calib_.left.fx;
-    if (std::abs(P_r[0] - P_l[0]) > tolerance_px || std::abs(P_r[5] - P_l[5]) > tolerance_px ||
-        std::abs(P_r[2] - P_l[2]) > tolerance_px || std::abs(P_r[6] - P_l[6]) > tolerance_px) {
-      throw InputError(right_info_topic, "field 'p'",
-                       "expected the rectified intrinsics of " + left_info_topic +
-                           " (a rectified stereo pair shares fx, fy, cx, cy)");
-    }
-    calib_.baseline_m = -P_r[3] / calib_.left.fx;
-    if (!(calib_.baseline_m > 0) || !std::isfinite(calib_.baseline_m)) {
-      throw InputError(
-          right_info_topic, "field 'p'",
-          "expected p[3] = -fx * baseline < 0 (the right camera of the pair), found " + std::to_string(P_r[3]));
-    }
-    const cv::Size info_size = calib_.left.size();
+    const cv::Size info_size(left_info->width > 0 ? left_info->width : image_size_.width,
+                             left_info->height > 0 ? left_info->height : image_size_.height);
+    calib_ = calibration_from_projections(left_info->p, right_info->p, info_size, bag_dir,
+                                          left_info_topic + " field 'p'", right_info_topic + " field 'p'");
     if (info_size != image_size_) {
       throw InputError(left_info_topic, "fields 'width'/'height'",
                        "expected the images' size " + size_text(image_size_) + ", found " + size_text(info_size));

@@ -451,5 +451,30 @@ TEST(RosbagDataset, RawCameraInfoIsRectified) {
   EXPECT_EQ(bag->frame(0).left.size(), cv::Size(64, 48));
 }
 
+// Projection matrices that are not one rectified pair name the camera_info topic and what was expected.
+TEST(RosbagDataset, CameraInfoOfNoRectifiedPairNamesTheTopic) {
+  const std::vector<double> K = {kFx, 0, kCx, 0, kFy, kCy, 0, 0, 1}, R = {1, 0, 0, 0, 1, 0, 0, 0, 1};
+  const cv::Mat image = noise_image(48, 64, CV_8UC1, 3);
+  auto bag_with_right_p = [&](const std::string& path, const std::vector<double>& right_p) {
+    BagWriter writer(path);
+    const int left = writer.topic("/left/image_raw", "sensor_msgs/msg/Image");
+    const int right = writer.topic("/right/image_raw", "sensor_msgs/msg/Image");
+    const int left_info = writer.topic("/left/camera_info", "sensor_msgs/msg/CameraInfo");
+    const int right_info = writer.topic("/right/camera_info", "sensor_msgs/msg/CameraInfo");
+    writer.write(left, 1, test::encode_image(1000, image, "mono8"));
+    writer.write(right, 1, test::encode_image(1000, image, "mono8"));
+    writer.write(left_info, 1,
+                 test::encode_camera_info(1000, 64, 48, {}, K, R, test::rectified_p(kFx, kFy, kCx, kCy, 0)));
+    writer.write(right_info, 1, test::encode_camera_info(1000, 64, 48, {}, K, R, right_p));
+  };
+  TempDir dir("agvslam-rosbag");
+  bag_with_right_p(dir.file("behind"), test::rectified_p(kFx, kFy, kCx, kCy, kFx * kBaseline));
+  expect_input_error([&] { open_dataset(dir.file("behind")); },
+                     {"/right/camera_info field 'p'", "expected a positive baseline"});
+  bag_with_right_p(dir.file("other_cy"), test::rectified_p(kFx, kFy, kCx, kCy + 5, -kFx * kBaseline));
+  expect_input_error([&] { open_dataset(dir.file("other_cy")); },
+                     {"/right/camera_info field 'p'", "expected a rectified pair"});
+}
+
 }  // namespace
 }  // namespace agvslam::io

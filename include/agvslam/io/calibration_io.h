@@ -14,10 +14,19 @@
 
 #include <optional>
 #include <string>
+#include <vector>
 
 #include "agvslam/core/camera.h"
 
 namespace agvslam::io {
+
+// A rectified pair from its left and right 3x4 projection matrices (12 values, row-major: KITTI's P0/P1, a ROS
+// CameraInfo's p): the left camera's fx, fy, cx, cy and the baseline from P[0,3] = -fx * x of each camera. InputError
+// naming `source` and `left_field` / `right_field` for a value that is not finite, a focal length or baseline that
+// is not positive, or a right matrix of another rectification (other fx or cy).
+StereoCalibration calibration_from_projections(const std::vector<double>& P_left, const std::vector<double>& P_right,
+                                               cv::Size image_size, const std::string& source,
+                                               const std::string& left_field, const std::string& right_field);
 
 // image_size: the size of the images the file belongs to (KITTI calib.txt does not say).
 StereoCalibration load_kitti_calib(const std::string& path, cv::Size image_size);
