@@ -7,7 +7,7 @@
 //               [--opencv-threads N] [--params-place params/place.yaml] [--loop on|off]
 //               [--save-map FILE] [--load-map FILE --mode localise|map] [--blank A:B] [--repeat N]
 //               [--map-dataset DIR] [--semantic MODEL|off] [--params-semantic params/semantic.yaml]
-//               [--test-slow-mapping-ms MS]
+//               [--save-earlier-maps DIR] [--test-slow-mapping-ms MS]
 //
 // Reads KITTI-layout folders (also what agvslam-sim writes), EuRoC ASL folders and rosbag2 recordings (sqlite3
 // storage) through agvslam::io, and runs
@@ -36,7 +36,8 @@
 //   MAPS <n> (new maps after a long loss: <n-1>) LAST_STATE <state> KEYFRAME_WAITS <k>
 // (tracking lost for slam.tracking.new_map_after_lost_s starts a new map: the trajectory file then holds the poses
 // of each map in that map's frame, and ATE aligns each map on its own; KEYFRAME_WAITS: frames that waited for room
-// in local mapping's queue). --json adds per-frame records (state, map_id, counts, times, mapping queue length).
+// in local mapping's queue; --save-earlier-maps DIR saves each map left behind as DIR/map_<map_id>.agvmap). --json
+// adds per-frame records (state, map_id, counts, times, mapping queue length).
 // A progress bar with the frame rate goes to stderr. Exit status: 0 on success, 2 on bad input (the message names
 // the option, file or field), 1 on any other failure.
 //
@@ -108,7 +109,7 @@ struct Options {
   std::string params_slam, params_features, params_dynamic, params_stereo;
   std::string semantic = "off", params_semantic = AGVSLAM_PARAMS_DIR "/semantic.yaml";
   std::string params_place = AGVSLAM_PARAMS_DIR "/place.yaml";
-  std::string loop = "on", save_map, load_map, mode, blank, map_dataset;
+  std::string loop = "on", save_map, load_map, mode, blank, map_dataset, save_earlier_maps;
   int repeat = 1;
   double speed = 0;
   int opencv_threads = 1;
@@ -273,6 +274,7 @@ daemon::DaemonConfig pipeline_config(const Options& o, const Settings& s) {
   }
   system.threaded_mapping = o.mapping == "thread";
   system.test_mapping_step_delay_ms = o.test_slow_mapping_ms;
+  system.earlier_maps_folder = o.save_earlier_maps;
   c.place = agvslam::place::load_place_config(o.params_place);  // the pipeline loads the vocabulary
   system.direct_index_level = c.place->direct_index_level;
   if (o.loop == "off") system.slam.loop_closing.enabled = false;
@@ -516,7 +518,8 @@ class FrameLog {
 // What the SLAM holds at the end of the run.
 struct SlamResults {
   agvslam::Trajectory trajectory;
-  std::vector<uint32_t> trajectory_map_ids;  // the map of each pose (System::trajectory)
+  std::vector<uint32_t> trajectory_map_ids;    // the map of each pose (System::trajectory)
+  std::vector<std::string> earlier_map_files;  // --save-earlier-maps
   slam::LocalMappingStats mapping;
   slam::RetirementCounts retired;  // map points on objects that moved
   slam::LoopClosingStats loops;
@@ -574,6 +577,8 @@ bool play(const Options& o, const Settings& s, const Input& in, FrameLog& log, S
   if (results.skipped_frames > 0) spdlog::warn("{} unreadable frames skipped", results.skipped_frames);
   results.trajectory = system.trajectory(&results.trajectory_map_ids);
   results.mapping = system.mapping_stats();
+  results.earlier_map_files = system.earlier_map_files();
+  for (const std::string& e : system.earlier_map_errors()) spdlog::error("earlier map not saved: {}", e);
   results.retired = system.retirement_counts();
   results.loops = system.loop_stats();
   if (!o.save_map.empty()) results.save_map = save_map(system, o.save_map);
@@ -816,6 +821,7 @@ void write_json(const Options& o, const Input& in, const FrameLog& log, const Sl
                  {"new_maps", log.new_maps},
                  {"last_state", log.last_state},
                  {"keyframe_waits", log.keyframe_waits}};
+  j["earlier_map_files"] = results.earlier_map_files;
   j["loops"] = loops_json;
   j["loop_closing"] = {{"enabled", o.loop == "on"},
                        {"keyframes_processed", l.keyframes_processed},
@@ -921,6 +927,8 @@ int main(int argc, char** argv) {
   app.add_option("--mode", o.mode, "with --load-map: localise (track without changing the map) or map (extend it)");
   app.add_option("--blank", o.blank, "black out frames A:B (inclusive): a covered camera, forced loss");
   app.add_option("--repeat", o.repeat, "play the frame range this many times in a row (laps of a loop)");
+  app.add_option("--save-earlier-maps", o.save_earlier_maps,
+                 "folder: a map left behind after a long loss is saved there as map_<map_id>.agvmap");
   app.add_option("--test-slow-mapping-ms", o.test_slow_mapping_ms,
                  "TEST ONLY: local mapping sleeps this long (ms) after each of its steps, as on a slower computer");
   app.add_option("--map-dataset", o.map_dataset,

@@ -119,6 +119,17 @@ void System::reset_now() {
 }
 
 void System::start_new_map() {
+  if (!config_.earlier_maps_folder.empty()) {
+    const std::string path = config_.earlier_maps_folder + "/map_" + std::to_string(map_id_) + ".agvmap";
+    try {
+      save_map(path);
+      std::lock_guard<std::mutex> lock(earlier_files_mutex_);
+      earlier_map_files_.push_back(path);
+    } catch (const InputError& e) {
+      std::lock_guard<std::mutex> lock(earlier_files_mutex_);
+      earlier_map_errors_.emplace_back(e.what());
+    }
+  }
   {
     std::lock_guard<std::mutex> lock(map_.mutex());
     for (const TrajectoryEntry& e : trajectory_) {
@@ -297,6 +308,16 @@ TrackResult System::track_stereo(int64_t t_ns, const cv::Mat& left, const cv::Ma
   r.timings.total_ms = ms_since(t_start);
   r.timings.total_cpu_ms = thread_cpu_ms() - cpu_start;
   return r;
+}
+
+std::vector<std::string> System::earlier_map_files() const {
+  std::lock_guard<std::mutex> lock(earlier_files_mutex_);
+  return earlier_map_files_;
+}
+
+std::vector<std::string> System::earlier_map_errors() const {
+  std::lock_guard<std::mutex> lock(earlier_files_mutex_);
+  return earlier_map_errors_;
 }
 
 RetirementCounts System::retirement_counts() const {

@@ -1,7 +1,8 @@
 // agvslam-run's place-recognition and map options end to end on the KITTI 06 excerpt: --save-map, then
 // --load-map --mode localise on a later part of the sequence (relocalised at once, map unchanged, poses in the
 // saved frame), --blank, --repeat, and bad options or files exiting 2 with a message naming them; threaded mapping at
-// 2x, 4x and unpaced speed and slowed on purpose never ends lost, and a long loss starts a new map that is reported.
+// 2x, 4x and unpaced speed and slowed on purpose never ends lost, and a long loss starts a new map that is reported
+// (the map left behind saved with --save-earlier-maps).
 #include <gtest/gtest.h>
 
 #include <filesystem>
@@ -203,9 +204,9 @@ TEST(RunToolMaps, LongLossReportsANewMap) {
   // of real frames later, and the tool reports it (MAPS line, map_id per frame), with ATE aligned per map.
   AGVSLAM_REQUIRE_SHARED(data, "data/kitti06_f000-050");
   const std::string dir = test::make_temp_dir("agvslam-run-newmap");
-  const ToolRun r =
-      run_tool("--dataset " + data + " --dynamic off --mapping inline --blank 10:25 --params-features " +
-               AGVSLAM_SOURCE_DIR "/params/features_kitti.yaml --out " + dir + "/n.tum --json " + dir + "/n.json");
+  const ToolRun r = run_tool("--dataset " + data + " --dynamic off --mapping inline --blank 10:25 --params-features " +
+                             AGVSLAM_SOURCE_DIR "/params/features_kitti.yaml --save-earlier-maps " + dir + " --out " +
+                             dir + "/n.tum --json " + dir + "/n.json");
   ASSERT_EQ(r.rc, 0) << r.text;
   EXPECT_NE(r.text.find("MAPS 2 (new maps after a long loss: 1) LAST_STATE ok"), std::string::npos) << r.text;
   const nlohmann::json j = read_json(dir + "/n.json");
@@ -223,6 +224,8 @@ TEST(RunToolMaps, LongLossReportsANewMap) {
   ASSERT_TRUE(j.contains("ate"));
   EXPECT_EQ(j["ate"]["per_map"].size(), 2u);
   EXPECT_LT(j["ate"]["rmse_m"].get<double>(), 0.1);
+  ASSERT_EQ(j["earlier_map_files"].size(), 1u);
+  EXPECT_TRUE(std::filesystem::exists(dir + "/map_0.agvmap"));
   std::filesystem::remove_all(dir);
 }
 

@@ -4,6 +4,7 @@
 
 #include <algorithm>
 #include <chrono>
+#include <filesystem>
 #include <opencv2/imgproc.hpp>
 #include <thread>
 
@@ -196,9 +197,11 @@ TEST(System, LongLossStartsANewMapAfterTheConfiguredTimeAndTrackingResumes) {
   // starts from the current frame. With new_map_after_lost_s = 0 the same run stays lost to the end.
   AGVSLAM_REQUIRE_SHARED(root, "data/kitti06_f000-050");
   const auto d = io::open_dataset(root);
+  const std::string folder = test::make_temp_dir("agvslam-earlier-maps");
   for (const double after_s : {1.0, 0.0}) {
     SystemConfig c = kitti_config(*d);
     c.slam.tracking.new_map_after_lost_s = after_s;
+    c.earlier_maps_folder = folder;
     System slam(d->calibration(), c);
     const cv::Mat black = cv::Mat::zeros(d->calibration().left.size(), CV_8UC1);
     long new_map_frame = -1;
@@ -240,11 +243,18 @@ TEST(System, LongLossStartsANewMapAfterTheConfiguredTimeAndTrackingResumes) {
       ASSERT_EQ(map_ids.size(), traj.size());
       EXPECT_EQ(std::count(map_ids.begin(), map_ids.end(), 0u), 10);
       EXPECT_EQ(std::count(map_ids.begin(), map_ids.end(), 1u), ok_in_new_map);
+      // The map left behind was saved and loads again.
+      EXPECT_TRUE(slam.earlier_map_errors().empty());
+      ASSERT_EQ(slam.earlier_map_files(), std::vector<std::string>{folder + "/map_0.agvmap"});
+      System reloaded(d->calibration(), kitti_config(*d));
+      EXPECT_GE(reloaded.load_map(folder + "/map_0.agvmap", MapMode::kLocalisation).keyframes, 2u);
     } else {
       EXPECT_EQ(new_map_frame, -1);
       EXPECT_EQ(slam.map_id(), 0u);
+      EXPECT_TRUE(slam.earlier_map_files().empty());
     }
   }
+  std::filesystem::remove_all(folder);
 }
 
 TEST(System, ResetWithKeyframesStillQueuedForMapping) {

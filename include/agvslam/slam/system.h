@@ -14,7 +14,8 @@
 // A lost frame gives state kLost and no pose (r.T_w_c is the identity and pose_valid is false), never a guessed
 // pose; the following frames relocalise with the bag-of-words keyframe database (needs config.vocabulary). Lost
 // for longer than slam.tracking.new_map_after_lost_s, a new map is started from the current stereo frame
-// (r.map_id counts up, r.counts.new_map is set); the old map's trajectory is kept, its keyframes are not.
+// (r.map_id counts up, r.counts.new_map is set); the old map's trajectory is kept, and the old map itself is saved
+// to config.earlier_maps_folder when one is set (not kept in memory: no relocalisation into it, no merge).
 // request_reset() empties the map at the next frame; shutdown() stops the threads (also done by the destructor).
 //
 // Saved maps (for agvslamd and agvslam-run; file format in map_io.h):
@@ -64,6 +65,9 @@ struct SystemConfig {
   // brute-force matching; maps are saved with vocabulary identity 0.
   std::shared_ptr<const place::Vocabulary> vocabulary;
   int direct_index_level = 2;  // params/place.yaml vocabulary.direct_index_level
+  // A folder: when a long loss starts a new map (slam.tracking.new_map_after_lost_s), the map left behind is saved
+  // there as map_<its map_id>.agvmap (atomically, as save_map) for later loading; "": it is dropped.
+  std::string earlier_maps_folder;
   // TEST ONLY: LocalMapping::set_test_step_delay_ms (a slower computer); not in any YAML. Never set on a vehicle.
   double test_mapping_step_delay_ms = 0;
 };
@@ -138,6 +142,10 @@ class System {
   // map's frame; map_ids (optional) receives the map of each pose.
   Trajectory trajectory(std::vector<uint32_t>* map_ids = nullptr);
   uint32_t map_id() const { return map_id_; }
+  // Files of the maps left behind (SystemConfig::earlier_maps_folder) and the errors of those that could not be
+  // written (InputError texts; tracking goes on).
+  std::vector<std::string> earlier_map_files() const;
+  std::vector<std::string> earlier_map_errors() const;
   // Waits for the local mapper to finish the queued keyframes.
   void wait_for_mapping();
 
@@ -192,6 +200,8 @@ class System {
   uint32_t map_id_ = 0;
   Trajectory earlier_maps_trajectory_;  // frames of maps left behind, with their poses when they were left
   std::vector<uint32_t> earlier_maps_ids_;
+  mutable std::mutex earlier_files_mutex_;
+  std::vector<std::string> earlier_map_files_, earlier_map_errors_;
 };
 
 }  // namespace agvslam::slam
