@@ -7,6 +7,7 @@
 //               [--opencv-threads N] [--params-place params/place.yaml] [--loop on|off]
 //               [--save-map FILE] [--load-map FILE --mode localise|map] [--blank A:B] [--repeat N]
 //               [--map-dataset DIR] [--semantic MODEL|off] [--params-semantic params/semantic.yaml]
+//               [--save-earlier-maps DIR] [--test-slow-mapping-ms MS]
 //
 // Reads KITTI-layout folders (also what agvslam-sim writes), EuRoC ASL folders and rosbag2 recordings (sqlite3
 // storage) through agvslam::io, and runs
@@ -22,7 +23,8 @@
 // before the next frame (deterministic: the same input gives the same trajectory; the tracking times then include
 // that mapping work, shown separately as inline_mapping: take speed figures with --mapping thread). --speed 1 feeds
 // frames at the dataset's rate (the real-time case; none is dropped when the pipeline falls behind), 0 as fast as
-// tracking goes.
+// tracking goes. --test-slow-mapping-ms MS (tests only) makes local mapping sleep MS after each of its steps, as
+// on a computer too slow for the frame rate.
 //
 // Writes TRAJ with the pose of every tracked frame (each relative to its reference keyframe, composed with the
 // keyframe's final pose, as ORB-SLAM2 saves trajectories); with --format kitti and frames missing, TRAJ.times
@@ -30,7 +32,12 @@
 //   FRAMES <n> TRACKED <m> KEYFRAMES <k> LOST <l>
 // then, with ground truth, `ATE_RMSE_M <x>` (SE(3)-aligned, by time stamp) and the drift, then per-stage timing
 // (median / p95 / max ms; wall clock, and *_cpu: the thread's own CPU time, which other load on the machine does
-// not inflate). --json adds per-frame records (state, counts, times, mapping queue length).
+// not inflate), and
+//   MAPS <n> (new maps after a long loss: <n-1>) LAST_STATE <state> KEYFRAME_WAITS <k>
+// (tracking lost for slam.tracking.new_map_after_lost_s starts a new map: the trajectory file then holds the poses
+// of each map in that map's frame, and ATE aligns each map on its own; KEYFRAME_WAITS: frames that waited for room
+// in local mapping's queue; --save-earlier-maps DIR saves each map left behind as DIR/map_<map_id>.agvmap). --json
+// adds per-frame records (state, map_id, counts, times, mapping queue length).
 // A progress bar with the frame rate goes to stderr. Exit status: 0 on success, 2 on bad input (the message names
 // the option, file or field), 1 on any other failure.
 //
@@ -102,10 +109,11 @@ struct Options {
   std::string params_slam, params_features, params_dynamic, params_stereo;
   std::string semantic = "off", params_semantic = AGVSLAM_PARAMS_DIR "/semantic.yaml";
   std::string params_place = AGVSLAM_PARAMS_DIR "/place.yaml";
-  std::string loop = "on", save_map, load_map, mode, blank, map_dataset;
+  std::string loop = "on", save_map, load_map, mode, blank, map_dataset, save_earlier_maps;
   int repeat = 1;
   double speed = 0;
   int opencv_threads = 1;
+  double test_slow_mapping_ms = 0;
 };
 
 // The options checked and parsed.
@@ -157,6 +165,9 @@ Settings check_options(const Options& o) {
     throw InputError("--opencv-threads", std::to_string(o.opencv_threads), "expected an integer in [1, 64]");
   }
   if (o.loop != "on" && o.loop != "off") throw InputError("--loop", o.loop, "expected on or off");
+  if (!(o.test_slow_mapping_ms >= 0 && o.test_slow_mapping_ms <= 10000)) {
+    throw InputError("--test-slow-mapping-ms", std::to_string(o.test_slow_mapping_ms), "expected 0 to 10000 ms");
+  }
   if (o.repeat < 1 || o.repeat > 100)
     throw InputError("--repeat", std::to_string(o.repeat), "expected an integer in [1, 100]");
   if (!o.mode.empty()) {
@@ -262,6 +273,8 @@ daemon::DaemonConfig pipeline_config(const Options& o, const Settings& s) {
     system.stereo = f.stereo_matching;
   }
   system.threaded_mapping = o.mapping == "thread";
+  system.test_mapping_step_delay_ms = o.test_slow_mapping_ms;
+  system.earlier_maps_folder = o.save_earlier_maps;
   c.place = agvslam::place::load_place_config(o.params_place);  // the pipeline loads the vocabulary
   system.direct_index_level = c.place->direct_index_level;
   if (o.loop == "off") system.slam.loop_closing.enabled = false;
@@ -297,6 +310,8 @@ void log_settings(const Options& o, const Settings& s, const Input& in, const da
                o.load_map.empty() ? "" : std::string(" (mode ") + slam::to_string(s.map_mode) + ")",
                o.save_map.empty() ? "" : ", save to " + o.save_map);
   if (s.blank) spdlog::info("  blank (covered camera) frames {}..{}", s.blank->first, s.blank->second);
+  if (o.test_slow_mapping_ms > 0)
+    spdlog::warn("  TEST ONLY: local mapping sleeps {} ms after each step (a slower computer)", o.test_slow_mapping_ms);
   if (o.repeat > 1) spdlog::info("  {} laps of frames {}..{}", o.repeat, in.setup.first, in.setup.last);
   if (in.T_w1_w2) {
     spdlog::info("  map frame: the ground truth is expressed in {}'s world frame (t = {:.3f} {:.3f} {:.3f} m)",
@@ -355,9 +370,9 @@ class FrameLog {
  public:
   // Stages in the order of the timing table.
   static constexpr const char* kStageOrder[] = {
-      "extract",      "stereo",       "map_wait",       "frame",          "local_map",    "retire",
-      "retire_cpu",   "keyframe",     "inline_mapping", "tracking",       "tracking_cpu", "detector",
-      "detector_cpu", "frontend_sum", "frontend_cpu",   "frame_interval", "read"};
+      "extract",    "stereo",       "map_wait",      "frame",          "local_map",      "retire",
+      "retire_cpu", "keyframe",     "keyframe_wait", "inline_mapping", "tracking",       "tracking_cpu",
+      "detector",   "detector_cpu", "frontend_sum",  "frontend_cpu",   "frame_interval", "read"};
 
   FrameLog(bool inline_mapping, std::size_t last, std::size_t total_frames)
       : inline_mapping_(inline_mapping), last_(last), total_frames_(total_frames) {}
@@ -386,6 +401,9 @@ class FrameLog {
   }
 
   std::size_t frames = 0, tracked = 0, lost = 0, resets = 0, recovered = 0, max_queue = 0, keyframes = 0;
+  std::size_t new_maps = 0;         // maps started after a long loss (tracking.new_map_after_lost_s)
+  std::size_t keyframe_waits = 0;   // frames that waited for room in local mapping's queue
+  std::string last_state;           // of the last frame
   long first_tracked = -1;          // frames processed before the first pose
   long blank_recovered_after = -1;  // frames after the blank until a pose
   std::vector<std::size_t> laps_keyframes, laps_points;
@@ -412,6 +430,9 @@ class FrameLog {
     if (r.state == slam::TrackingState::kLost) ++lost;
     if (r.counts.reset) ++resets;
     if (r.counts.recovered) ++recovered;
+    if (r.counts.new_map) ++new_maps;
+    if (r.counts.keyframe_waited) ++keyframe_waits;
+    last_state = slam::to_string(r.state);
     keyframes = r.keyframes;
     max_queue = std::max(max_queue, r.mapping_queue);
   }
@@ -428,6 +449,7 @@ class FrameLog {
     series["retire"].add(r.timings.retire_ms);
     series["retire_cpu"].add(r.timings.retire_cpu_ms);
     series["keyframe"].add(r.timings.keyframe_ms);
+    if (r.counts.keyframe_waited) series["keyframe_wait"].add(r.timings.keyframe_wait_ms);
     if (inline_mapping_) series["inline_mapping"].add(r.timings.inline_mapping_ms);
     series["tracking"].add(r.timings.total_ms);
     series["tracking_cpu"].add(r.timings.total_cpu_ms);
@@ -465,6 +487,9 @@ class FrameLog {
          {"loops", r.loops_closed},
          {"t_ns", f.captured.frame.t_ns},
          {"state", slam::to_string(r.state)},
+         {"map_id", r.map_id},
+         {"new_map", r.counts.new_map},
+         {"keyframe_wait_ms", r.counts.keyframe_waited ? r.timings.keyframe_wait_ms : 0.0},
          {"features", r.counts.features},
          {"stereo_features", r.counts.stereo_features},
          {"method", r.counts.method},
@@ -493,6 +518,8 @@ class FrameLog {
 // What the SLAM holds at the end of the run.
 struct SlamResults {
   agvslam::Trajectory trajectory;
+  std::vector<uint32_t> trajectory_map_ids;    // the map of each pose (System::trajectory)
+  std::vector<std::string> earlier_map_files;  // --save-earlier-maps
   slam::LocalMappingStats mapping;
   slam::RetirementCounts retired;  // map points on objects that moved
   slam::LoopClosingStats loops;
@@ -548,8 +575,10 @@ bool play(const Options& o, const Settings& s, const Input& in, FrameLog& log, S
   if (pipeline.failed()) return false;
   results.skipped_frames = pipeline.stats().dropped_source;
   if (results.skipped_frames > 0) spdlog::warn("{} unreadable frames skipped", results.skipped_frames);
-  results.trajectory = system.trajectory();
+  results.trajectory = system.trajectory(&results.trajectory_map_ids);
   results.mapping = system.mapping_stats();
+  results.earlier_map_files = system.earlier_map_files();
+  for (const std::string& e : system.earlier_map_errors()) spdlog::error("earlier map not saved: {}", e);
   results.retired = system.retirement_counts();
   results.loops = system.loop_stats();
   if (!o.save_map.empty()) results.save_map = save_map(system, o.save_map);
@@ -587,9 +616,38 @@ std::optional<agvslam::Trajectory> played_ground_truth(const Options& o, const d
   return played;
 }
 
-// ATE_RMSE_M (SE(3)-aligned) and DRIFT_M lines; j["ate"].
-void report_accuracy(const agvslam::Trajectory& trajectory, const std::optional<agvslam::Trajectory>& gt,
-                     nlohmann::json& j) {
+// ATE_RMSE_M (SE(3)-aligned) and DRIFT_M lines; j["ate"]. Poses of several maps (a new map after a long loss)
+// are in different frames: each map is aligned on its own and the RMSE is over all their poses.
+void report_accuracy(const agvslam::Trajectory& trajectory, const std::vector<uint32_t>& map_ids,
+                     const std::optional<agvslam::Trajectory>& gt, nlohmann::json& j) {
+  const bool several_maps =
+      !map_ids.empty() && std::any_of(map_ids.begin(), map_ids.end(), [&](uint32_t m) { return m != map_ids[0]; });
+  if (several_maps && map_ids.size() == trajectory.size()) {
+    std::map<uint32_t, agvslam::Trajectory> by_map;
+    for (std::size_t k = 0; k < trajectory.size(); ++k) by_map[map_ids[k]].push_back(trajectory[k]);
+    double drift_m = 0, sum_sq = 0;
+    std::size_t poses = 0;
+    nlohmann::json per_map = nlohmann::json::array();
+    for (const auto& [id, part] : by_map) {
+      for (const auto& p : part)
+        drift_m = std::max(drift_m, (p.T_w_c.translation() - part.front().T_w_c.translation()).norm());
+      if (!gt) continue;
+      const auto pairs = agvslam::eval::associate_by_timestamp(*gt, part, 5'000'000);
+      if (pairs.size() < 3) continue;
+      const auto ate = agvslam::eval::compute_ate(pairs, agvslam::eval::AlignMode::kSE3);
+      sum_sq += ate.translation_m.rmse * ate.translation_m.rmse * static_cast<double>(ate.translation_m.count);
+      poses += ate.translation_m.count;
+      per_map.push_back({{"map_id", id}, {"rmse_m", ate.translation_m.rmse}, {"poses", ate.translation_m.count}});
+    }
+    if (poses > 0) {
+      const double rmse = std::sqrt(sum_sq / static_cast<double>(poses));
+      std::printf("ATE_RMSE_M %.5f (SE3-aligned per map, %zu maps, %zu poses)\n", rmse, by_map.size(), poses);
+      j["ate"] = {{"rmse_m", rmse}, {"poses", poses}, {"per_map", per_map}};
+    }
+    std::printf("DRIFT_M %.5f (largest distance from the first tracked position of its map)\n", drift_m);
+    j["drift_m"] = drift_m;
+    return;
+  }
   // Drift: the largest distance of a tracked position from the first one (for sequences where the camera stands
   // still, e.g. simulator scene1 and the EuRoC excerpt).
   double drift_m = 0;
@@ -752,10 +810,18 @@ void write_json(const Options& o, const Input& in, const FrameLog& log, const Sl
   j["semantic"] = o.semantic;
   j["mapping"] = o.mapping;
   j["speed"] = o.speed;
-  j["frames"] = {{"first", in.setup.first}, {"last", in.setup.last},
-                 {"processed", log.frames}, {"tracked", log.tracked},
-                 {"lost", log.lost},        {"recovered", log.recovered},
-                 {"resets", log.resets},    {"skipped_unreadable", results.skipped_frames}};
+  j["frames"] = {{"first", in.setup.first},
+                 {"last", in.setup.last},
+                 {"processed", log.frames},
+                 {"tracked", log.tracked},
+                 {"lost", log.lost},
+                 {"recovered", log.recovered},
+                 {"resets", log.resets},
+                 {"skipped_unreadable", results.skipped_frames},
+                 {"new_maps", log.new_maps},
+                 {"last_state", log.last_state},
+                 {"keyframe_waits", log.keyframe_waits}};
+  j["earlier_map_files"] = results.earlier_map_files;
   j["loops"] = loops_json;
   j["loop_closing"] = {{"enabled", o.loop == "on"},
                        {"keyframes_processed", l.keyframes_processed},
@@ -810,7 +876,9 @@ int run(const Options& o) {
   std::printf("FRAMES %zu TRACKED %zu KEYFRAMES %zu LOST %zu\n", log.frames, log.tracked, log.keyframes, log.lost);
   nlohmann::json j;
   const std::optional<agvslam::Trajectory> gt = played_ground_truth(o, in.setup);
-  report_accuracy(results.trajectory, gt, j);
+  report_accuracy(results.trajectory, results.trajectory_map_ids, gt, j);
+  std::printf("MAPS %zu (new maps after a long loss: %zu) LAST_STATE %s KEYFRAME_WAITS %zu\n", log.new_maps + 1,
+              log.new_maps, log.last_state.c_str(), log.keyframe_waits);
   report_moving_inliers(log, j);
   if (in.T_w1_w2) report_map_frame_accuracy(results.trajectory, gt, *in.T_w1_w2, j);
   const nlohmann::json loops_json = report_loops(results.loops);
@@ -859,6 +927,10 @@ int main(int argc, char** argv) {
   app.add_option("--mode", o.mode, "with --load-map: localise (track without changing the map) or map (extend it)");
   app.add_option("--blank", o.blank, "black out frames A:B (inclusive): a covered camera, forced loss");
   app.add_option("--repeat", o.repeat, "play the frame range this many times in a row (laps of a loop)");
+  app.add_option("--save-earlier-maps", o.save_earlier_maps,
+                 "folder: a map left behind after a long loss is saved there as map_<map_id>.agvmap");
+  app.add_option("--test-slow-mapping-ms", o.test_slow_mapping_ms,
+                 "TEST ONLY: local mapping sleeps this long (ms) after each of its steps, as on a slower computer");
   app.add_option("--map-dataset", o.map_dataset,
                  "with --load-map on simulator folders: the folder the map was made from (MAP_FRAME_ATE_M)");
   return agvslam::apps::parse_and_run(app, argc, argv, [&] { return run(o); });

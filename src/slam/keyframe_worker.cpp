@@ -1,11 +1,13 @@
 #include "agvslam/slam/keyframe_worker.h"
 
+#include <chrono>
 #include <utility>
 
 namespace agvslam::slam {
 
 KeyframeWorker::KeyframeWorker(std::size_t capacity, WhenFull when_full, std::function<void(const KeyFramePtr&)> work)
-    : work_(std::move(work)),
+    : capacity_(capacity),
+      work_(std::move(work)),
       queue_(capacity, when_full == WhenFull::kRefuseNew ? QueuePolicy::kRefuseNew : QueuePolicy::kNewestWins) {}
 
 KeyframeWorker::~KeyframeWorker() { stop(); }
@@ -52,7 +54,8 @@ void KeyframeWorker::process(const KeyFramePtr& kf) {
     work_(kf);
   }
   std::lock_guard<std::mutex> lock(pending_mutex_);
-  if (--pending_ == 0) idle_cv_.notify_all();
+  --pending_;
+  idle_cv_.notify_all();  // idle waiters and trackers waiting for room
 }
 
 void KeyframeWorker::process_pending() {
@@ -69,14 +72,31 @@ void KeyframeWorker::wait_until_idle() {
   idle_cv_.wait(lock, [&] { return pending_ == 0 || stop_.load(); });
 }
 
-void KeyframeWorker::clear() {
+std::vector<KeyFramePtr> KeyframeWorker::clear() {
+  std::vector<KeyFramePtr> dropped;
   std::lock_guard<std::mutex> lock(pending_mutex_);
-  pending_ -= queue_.clear();
-  if (pending_ == 0) idle_cv_.notify_all();
+  while (std::optional<KeyFramePtr> kf = queue_.try_pop()) dropped.push_back(std::move(*kf));
+  pending_ -= dropped.size();
+  idle_cv_.notify_all();
+  return dropped;
+}
+
+bool KeyframeWorker::wait_for_room(double timeout_ms) {
+  std::unique_lock<std::mutex> lock(pending_mutex_);
+  if (!thread_.joinable()) return queue_.size() < capacity_;
+  return idle_cv_.wait_for(lock, std::chrono::duration<double, std::milli>(timeout_ms), [&] {
+    return queue_.size() < capacity_ || stop_.load();
+  }) && queue_.size() < capacity_;
 }
 
 void KeyframeWorker::run() {
-  while (std::optional<KeyFramePtr> kf = queue_.pop_unless([this] { return stop_.load(); })) process(*kf);
+  while (std::optional<KeyFramePtr> kf = queue_.pop_unless([this] { return stop_.load(); })) {
+    {
+      std::lock_guard<std::mutex> lock(pending_mutex_);  // a tracker waiting for room sees it now
+    }
+    idle_cv_.notify_all();
+    process(*kf);
+  }
 }
 
 }  // namespace agvslam::slam

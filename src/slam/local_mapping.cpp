@@ -4,6 +4,7 @@
 #include <algorithm>
 #include <chrono>
 #include <cmath>
+#include <thread>
 #include <unordered_map>
 
 #include "agvslam/slam/map.h"
@@ -51,12 +52,18 @@ void LocalMapping::process_pending() { worker_.process_pending(); }
 
 void LocalMapping::wait_until_idle() { worker_.wait_until_idle(); }
 
-void LocalMapping::reset() {
-  worker_.clear();
+std::vector<KeyFramePtr> LocalMapping::reset() {
+  std::vector<KeyFramePtr> dropped = worker_.clear();
   abort_ba_.store(true);
   std::lock_guard<std::mutex> work(worker_.work_mutex());  // the keyframe in progress finishes
   recent_points_.clear();
-  worker_.clear();
+  for (KeyFramePtr& kf : worker_.clear()) dropped.push_back(std::move(kf));
+  return dropped;
+}
+
+bool LocalMapping::wait_for_room(double timeout_ms) {
+  abort_ba_.store(true);
+  return worker_.wait_for_room(timeout_ms);
 }
 
 LocalMappingStats LocalMapping::stats() const {
@@ -80,6 +87,7 @@ void LocalMapping::process(const KeyFramePtr& kf) {
     process_new_keyframe(*kf);
     s.insert_ms = ms_since(t0);
   }
+  test_step_delay(false);
   if (kf->bad()) return;
   {
     const auto t0 = Clock::now();
@@ -87,24 +95,31 @@ void LocalMapping::process(const KeyFramePtr& kf) {
     cull_recent_points(*kf);
     s.culling_ms = ms_since(t0);
   }
+  test_step_delay(false);
   {
     const auto t0 = Clock::now();
     create_new_map_points(*kf);
     s.triangulation_ms = ms_since(t0);
   }
+  test_step_delay(false);
   if (!more_waiting()) {
     const auto t0 = Clock::now();
     std::lock_guard<std::mutex> lock(map_.mutex());
     search_in_neighbours(*kf);
     s.fusion_ms = ms_since(t0);
+    test_step_delay(false);
   }
   if (!more_waiting()) {
     const auto t0 = Clock::now();
     local_bundle_adjustment(*kf);
+    test_step_delay(true);
     s.ba_ms = ms_since(t0);
     const auto t1 = Clock::now();
-    std::lock_guard<std::mutex> lock(map_.mutex());
-    cull_keyframes(*kf);
+    {
+      std::lock_guard<std::mutex> lock(map_.mutex());
+      cull_keyframes(*kf);
+    }
+    test_step_delay(false);
     s.kf_culling_ms = ms_since(t1);
   }
   s.total_ms = ms_since(t_start);
@@ -122,6 +137,15 @@ void LocalMapping::process(const KeyFramePtr& kf) {
         {kf->id, s.insert_ms, s.culling_ms, s.triangulation_ms, s.fusion_ms, s.ba_ms, s.kf_culling_ms, s.total_ms});
   }
   if (sink_) sink_(kf);
+}
+
+void LocalMapping::test_step_delay(bool abortable) const {
+  if (test_step_delay_ms_ <= 0) return;
+  const auto until = Clock::now() + std::chrono::duration<double, std::milli>(test_step_delay_ms_);
+  while (Clock::now() < until) {
+    if (abortable && abort_ba_.load()) return;
+    std::this_thread::sleep_for(std::chrono::milliseconds(1));
+  }
 }
 
 void LocalMapping::process_new_keyframe(KeyFrame& kf) {

@@ -111,7 +111,7 @@ void LoopClosing::wait_until_idle() {
 }
 
 void LoopClosing::reset() {
-  worker_.clear();
+  static_cast<void>(worker_.clear());  // keyframes local mapping has inserted: the map holds them
   std::lock_guard<std::mutex> work(worker_.work_mutex());
   stop_global_ba();
   consistent_groups_.clear();

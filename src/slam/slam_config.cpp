@@ -39,6 +39,9 @@ const params::Table<TrackingConfig>& tracking_params() {
               {"keyframe_stop_distance_m", &T::keyframe_stop_distance_m, Range::closed(0, 100), "m", "0: off"},
               {"reset_max_keyframes", &T::reset_max_keyframes, Range::at_least(0)},
               {"reset_after_lost_frames", &T::reset_after_lost_frames, Range::at_least(1), "frames"},
+              {"keyframe_queue_wait_ms", &T::keyframe_queue_wait_ms, Range::closed(0, 5000), "ms", "0: no wait"},
+              {"keyframe_queue_wait_weak_ms", &T::keyframe_queue_wait_weak_ms, Range::closed(0, 5000), "ms"},
+              {"new_map_after_lost_s", &T::new_map_after_lost_s, Range::closed(0, 3600), "s", "0: never"},
           })
           .check(
               "min_init_stereo", [](const T& t) { return t.min_init_stereo <= t.min_init_features; },
@@ -48,7 +51,11 @@ const params::Table<TrackingConfig>& tracking_params() {
               "at least min_frame_inliers")
           .check(
               "min_local_map_inliers", [](const T& t) { return t.min_local_map_inliers >= t.min_frame_inliers; },
-              "at least min_frame_inliers");
+              "at least min_frame_inliers")
+          .check(
+              "keyframe_queue_wait_weak_ms",
+              [](const T& t) { return t.keyframe_queue_wait_weak_ms >= t.keyframe_queue_wait_ms; },
+              "at least keyframe_queue_wait_ms");
   return table;
 }
 

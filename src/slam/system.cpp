@@ -48,6 +48,9 @@ System::System(const StereoCalibration& calibration, const SystemConfig& config)
     throw InputError("SystemConfig", "calibration", "expected a valid rectified camera and a positive baseline");
   }
   if (!(config_.frame_rate_hz > 0)) throw InputError("SystemConfig", "frame_rate_hz", "expected a positive rate (Hz)");
+  if (!(config_.test_mapping_step_delay_ms >= 0 && config_.test_mapping_step_delay_ms <= 10000)) {
+    throw InputError("SystemConfig", "test_mapping_step_delay_ms", "expected 0 to 10000 ms");
+  }
   if (config_.vocabulary) {
     try {
       place_ = std::make_shared<PlaceRecognition>(config_.vocabulary, config_.direct_index_level);
@@ -56,6 +59,7 @@ System::System(const StereoCalibration& calibration, const SystemConfig& config)
     }
   }
   mapper_ = std::make_unique<LocalMapping>(config_.slam, map_, intrinsics_of(*geometry_));
+  mapper_->set_test_step_delay_ms(config_.test_mapping_step_delay_ms);
   if (place_) mapper_->set_place_recognition(place_);
   if (place_ && config_.slam.loop_closing.enabled) {
     loop_ = std::make_unique<LoopClosing>(config_.slam, map_, *mapper_, place_, intrinsics_of(*geometry_));
@@ -104,13 +108,40 @@ void System::request_reset() {
 
 void System::reset_now() {
   if (loop_) loop_->reset();
-  mapper_->reset();
+  // Kept until the map is cleared: their points, in the map, point back at them.
+  const std::vector<KeyFramePtr> dropped = mapper_->reset();
   {
     std::lock_guard<std::mutex> lock(map_.mutex());
     tracking_->reset();
     map_.clear();
     if (place_) place_->clear();
   }
+}
+
+void System::start_new_map() {
+  if (!config_.earlier_maps_folder.empty()) {
+    const std::string path = config_.earlier_maps_folder + "/map_" + std::to_string(map_id_) + ".agvmap";
+    try {
+      save_map(path);
+      std::lock_guard<std::mutex> lock(earlier_files_mutex_);
+      earlier_map_files_.push_back(path);
+    } catch (const InputError& e) {
+      std::lock_guard<std::mutex> lock(earlier_files_mutex_);
+      earlier_map_errors_.emplace_back(e.what());
+    }
+  }
+  {
+    std::lock_guard<std::mutex> lock(map_.mutex());
+    for (const TrajectoryEntry& e : trajectory_) {
+      SE3d T_c_w;
+      if (!map_.resolve_pose(e.reference_kf_id, e.T_c_r, T_c_w)) continue;
+      earlier_maps_trajectory_.push_back({e.t_ns, T_c_w.inverse()});
+      earlier_maps_ids_.push_back(map_id_);
+    }
+  }
+  trajectory_.clear();
+  reset_now();
+  ++map_id_;
 }
 
 void System::settle() {
@@ -171,7 +202,8 @@ MapLoadStats System::load_map(const std::string& path, MapMode mode) {
   }
   st.bow_ms = ms_since(t0);
   if (loop_) loop_->reset();
-  mapper_->reset();
+  // Kept until the map is replaced: their points, in the map, point back at them.
+  const std::vector<KeyFramePtr> dropped = mapper_->reset();
   {
     std::lock_guard<std::mutex> lock(map_.mutex());
     tracking_->start_relocalising();
@@ -184,6 +216,8 @@ MapLoadStats System::load_map(const std::string& path, MapMode mode) {
     st.map_points = map_.map_point_count();
   }
   trajectory_.clear();
+  earlier_maps_trajectory_.clear();
+  earlier_maps_ids_.clear();
   set_mode(mode);
   return st;
 }
@@ -235,6 +269,26 @@ TrackResult System::track_stereo(int64_t t_ns, const cv::Mat& left, const cv::Ma
     }
   }
   if (counts.reset) reset_now();
+  if (counts.new_map) {
+    // The frame that waited out the loss initialises the new map at once (its features are still here).
+    start_new_map();
+    frame_.assign(r.frame_id, t_ns, geometry_, keypoints_.keypoints, keypoints_.descriptors, depth_.u_right_px,
+                  depth_.depth_m);
+    TrackingCounts init_counts;
+    TrackTimings init_timings;
+    r.state = tracking_->track(frame_, init_timings, init_counts, FrameImages{left, right, dynamic_mask});
+    r.counts.method = init_counts.method;
+    r.counts.inliers = init_counts.inliers;
+    r.counts.new_keyframe = init_counts.new_keyframe;
+    r.timings.keyframe_ms += init_timings.keyframe_ms;
+    if (r.state == TrackingState::kOk) {
+      const Frame& f = tracking_->last_frame();
+      r.pose_valid = true;
+      r.T_w_c = f.T_w_c();
+      trajectory_.push_back({t_ns, f.reference_keyframe->id, tracking_->last_relative_pose()});
+    }
+  }
+  r.map_id = map_id_;
   if (!config_.threaded_mapping) {
     const auto t_map = Clock::now();
     mapper_->process_pending();
@@ -256,19 +310,31 @@ TrackResult System::track_stereo(int64_t t_ns, const cv::Mat& left, const cv::Ma
   return r;
 }
 
+std::vector<std::string> System::earlier_map_files() const {
+  std::lock_guard<std::mutex> lock(earlier_files_mutex_);
+  return earlier_map_files_;
+}
+
+std::vector<std::string> System::earlier_map_errors() const {
+  std::lock_guard<std::mutex> lock(earlier_files_mutex_);
+  return earlier_map_errors_;
+}
+
 RetirementCounts System::retirement_counts() const {
   std::lock_guard<std::mutex> lock(retired_mutex_);
   return retired_;
 }
 
-Trajectory System::trajectory() {
-  Trajectory out;
-  out.reserve(trajectory_.size());
+Trajectory System::trajectory(std::vector<uint32_t>* map_ids) {
+  Trajectory out = earlier_maps_trajectory_;
+  if (map_ids) *map_ids = earlier_maps_ids_;
+  out.reserve(out.size() + trajectory_.size());
   std::lock_guard<std::mutex> lock(map_.mutex());
   for (const TrajectoryEntry& e : trajectory_) {
     SE3d T_c_w;
     if (!map_.resolve_pose(e.reference_kf_id, e.T_c_r, T_c_w)) continue;
     out.push_back({e.t_ns, T_c_w.inverse()});
+    if (map_ids) map_ids->push_back(map_id_);
   }
   return out;
 }

@@ -53,6 +53,9 @@ void Tracking::reset() {
   reference_kf_.reset();
   has_velocity_ = false;
   lost_frames_ = 0;
+  lost_usable_ns_ = 0;
+  last_lost_t_ns_ = 0;
+  previous_inliers_ = 0;
   local_keyframes_.clear();
   local_points_.clear();
   map_loaded_ = false;
@@ -126,6 +129,8 @@ TrackingState Tracking::track(Frame& frame, TrackTimings& timings, TrackingCount
   if (ok) {
     state_ = TrackingState::kOk;
     lost_frames_ = 0;
+    lost_usable_ns_ = 0;
+    last_lost_t_ns_ = 0;
     if (last_frame_.has_pose() && !was_lost) {
       velocity_ = current_.T_c_w() * last_frame_.T_w_c();
       has_velocity_ = true;
@@ -139,11 +144,30 @@ TrackingState Tracking::track(Frame& frame, TrackTimings& timings, TrackingCount
     timings.retire_cpu_ms = thread_cpu_ms() - cpu_retire;
     timings.retire_ms = ms_since(t_retire);
     const auto t_kf = Clock::now();
-    if (need_new_keyframe()) {
+    const KeyframeNeed need = need_new_keyframe();
+    bool make_keyframe = need == KeyframeNeed::kNow;
+    if (need == KeyframeNeed::kWhenQueueHasRoom) {
+      // Local mapping needs the map mutex to take a keyframe off its queue: released while waiting. The local map's
+      // raw pointers may dangle afterwards; the next frame rebuilds them.
+      local_keyframes_.clear();
+      local_points_.clear();
+      lock.unlock();
+      const auto t_room = Clock::now();
+      // Near loss: few inliers now, or at their decline since the last frame (the same ratio again) few next frame.
+      const int predicted = previous_inliers_ > inliers_ ? inliers_ * inliers_ / previous_inliers_ : inliers_;
+      const bool weak = predicted < 2 * config_.tracking.min_local_map_inliers;
+      make_keyframe = mapper_.wait_for_room(weak ? config_.tracking.keyframe_queue_wait_weak_ms
+                                                 : config_.tracking.keyframe_queue_wait_ms);
+      timings.keyframe_wait_ms = ms_since(t_room);
+      lock.lock();
+      counts.keyframe_waited = true;
+    }
+    if (make_keyframe) {
       create_new_keyframe();
       counts.new_keyframe = true;
     }
     timings.keyframe_ms = ms_since(t_kf);
+    previous_inliers_ = make_keyframe ? 0 : inliers_;  // a new keyframe renews the inliers: no decline to measure
     // Outliers may go to a new keyframe (local BA decides), but the next frame does not use them.
     for (std::size_t i = 0; i < current_.size(); ++i) {
       if (current_.map_points[i] && current_.outlier[i]) current_.map_points[i].reset();
@@ -151,11 +175,23 @@ TrackingState Tracking::track(Frame& frame, TrackTimings& timings, TrackingCount
   } else {
     state_ = TrackingState::kLost;
     has_velocity_ = false;
+    previous_inliers_ = 0;
     ++lost_frames_;
     if (!map_loaded_ && !localisation_only_ && lost_frames_ >= config_.tracking.reset_after_lost_frames &&
         map_.keyframe_count() <= static_cast<std::size_t>(config_.tracking.reset_max_keyframes)) {
       // Lost right after initialisation: start again (the caller's System clears the map).
       counts.reset = true;
+    }
+    // Relocalisation's time runs only on frames that could start a map (a covered camera shows nothing to
+    // relocalise with): after new_map_after_lost_s of them, a new map from this frame (the caller's System keeps
+    // the old trajectory).
+    const bool usable = can_initialise();
+    if (usable && last_lost_t_ns_ > 0) lost_usable_ns_ += current_.t_ns - last_lost_t_ns_;
+    last_lost_t_ns_ = current_.t_ns;
+    const double new_map_after_s = config_.tracking.new_map_after_lost_s;
+    if (!counts.reset && !map_loaded_ && !localisation_only_ && new_map_after_s > 0 && usable &&
+        1e-9 * static_cast<double>(lost_usable_ns_) >= new_map_after_s) {
+      counts.new_map = true;
     }
   }
   if (!current_.reference_keyframe) current_.reference_keyframe = reference_kf_;
@@ -167,13 +203,15 @@ TrackingState Tracking::track(Frame& frame, TrackTimings& timings, TrackingCount
   return state_;
 }
 
-bool Tracking::stereo_initialisation() {
+bool Tracking::can_initialise() const {
   int with_depth = 0;
   for (float d : current_.depth) with_depth += d > 0 ? 1 : 0;
-  if (static_cast<int>(current_.size()) <= config_.tracking.min_init_features ||
-      with_depth < config_.tracking.min_init_stereo) {
-    return false;
-  }
+  return static_cast<int>(current_.size()) > config_.tracking.min_init_features &&
+         with_depth >= config_.tracking.min_init_stereo;
+}
+
+bool Tracking::stereo_initialisation() {
+  if (!can_initialise()) return false;
   current_.set_pose(SE3d::Identity());
   auto kf = std::make_shared<KeyFrame>(map_.new_keyframe_id(), current_);
   map_.add_keyframe(kf);
@@ -566,12 +604,12 @@ void Tracking::retire_moved_points(const FrameImages& images, TrackingCounts& co
   }
 }
 
-bool Tracking::need_new_keyframe() {
-  if (!reference_kf_ || localisation_only_) return false;
+Tracking::KeyframeNeed Tracking::need_new_keyframe() {
+  if (!reference_kf_ || localisation_only_) return KeyframeNeed::kNo;
   const std::size_t n_kfs = map_.keyframe_count();
   if (current_.id < last_recovery_frame_id_ + static_cast<uint64_t>(max_frames_) && last_recovery_frame_id_ > 0 &&
       n_kfs > static_cast<std::size_t>(max_frames_)) {
-    return false;
+    return KeyframeNeed::kNo;
   }
   const int min_obs = n_kfs <= 2 ? 2 : 3;
   const int ref_matches = reference_kf_->tracked_map_points(min_obs);
@@ -604,16 +642,17 @@ bool Tracking::need_new_keyframe() {
     stopped = speed_mps <= tc.keyframe_stop_speed_mps &&
               (current_.T_w_c().translation() - last_keyframe_center_w_).norm() >= tc.keyframe_stop_distance_m;
   }
-  if (!((c1a || c1b || c1c) && c2) && !stopped) return false;
+  if (!((c1a || c1b || c1c) && c2) && !stopped) return KeyframeNeed::kNo;
   if (KeyFrame* old_kf = weak ? nullptr : revisited_keyframe()) {
     // The place is already in the map from an earlier pass: track against that keyframe instead of adding one.
     reference_kf_ = old_kf->shared_from_this();
     current_.reference_keyframe = reference_kf_;
-    return false;
+    return KeyframeNeed::kNo;
   }
-  if (mapper_idle) return true;
+  if (mapper_idle) return KeyframeNeed::kNow;
   mapper_.interrupt_ba();
-  return mapper_.queue_length() < static_cast<std::size_t>(config_.mapping.queue_capacity);
+  if (mapper_.queue_length() < static_cast<std::size_t>(config_.mapping.queue_capacity)) return KeyframeNeed::kNow;
+  return config_.tracking.keyframe_queue_wait_weak_ms > 0 ? KeyframeNeed::kWhenQueueHasRoom : KeyframeNeed::kNo;
 }
 
 KeyFrame* Tracking::revisited_keyframe() const {

@@ -10,6 +10,7 @@
 #include <chrono>
 #include <condition_variable>
 #include <mutex>
+#include <thread>
 #include <vector>
 
 #include "agvslam/slam/frame.h"
@@ -95,10 +96,37 @@ TEST(KeyframeWorker, ClearDropsTheQueuedOnes) {
   KeyframeWorker w(4, KeyframeWorker::WhenFull::kRefuseNew, [&](const KeyFramePtr& kf) { rec(kf); });
   w.push(keyframe(1));
   w.push(keyframe(2));
-  w.clear();
+  const std::vector<KeyFramePtr> dropped = w.clear();
+  ASSERT_EQ(dropped.size(), 2U);  // handed back: their points may still be in a map
+  EXPECT_EQ(dropped[0]->id, 1U);
+  EXPECT_EQ(dropped[1]->id, 2U);
   EXPECT_TRUE(w.idle());
   w.process_pending();
   EXPECT_TRUE(rec.get().empty());
+}
+
+TEST(KeyframeWorker, WaitForRoomReturnsWhenTheThreadTakesAKeyframe) {
+  std::atomic<bool> release{false};
+  KeyframeWorker w(1, KeyframeWorker::WhenFull::kRefuseNew, [&](const KeyFramePtr&) {
+    while (!release.load()) std::this_thread::sleep_for(std::chrono::milliseconds(1));
+  });
+  w.start();
+  w.push(keyframe(1));  // taken by the thread, which then blocks
+  while (!w.empty()) std::this_thread::sleep_for(std::chrono::milliseconds(1));
+  EXPECT_TRUE(w.wait_for_room(1000));  // the queue itself is empty
+  EXPECT_EQ(w.push(keyframe(2)), KeyframeWorker::Pushed::kQueued);
+  const auto t0 = std::chrono::steady_clock::now();
+  EXPECT_FALSE(w.wait_for_room(50));  // full while the thread is busy: gives up after the timeout
+  const double waited_ms = std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - t0).count();
+  EXPECT_GE(waited_ms, 45.0);
+  std::thread releaser([&] {
+    std::this_thread::sleep_for(std::chrono::milliseconds(30));
+    release = true;
+  });
+  EXPECT_TRUE(w.wait_for_room(5000));  // keyframe 2 taken off the queue
+  releaser.join();
+  w.wait_until_idle();
+  w.stop();
 }
 
 TEST(KeyframeWorker, TheThreadProcessesEveryKeyframeAndWaitUntilIdleWaitsForTheLast) {

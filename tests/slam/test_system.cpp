@@ -2,7 +2,9 @@
 // ground truth, a still camera staying still, loss on blank frames without garbage, reset, and the dynamic mask.
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <chrono>
+#include <filesystem>
 #include <opencv2/imgproc.hpp>
 #include <thread>
 
@@ -179,6 +181,106 @@ TEST(System, NoFeaturesInsideTheDynamicMask) {
   ASSERT_EQ(kfs.size(), 1u);
   ASSERT_GT(kfs[0]->size(), 100u);
   for (const cv::KeyPoint& kp : kfs[0]->keypoints) EXPECT_FALSE(moving.contains(cv::Point(kp.pt))) << kp.pt;
+}
+
+SystemConfig kitti_config(const io::StereoDataset& d) {
+  SystemConfig c = inline_config(d);
+  const features::FeaturesConfig f = features::load_features_config(AGVSLAM_SOURCE_DIR "/params/features_kitti.yaml");
+  c.orb = f.orb;
+  c.stereo = f.stereo_matching;
+  return c;
+}
+
+TEST(System, LongLossStartsANewMapAfterTheConfiguredTimeAndTrackingResumes) {
+  // KITTI 06 with frames 10..25 blacked out: the car drives ~17 m meanwhile, out of reach of relocalisation. The
+  // covered camera is waited out; then relocalisation gets new_map_after_lost_s of real views before a new map
+  // starts from the current frame. With new_map_after_lost_s = 0 the same run stays lost to the end.
+  AGVSLAM_REQUIRE_SHARED(root, "data/kitti06_f000-050");
+  const auto d = io::open_dataset(root);
+  const std::string folder = test::make_temp_dir("agvslam-earlier-maps");
+  for (const double after_s : {1.0, 0.0}) {
+    SystemConfig c = kitti_config(*d);
+    c.slam.tracking.new_map_after_lost_s = after_s;
+    c.earlier_maps_folder = folder;
+    System slam(d->calibration(), c);
+    const cv::Mat black = cv::Mat::zeros(d->calibration().left.size(), CV_8UC1);
+    long new_map_frame = -1;
+    int ok_in_new_map = 0;
+    for (std::size_t i = 0; i < d->size(); ++i) {
+      const StereoFrame f = d->frame(i);
+      const bool blank = i >= 10 && i <= 25;
+      const TrackResult r =
+          blank ? slam.track_stereo(f.t_ns, black, black, {}) : slam.track_stereo(f.t_ns, f.left, f.right, {});
+      if (i < 10) {
+        EXPECT_EQ(r.state, TrackingState::kOk) << "frame " << i;
+      }
+      if (blank) {
+        EXPECT_FALSE(r.pose_valid) << "frame " << i;
+      }
+      if (r.counts.new_map) {
+        EXPECT_EQ(new_map_frame, -1) << "a second new map at frame " << i;
+        new_map_frame = static_cast<long>(i);
+        // The new map's world frame is the camera of the frame that starts it.
+        EXPECT_EQ(r.state, TrackingState::kOk);
+        EXPECT_TRUE(r.T_w_c.isApprox(SE3d::Identity()));
+        // Lost time counts from the first frame with a view again (the last blank frame's stamp).
+        const double waited_s = 1e-9 * static_cast<double>(f.t_ns - d->frame(25).t_ns);
+        EXPECT_GE(waited_s, after_s);
+        EXPECT_LT(waited_s, after_s + 1.5 / d->rate_hz());
+      }
+      EXPECT_EQ(r.map_id, new_map_frame >= 0 && static_cast<long>(i) >= new_map_frame ? 1u : 0u) << "frame " << i;
+      if (new_map_frame >= 0) {
+        EXPECT_EQ(r.state, TrackingState::kOk) << "frame " << i << " after the new map";
+        ok_in_new_map += r.state == TrackingState::kOk ? 1 : 0;
+      }
+    }
+    if (after_s > 0) {
+      ASSERT_GE(new_map_frame, 26);
+      std::printf("new map at frame %ld, %d frames tracked in it\n", new_map_frame, ok_in_new_map);
+      // Both maps' frames are in the trajectory, each pose with its map.
+      std::vector<uint32_t> map_ids;
+      const Trajectory traj = slam.trajectory(&map_ids);
+      ASSERT_EQ(map_ids.size(), traj.size());
+      EXPECT_EQ(std::count(map_ids.begin(), map_ids.end(), 0u), 10);
+      EXPECT_EQ(std::count(map_ids.begin(), map_ids.end(), 1u), ok_in_new_map);
+      // The map left behind was saved and loads again.
+      EXPECT_TRUE(slam.earlier_map_errors().empty());
+      ASSERT_EQ(slam.earlier_map_files(), std::vector<std::string>{folder + "/map_0.agvmap"});
+      System reloaded(d->calibration(), kitti_config(*d));
+      EXPECT_GE(reloaded.load_map(folder + "/map_0.agvmap", MapMode::kLocalisation).keyframes, 2u);
+    } else {
+      EXPECT_EQ(new_map_frame, -1);
+      EXPECT_EQ(slam.map_id(), 0u);
+      EXPECT_TRUE(slam.earlier_map_files().empty());
+    }
+  }
+  std::filesystem::remove_all(folder);
+}
+
+TEST(System, ResetWithKeyframesStillQueuedForMapping) {
+  // Local mapping far slower than the frame rate leaves keyframes queued; their points are in the map already and
+  // point back at them. A reset drops the queue and clears the map: the keyframes must outlive that.
+  AGVSLAM_REQUIRE_SHARED(root, "data/kitti06_f000-050");
+  const auto d = io::open_dataset(root);
+  SystemConfig c = kitti_config(*d);
+  c.threaded_mapping = true;
+  c.test_mapping_step_delay_ms = 300;
+  c.slam.tracking.keyframe_queue_wait_ms = 0;  // queue up keyframes without waiting for room
+  c.slam.tracking.keyframe_queue_wait_weak_ms = 0;
+  System slam(d->calibration(), c);
+  std::size_t queued = 0;
+  for (std::size_t i = 0; i < 8; ++i) {
+    const StereoFrame f = d->frame(i);
+    queued = std::max(queued, slam.track_stereo(f.t_ns, f.left, f.right, {}).mapping_queue);
+  }
+  EXPECT_GE(queued, 1u);
+  slam.request_reset();
+  const StereoFrame f = d->frame(8);
+  const TrackResult r = slam.track_stereo(f.t_ns, f.left, f.right, {});
+  EXPECT_TRUE(r.counts.reset);
+  EXPECT_EQ(r.state, TrackingState::kOk);
+  slam.wait_for_mapping();
+  EXPECT_EQ(slam.map().keyframe_count(), 1u);
 }
 
 }  // namespace

@@ -12,6 +12,7 @@
 #include <functional>
 #include <mutex>
 #include <thread>
+#include <vector>
 
 #include "agvslam/core/bounded_queue.h"
 #include "agvslam/slam/key_frame.h"
@@ -44,8 +45,13 @@ class KeyframeWorker {
   void process_pending();
   // Thread: blocks until idle (or stopped). Without it: process_pending().
   void wait_until_idle();
-  // Drops the queued keyframes (the one in progress goes on).
-  void clear();
+  // Drops the queued keyframes (the one in progress goes on) and returns them: points that tracking created for a
+  // queued keyframe are already in the map and observe it through a raw pointer, so the caller keeps them alive
+  // until those points are gone.
+  [[nodiscard]] std::vector<KeyFramePtr> clear();
+  // Blocks until the queue has room for one more keyframe, the worker stops, or timeout_ms passes; true when there
+  // is room. Without the thread: true when there is room now.
+  bool wait_for_room(double timeout_ms);
   // Held while a keyframe is processed.
   std::mutex& work_mutex() { return work_mutex_; }
 
@@ -53,6 +59,7 @@ class KeyframeWorker {
   void run();
   void process(const KeyFramePtr& kf);  // the work under the work mutex, then the keyframe counts as done
 
+  const std::size_t capacity_;
   const std::function<void(const KeyFramePtr&)> work_;
   BoundedQueue<KeyFramePtr> queue_;
 

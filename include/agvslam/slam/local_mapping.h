@@ -79,8 +79,11 @@ class LocalMapping {
   // Blocks until the queue is empty and the mapper is idle (both modes).
   void wait_until_idle();
   // Drops the queued keyframes and the mapper's state; waits for the keyframe in progress. The caller then
-  // clears the map.
-  void reset();
+  // clears the map, and keeps the returned (dropped) keyframes until it has: their points are in the map.
+  [[nodiscard]] std::vector<KeyFramePtr> reset();
+  // Tracking side: blocks up to timeout_ms until the queue has room for a keyframe (interrupting a local BA first);
+  // true when it has. Without the thread: true when it has room now.
+  bool wait_for_room(double timeout_ms);
 
   // The loop closer's input: called with each processed keyframe, in the mapping thread, without the map mutex
   // (it must not block).
@@ -95,6 +98,11 @@ class LocalMapping {
     return std::unique_lock<std::mutex>(worker_.work_mutex());
   }
 
+  // TEST ONLY (a slower computer than the one running the tests): sleeps this long after each step of every
+  // keyframe (insertion, culling, triangulation, fusion, local BA, keyframe culling), without the map mutex; an
+  // interrupted BA (interrupt_ba) cuts its sleep short as it cuts the solver. 0: off. Never set on a vehicle.
+  void set_test_step_delay_ms(double ms) { test_step_delay_ms_ = ms; }
+
   LocalMappingStats stats() const;
   // Per-keyframe step times since the start (a few dozen bytes per keyframe).
   std::vector<KeyframeMappingTimes> timing_history() const;
@@ -107,6 +115,7 @@ class LocalMapping {
   void search_in_neighbours(KeyFrame& kf);
   void local_bundle_adjustment(KeyFrame& kf);
   void cull_keyframes(KeyFrame& kf);
+  void test_step_delay(bool abortable) const;
 
   SlamConfig config_;
   Map& map_;
@@ -114,6 +123,7 @@ class LocalMapping {
   Matcher matcher_;
 
   std::atomic<bool> abort_ba_{false};
+  double test_step_delay_ms_ = 0;
 
   std::list<MapPointPtr> recent_points_;
   std::function<void(const KeyFramePtr&)> sink_;

@@ -48,6 +48,14 @@ struct TrackingConfig {
   // map is reset and initialised again (ORB-SLAM2 does the same with <= 5 keyframes).
   int reset_max_keyframes = 5;
   int reset_after_lost_frames = 5;
+  // A keyframe is due but local mapping's queue is full: tracking waits up to this long (ms) for room rather than
+  // skip it (0: skip at once, as ORB-SLAM2 does), and up to keyframe_queue_wait_weak_ms when the frame has, or at
+  // its inliers' decline since the last frame the next frame will have, fewer than twice min_local_map_inliers.
+  double keyframe_queue_wait_ms = 100;
+  double keyframe_queue_wait_weak_ms = 1000;
+  // Lost this long (s, by frame time stamps, counting only frames with enough features to start a map) without
+  // relocalising: a new map is started from the current stereo frame (0: never; loaded maps are never replaced).
+  double new_map_after_lost_s = 1.0;
 
   void validate(const std::string& source) const;
   std::string describe() const;

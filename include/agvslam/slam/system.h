@@ -12,7 +12,10 @@
 // the map while it solves. With threaded_mapping = false all of it runs inside track_stereo (deterministic).
 //
 // A lost frame gives state kLost and no pose (r.T_w_c is the identity and pose_valid is false), never a guessed
-// pose; the following frames relocalise with the bag-of-words keyframe database (needs config.vocabulary).
+// pose; the following frames relocalise with the bag-of-words keyframe database (needs config.vocabulary). Lost
+// for longer than slam.tracking.new_map_after_lost_s, a new map is started from the current stereo frame
+// (r.map_id counts up, r.counts.new_map is set); the old map's trajectory is kept, and the old map itself is saved
+// to config.earlier_maps_folder when one is set (not kept in memory: no relocalisation into it, no merge).
 // request_reset() empties the map at the next frame; shutdown() stops the threads (also done by the destructor).
 //
 // Saved maps (for agvslamd and agvslam-run; file format in map_io.h):
@@ -62,6 +65,11 @@ struct SystemConfig {
   // brute-force matching; maps are saved with vocabulary identity 0.
   std::shared_ptr<const place::Vocabulary> vocabulary;
   int direct_index_level = 2;  // params/place.yaml vocabulary.direct_index_level
+  // A folder: when a long loss starts a new map (slam.tracking.new_map_after_lost_s), the map left behind is saved
+  // there as map_<its map_id>.agvmap (atomically, as save_map) for later loading; "": it is dropped.
+  std::string earlier_maps_folder;
+  // TEST ONLY: LocalMapping::set_test_step_delay_ms (a slower computer); not in any YAML. Never set on a vehicle.
+  double test_mapping_step_delay_ms = 0;
 };
 
 // Loads the vocabulary that a place configuration names (InputError naming the file for a bad one).
@@ -85,6 +93,10 @@ struct TrackResult {
   std::size_t map_points = 0;
   std::size_t mapping_queue = 0;  // keyframes waiting for the local mapper
   uint64_t loops_closed = 0;      // loops closed so far
+  // Which map the pose is in: 0 from the start (or the loaded map); +1 each time tracking was lost for
+  // tracking.new_map_after_lost_s and a new map was started (its world frame is the camera at that frame, so poses
+  // jump: the vehicle must not compare them with earlier ones). counts.new_map marks the frame that starts one.
+  uint32_t map_id = 0;
   bool global_ba_running = false;
   // Level-0 pixel positions (left image) of the keypoints the pose rests on: the map point inliers of this frame
   // (empty unless the state is ok). Tools score them against ground-truth masks: how much of the pose leaned on
@@ -126,8 +138,14 @@ class System {
 
   // The trajectory of every tracked frame, each pose expressed relative to its reference keyframe and composed
   // with that keyframe's current (bundle-adjusted) pose, as ORB-SLAM2 saves it. Frames that were not tracked are
-  // absent.
-  Trajectory trajectory();
+  // absent. Frames of earlier maps (new_map_after_lost_s) keep the poses they had when their map was left, in that
+  // map's frame; map_ids (optional) receives the map of each pose.
+  Trajectory trajectory(std::vector<uint32_t>* map_ids = nullptr);
+  uint32_t map_id() const { return map_id_; }
+  // Files of the maps left behind (SystemConfig::earlier_maps_folder) and the errors of those that could not be
+  // written (InputError texts; tracking goes on).
+  std::vector<std::string> earlier_map_files() const;
+  std::vector<std::string> earlier_map_errors() const;
   // Waits for the local mapper to finish the queued keyframes.
   void wait_for_mapping();
 
@@ -146,6 +164,8 @@ class System {
 
  private:
   void reset_now();
+  // Lost for too long: the current map's trajectory is frozen, the map cleared and the counter moved on.
+  void start_new_map();
   // Waits until local mapping and loop closing are idle (threaded) or runs their queues (inline).
   void settle();
   MapFileContext file_context() const;
@@ -176,7 +196,12 @@ class System {
     uint64_t reference_kf_id;
     SE3d T_c_r;
   };
-  std::vector<TrajectoryEntry> trajectory_;
+  std::vector<TrajectoryEntry> trajectory_;  // the current map's frames
+  uint32_t map_id_ = 0;
+  Trajectory earlier_maps_trajectory_;  // frames of maps left behind, with their poses when they were left
+  std::vector<uint32_t> earlier_maps_ids_;
+  mutable std::mutex earlier_files_mutex_;
+  std::vector<std::string> earlier_map_files_, earlier_map_errors_;
 };
 
 }  // namespace agvslam::slam

@@ -7,7 +7,15 @@
 // relocalise (ORB-SLAM2's Relocalization): bag-of-words candidates from the place recognition, BoW matching, EPnP
 // RANSAC on the candidates' map points, motion-only BA, a projection search for more matches; then the last
 // reference keyframe and its neighbours (descriptor matching from their poses) before giving up again. A map of
-// few keyframes is reset and initialised anew after tracking.reset_after_lost_frames (never a loaded map).
+// few keyframes is reset and initialised anew after tracking.reset_after_lost_frames (never a loaded map). A larger
+// map lost for tracking.new_map_after_lost_s (frame time, counted on frames with enough features to start a map: a
+// covered camera is waited out) asks for a new map (counts.new_map: System starts one from the same frame), so
+// tracking is never lost for good.
+//
+// Keyframes: when one is due and local mapping's queue is full, tracking releases the map mutex and waits up to
+// tracking.keyframe_queue_wait_ms for room (keyframe_queue_wait_weak_ms when the frame is near loss; a local BA in
+// progress is interrupted) rather than skip it: skipping keyframe after keyframe leaves the map behind a fast camera
+// until tracking is lost.
 //
 // Localisation only (set_localisation_only): frames are tracked against the map without changing its structure:
 // no keyframes are created, so local mapping and loop closing get nothing. start_relocalising() (after a map is
@@ -42,7 +50,8 @@ struct TrackTimings {
   double local_map_ms = 0;       // local map update, projection search and motion-only BA
   double retire_ms = 0;          // retirement of map points that moved (point_retirement.h)
   double retire_cpu_ms = 0;      // ... its CPU time in this thread
-  double keyframe_ms = 0;        // keyframe decision and creation
+  double keyframe_ms = 0;        // keyframe decision and creation (including keyframe_wait_ms)
+  double keyframe_wait_ms = 0;   // waiting for room in local mapping's queue (tracking.keyframe_queue_wait_ms)
   double inline_mapping_ms = 0;  // local mapping run in this thread (SystemConfig::threaded_mapping = false only)
   double total_ms = 0;           // all of track_stereo (including inline mapping)
   double total_cpu_ms = 0;       // CPU time of the calling thread in track_stereo (what one core spends, whatever
@@ -59,6 +68,8 @@ struct TrackingCounts {
   bool recovered = false;             // tracked again after being lost (by relocalisation or recovery)
   int relocalisation_candidates = 0;  // BoW candidates tried while lost
   bool reset = false;                 // the map was reset on this frame
+  bool new_map = false;               // lost for tracking.new_map_after_lost_s: a new map starts at this frame
+  bool keyframe_waited = false;       // a keyframe was due with local mapping's queue full: tracking waited
   RetirementCounts retired;           // map points retired on this frame (point_retirement.h), by reason
 };
 
@@ -94,6 +105,8 @@ class Tracking {
   std::size_t local_point_count() const { return local_points_.size(); }
 
  private:
+  // The frame has the keypoints and stereo depths a new map needs (tracking.min_init_features / min_init_stereo).
+  bool can_initialise() const;
   bool stereo_initialisation();
   bool track_with_motion_model(int& matches);
   bool track_reference_keyframe(const KeyFrame& kf, const SE3d& T_c_w_guess, int& matches);
@@ -107,7 +120,9 @@ class Tracking {
   void search_local_points();
   int optimize_current_pose();
   int discard_outliers();
-  bool need_new_keyframe();
+  enum class KeyframeNeed { kNo, kNow, kWhenQueueHasRoom };
+  // kWhenQueueHasRoom: a keyframe is due but local mapping's queue is full (tracking waits for room, bounded).
+  KeyframeNeed need_new_keyframe();
   // An older keyframe that already covers the current view (the revisit rule of TrackingConfig), or null.
   KeyFrame* revisited_keyframe() const;
   void create_new_keyframe();
@@ -136,7 +151,10 @@ class Tracking {
   // itself when either time is unknown.
   SE3d predicted_motion() const;
   int lost_frames_ = 0;
+  int64_t lost_usable_ns_ = 0;  // time lost on frames that could start a map (new_map_after_lost_s)
+  int64_t last_lost_t_ns_ = 0;  // the previous lost frame's stamp (0: none since the last tracked frame)
   int inliers_ = 0;
+  int previous_inliers_ = 0;  // the last tracked frame's inliers (0: unknown, or a keyframe was made there)
   bool localisation_only_ = false;
   bool map_loaded_ = false;  // the map came from a file: never reset it
 
