@@ -205,8 +205,8 @@ void DepthConsistencyTest::run(const PinholeCamera& camera, double bf_px_m, cons
   // Residuals of every tested track, then the (adaptive) thresholds and the decisions.
   for (int idx : index_) {
     const std::size_t i = static_cast<std::size_t>(idx);
-    residuals(camera, bf_px_m, result.T_cur_prev, prev_pts[i], prev_disparity_px[i], cur_pts[i], cur_disparity_px[i],
-              result.reprojection_px[i], result.disparity_residual_px[i]);
+    slack_residuals(camera, bf_px_m, result.T_cur_prev, prev_pts[i], prev_disparity_px[i], cur_pts[i],
+                    cur_disparity_px[i], result.reprojection_px[i], result.disparity_residual_px[i]);
   }
   set_constants(config_, index_, scratch_, result);
   for (int idx : index_) {
@@ -230,6 +230,34 @@ void DepthConsistencyTest::residuals(const PinholeCamera& camera, double bf_px_m
   }
   reprojection_px = std::hypot(uv.x() - cur_px.x, uv.y() - cur_px.y);
   if (cur_disparity_px > 0) disparity_residual_px = std::abs(bf_px_m / depth_m - cur_disparity_px);
+}
+
+void DepthConsistencyTest::slack_residuals(const PinholeCamera& camera, double bf_px_m, const SE3d& T_cur_prev,
+                                           const cv::Point2f& prev_px, float prev_disparity_px,
+                                           const cv::Point2f& cur_px, float cur_disparity_px, double& reprojection_px,
+                                           double& disparity_residual_px) const {
+  // Only the image offset: scaling the previous depth by (1 + e) moves the prediction as scaling the translation by
+  // 1 / (1 + e) would, so the slack also covers the motion's scale error while it hides motion along the viewing ray
+  // of the order of e times the frame's translation only. The disparity residual keeps its own thresholds (a_disp_px,
+  // b_disp): a slack there would hide e times the depth.
+  const double slack = config_.disparity_slack_px + config_.disparity_slack_rel * prev_disparity_px;
+  residuals(camera, bf_px_m, T_cur_prev, prev_px, prev_disparity_px, cur_px, cur_disparity_px, reprojection_px,
+            disparity_residual_px);
+  if (!(slack > 0) || !(prev_disparity_px > 0) || reprojection_px < 0) return;
+  // The interval's far end stays at half the disparity at most (a point twice as far is no matching error).
+  const float d_far = static_cast<float>(std::max(0.5 * prev_disparity_px, prev_disparity_px - slack));
+  const float d_near = static_cast<float>(prev_disparity_px + slack);
+  Eigen::Vector2d p_far, p_near;
+  double z_far_m = 0, z_near_m = 0;
+  if (!predict(camera, bf_px_m, T_cur_prev, prev_px, d_far, p_far, z_far_m) ||
+      !predict(camera, bf_px_m, T_cur_prev, prev_px, d_near, p_near, z_near_m)) {
+    return;
+  }
+  const Eigen::Vector2d c(cur_px.x, cur_px.y);
+  const Eigen::Vector2d seg = p_near - p_far;
+  const double len2 = seg.squaredNorm();
+  const double s = len2 > 0 ? std::clamp((c - p_far).dot(seg) / len2, 0.0, 1.0) : 0.0;
+  reprojection_px = std::min(reprojection_px, (p_far + s * seg - c).norm());
 }
 
 bool DepthConsistencyTest::predict(const PinholeCamera& camera, double bf_px_m, const SE3d& T_cur_prev,

@@ -78,21 +78,28 @@ const Table<EpipolarTestConfig>& epipolar_params() {
 const Table<DepthTestConfig>& depth_test_params() {
   using C = DepthTestConfig;
   static const Table<C> table =
-      Table<C>("depth_test",
-               {
-                   {"min_points", &C::min_points, Range::closed(6, 10000)},
-                   {"min_disparity_px", &C::min_disparity_px, Range::left_open(0, 100), "px"},
-                   {"ransac_reprojection_px", &C::ransac_reprojection_px, Range::left_open(0, 20), "px"},
-                   {"ransac_iterations", &C::ransac_iterations, Range::closed(10, 100000)},
-                   {"ransac_confidence", &C::ransac_confidence, Range::open(0.5, 1)},
-                   {"a_reproj_px", &C::a_reproj_px, Range::left_open(0, 50), "px"},
-                   {"b_reproj", &C::b_reproj, Range::closed(0, 1), "", "px per px of disparity"},
-                   {"a_disp_px", &C::a_disp_px, Range::left_open(0, 50), "px"},
-                   {"b_disp", &C::b_disp, Range::closed(0, 1), "", "px per px of disparity"},
-                   {"adaptive", &C::adaptive},
-                   {"adaptive_k", &C::adaptive_k, Range::left_open(0, 20)},
-                   {"max_scale", &C::max_scale, Range::closed(1, 100)},
-               })
+      Table<C>(
+          "depth_test",
+          {
+              {"min_points", &C::min_points, Range::closed(6, 10000)},
+              {"min_disparity_px", &C::min_disparity_px, Range::left_open(0, 100), "px"},
+              {"ransac_reprojection_px", &C::ransac_reprojection_px, Range::left_open(0, 20), "px"},
+              {"ransac_iterations", &C::ransac_iterations, Range::closed(10, 100000)},
+              {"ransac_confidence", &C::ransac_confidence, Range::open(0.5, 1)},
+              {"a_reproj_px", &C::a_reproj_px, Range::left_open(0, 50), "px"},
+              {"b_reproj", &C::b_reproj, Range::closed(0, 1), "", "px per px of disparity"},
+              {"a_disp_px", &C::a_disp_px, Range::left_open(0, 50), "px"},
+              {"b_disp", &C::b_disp, Range::closed(0, 1), "", "px per px of disparity"},
+              {"disparity_slack_px", &C::disparity_slack_px, Range::closed(0, 20), "px"},
+              {"disparity_slack_rel", &C::disparity_slack_rel, Range::closed(0, 0.5), "", "fraction of the disparity"},
+              {"leaving_margin_px", &C::leaving_margin_px, Range::closed(-1, 1000), "px", "-1: off"},
+              {"slip_min_px", &C::slip_min_px, Range::closed(0, 1000), "px", "0: off"},
+              {"slip_min_zncc", &C::slip_min_zncc, Range::closed(-1, 1)},
+              {"slip_half_window", &C::slip_half_window, Range::closed(1, 30), "px"},
+              {"adaptive", &C::adaptive},
+              {"adaptive_k", &C::adaptive_k, Range::left_open(0, 20)},
+              {"max_scale", &C::max_scale, Range::closed(1, 100)},
+          })
           // Not a key of this section: the multi-frame test sets it from multiframe.prior_min_inlier_fraction.
           .check(
               "prior_min_inlier_fraction",

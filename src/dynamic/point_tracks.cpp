@@ -6,6 +6,7 @@
 #include <cmath>
 
 #include "agvslam/core/se3.h"
+#include "agvslam/dynamic/bilinear.h"
 
 namespace agvslam::dynamic {
 
@@ -160,12 +161,75 @@ void PointTracks::track_and_test(const StereoFrame& frame, DetectorResult& resul
     depth_test_.run(calibration_.left, calibration_.bf(), prev_pts_, prev_disparity_px_, cur_pts_, cur_disparity_px_,
                     tracked_, result.depth);
   }
+  if (config_.use_depth_test && result.depth.valid) drop_ambiguous_tracks(frame, result);
   has_motion_prior_ = config_.use_depth_test && result.depth.valid;
   if (has_motion_prior_) T_motion_prior_ = result.depth.T_cur_prev;
   tm.depth_test_ms = ms_since(t);
   t = Clock::now();
   test_multiframe(frame, result);
   tm.multiframe_ms = ms_since(t);
+}
+
+namespace {
+
+// Zero-mean normalised cross-correlation of the (2h+1)^2 patch of `a` around pa with the patch of `b` around pb whose
+// offsets are scaled by `scale`; -1 when a patch leaves its image.
+double scaled_zncc(const cv::Mat& a, const cv::Point2f& pa, const cv::Mat& b, const Eigen::Vector2d& pb, double scale,
+                   int h) {
+  const double reach_b = scale * h + 1;
+  if (pa.x < h || pa.y < h || pa.x >= a.cols - h - 1 || pa.y >= a.rows - h - 1 || pb.x() < reach_b ||
+      pb.y() < reach_b || pb.x() >= b.cols - reach_b - 1 || pb.y() >= b.rows - reach_b - 1) {
+    return -1;
+  }
+  double sa = 0, sb = 0, saa = 0, sbb = 0, sab = 0;
+  const int n = (2 * h + 1) * (2 * h + 1);
+  for (int dy = -h; dy <= h; ++dy) {
+    for (int dx = -h; dx <= h; ++dx) {
+      const double va = bilinear_u8(a, pa.x + dx, pa.y + dy);
+      const double vb = bilinear_u8(b, pb.x() + scale * dx, pb.y() + scale * dy);
+      sa += va;
+      sb += vb;
+      saa += va * va;
+      sbb += vb * vb;
+      sab += va * vb;
+    }
+  }
+  const double var_a = saa - sa * sa / n, var_b = sbb - sb * sb / n;
+  if (!(var_a > 0) || !(var_b > 0)) return -1;
+  return (sab - sa * sb / n) / std::sqrt(var_a * var_b);
+}
+
+}  // namespace
+
+void PointTracks::drop_ambiguous_tracks(const StereoFrame& frame, DetectorResult& result) {
+  const DepthTestConfig& dc = config_.depth_test;
+  if (dc.leaving_margin_px < 0 && !(dc.slip_min_px > 0)) return;
+  const PinholeCamera& camera = calibration_.left;
+  const double w = frame.left.cols, h = frame.left.rows;
+  for (std::size_t i = 0; i < prev_pts_.size(); ++i) {
+    if (!tracked_[i]) continue;
+    Eigen::Vector2d uv;
+    double depth_m = 0;
+    if (!DepthConsistencyTest::predict(camera, calibration_.bf(), result.depth.T_cur_prev, prev_pts_[i],
+                                       prev_disparity_px_[i], uv, depth_m)) {
+      continue;
+    }
+    const double m = dc.leaving_margin_px;
+    const bool left_view = m >= 0 && (uv.x() < -m || uv.y() < -m || uv.x() > w - 1 + m || uv.y() > h - 1 + m);
+    bool slipped = false;
+    const bool flagged = result.depth.dynamic[i] || (!result.epipolar.dynamic.empty() && result.epipolar.dynamic[i]);
+    if (!left_view && flagged && dc.slip_min_px > 0 &&
+        std::hypot(uv.x() - cur_pts_[i].x, uv.y() - cur_pts_[i].y) > dc.slip_min_px) {
+      // The patch grows as the point comes nearer: by its previous depth over the predicted one.
+      const double scale = calibration_.bf() / prev_disparity_px_[i] / depth_m;
+      slipped = scaled_zncc(prev_pyramid_.front(), prev_pts_[i], frame.left, uv, scale, dc.slip_half_window) >=
+                dc.slip_min_zncc;
+    }
+    if (!left_view && !slipped) continue;
+    tracked_[i] = 0;
+    result.depth.dynamic[i] = 0;
+    if (!result.epipolar.dynamic.empty()) result.epipolar.dynamic[i] = 0;
+  }
 }
 
 void PointTracks::test_multiframe(const StereoFrame& frame, DetectorResult& result) {
@@ -252,9 +316,9 @@ TrackedPoint PointTracks::test_new_point(const DetectorResult& result, const cv:
   p.dynamic_epipolar =
       epipolar_.test_track(result.epipolar, p.prev_px, p.cur_px, p.cur_disparity_px, &p.d_epi_px, &p.t_epi_px);
   if (config_.use_depth_test && result.depth.valid) {
-    DepthConsistencyTest::residuals(calibration_.left, calibration_.bf(), result.depth.T_cur_prev, p.prev_px,
-                                    p.prev_disparity_px, p.cur_px, p.cur_disparity_px, p.reprojection_px,
-                                    p.disparity_residual_px);
+    depth_test_.slack_residuals(calibration_.left, calibration_.bf(), result.depth.T_cur_prev, p.prev_px,
+                                p.prev_disparity_px, p.cur_px, p.cur_disparity_px, p.reprojection_px,
+                                p.disparity_residual_px);
     p.dynamic_depth = depth_test_.is_dynamic(result.depth, p.reprojection_px, p.disparity_residual_px,
                                              p.cur_disparity_px > 0 ? p.cur_disparity_px : p.prev_disparity_px);
   }

@@ -202,6 +202,53 @@ TEST(DepthTest, NeedsEnoughPointsWithDepth) {
   for (double v : r.reprojection_px) EXPECT_EQ(v, -1.0);
 }
 
+TEST(DepthTest, TheDisparitySlackPassesANearStaticPointAtSpeedButNotAMover) {
+  // KITTI's camera (fx 718 px, bf 387 px m) drives 2.5 m ahead in one frame. A road point 7 m ahead and 3 m left
+  // was matched 5 % off in disparity: its prediction moves by several px.
+  PinholeCamera cam;
+  cam.fx = cam.fy = 718;
+  cam.cx = 607;
+  cam.cy = 185;
+  cam.width = 1241;
+  cam.height = 376;
+  const double bf = 387;
+  SE3d T_cur_prev = SE3d::Identity();
+  T_cur_prev.translation() = Eigen::Vector3d(0, 0, -2.5);
+  const Eigen::Vector3d X(-3.0, 1.6, 7.0);
+  const cv::Point2f prev = project(cam, X);
+  const cv::Point2f cur = project(cam, T_cur_prev * X);
+  const float d_true = static_cast<float>(bf / X.z());
+  const float d_measured = 1.05f * d_true;
+  const float d_cur = static_cast<float>(bf / (T_cur_prev * X).z());
+
+  DepthTestConfig c;
+  c.disparity_slack_px = 0;
+  c.disparity_slack_rel = 0;
+  const DepthConsistencyTest exact(c);
+  c.disparity_slack_px = 0.5;
+  c.disparity_slack_rel = 0.08;
+  const DepthConsistencyTest slack(c);
+  double reproj_exact = -1, reproj_slack = -1, disp_exact = -1, disp_slack = -1;
+  exact.slack_residuals(cam, bf, T_cur_prev, prev, d_measured, cur, d_cur, reproj_exact, disp_exact);
+  slack.slack_residuals(cam, bf, T_cur_prev, prev, d_measured, cur, d_cur, reproj_slack, disp_slack);
+  EXPECT_GT(reproj_exact, 5.0);
+  EXPECT_LT(reproj_slack, 0.5);
+  // The disparity residual is not relaxed: a slack there would hide motion along the viewing ray.
+  EXPECT_DOUBLE_EQ(disp_slack, disp_exact);
+
+  // A car beside the road moving 0.5 m sideways is still far off: the slack only moves the prediction along its ray.
+  const cv::Point2f moved = project(cam, T_cur_prev * (X + Eigen::Vector3d(0.5, 0, 0)));
+  slack.slack_residuals(cam, bf, T_cur_prev, prev, d_measured, moved, d_cur, reproj_slack, disp_slack);
+  EXPECT_GT(reproj_slack, 20.0);
+  // ... and so is one that came 1 m nearer along the ray (the slack hides a fraction of the translation, 0.2 m here),
+  // whose disparity residual is not relaxed at all.
+  const Eigen::Vector3d X_nearer = T_cur_prev * (X * (6.0 / 7.0));
+  slack.slack_residuals(cam, bf, T_cur_prev, prev, d_true, project(cam, X_nearer),
+                        static_cast<float>(bf / X_nearer.z()), reproj_slack, disp_slack);
+  EXPECT_GT(reproj_slack, 10.0);
+  EXPECT_GT(disp_slack, 10.0);
+}
+
 TEST(DepthTest, InvalidConfigNamesTheField) {
   DepthTestConfig c;
   c.max_scale = 0.5;

@@ -8,6 +8,9 @@
 // disagrees with what is observed:
 //   reprojection offset |pi(T X_prev) - p_cur|          > a_reproj_px + b_reproj * d, or
 //   disparity residual  |bf / Z_pred - d_cur|           > a_disp_px  + b_disp  * d.
+// The image prediction is made for every previous disparity within the matcher's error (disparity_slack_*) and the
+// offset is the smallest over them: driving fast, a near point's prediction moves by several px per px of disparity
+// error (KITTI's road at ~7 m, 2.5 m per frame: ~3 px/px), which would flag the static road otherwise.
 // As in the epipolar test, the constant terms can adapt to the robust scale of this frame's residuals.
 
 #include <cstdint>
@@ -31,7 +34,22 @@ struct DepthTestConfig {
   double b_reproj = 0.03;    // ... + slope per px of disparity
   double a_disp_px = 1.0;    // disparity residual threshold: constant (px) ...
   double b_disp = 0.03;      // ... + slope per px of disparity (relative depth error)
-  bool adaptive = true;      // raise the constants to k * robust sigma of this frame's residuals
+  // The previous disparity's error the image prediction allows (px): constant + fraction of d (0 / 0: the measured
+  // one). Relative, it also covers the motion's scale error (slack_residuals()).
+  double disparity_slack_px = 0.5;
+  double disparity_slack_rel = 0.08;
+  // Tracks whose match is ambiguous are no evidence either way and are dropped (PointTracks): a static point that the
+  // motion puts more than leaving_margin_px outside the image cannot have been found inside it, so what LK found from
+  // its old position is either something moving with the camera or a slip onto a look-alike (-1 = kept) ...
+  double leaving_margin_px = 0;
+  // ... and a flagged track more than slip_min_px off its static prediction whose previous patch (2 x slip_half_window
+  // + 1 px, scaled by the predicted change of depth) correlates at slip_min_zncc or more with the image there has
+  // slipped a period of a repeated pattern (road hatching, rack uprights): the static prediction explains it too
+  // (slip_min_px 0 = no such check).
+  double slip_min_px = 12;
+  double slip_min_zncc = 0.8;
+  int slip_half_window = 5;
+  bool adaptive = true;  // raise the constants to k * robust sigma of this frame's residuals
   double adaptive_k = 3.0;
   double max_scale = 3.0;  // adaptive constants are at most max_scale x the configured ones
   // With a motion prior (run()'s T_cur_prev_prior), the tracks within ransac_reprojection_px of where it puts them
@@ -79,6 +97,11 @@ class DepthConsistencyTest {
   static void residuals(const PinholeCamera& camera, double bf_px_m, const SE3d& T_cur_prev, const cv::Point2f& prev_px,
                         float prev_disparity_px, const cv::Point2f& cur_px, float cur_disparity_px,
                         double& reprojection_px, double& disparity_residual_px);
+  // residuals() with the previous disparity anywhere within its slack (disparity_slack_*): the offsets to the
+  // predictions of that interval (the image one to the segment between its ends, nearly straight over a few px).
+  void slack_residuals(const PinholeCamera& camera, double bf_px_m, const SE3d& T_cur_prev, const cv::Point2f& prev_px,
+                       float prev_disparity_px, const cv::Point2f& cur_px, float cur_disparity_px,
+                       double& reprojection_px, double& disparity_residual_px) const;
   // The decision of run() for a track with these residuals, using the motion and thresholds of `fitted`
   // (for tracks added after run(), e.g. around dynamic points). disparity_px: the track's disparity.
   bool is_dynamic(const DepthTestResult& fitted, double reprojection_px, double disparity_residual_px,

@@ -109,6 +109,8 @@ class PointTracks {
   // Follows the tracks into this frame and chooses the next frame's LK levels from their largest motion (from where
   // each search started).
   void follow_tracks(DetectorResult& result);
+  // Drops the tracks whose match is ambiguous under this frame's motion (depth_test.leaving_margin_px, slip_*).
+  void drop_ambiguous_tracks(const StereoFrame& frame, DetectorResult& result);
   // The histories' step to this frame, then the multi-frame test and its depth-edge check.
   void test_multiframe(const StereoFrame& frame, DetectorResult& result);
   // The tracks kept into the next frame (prev_pts_ and the histories).
