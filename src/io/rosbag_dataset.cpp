@@ -166,6 +166,11 @@ cv::Mat decode_raw_image(CdrReader& in, const std::string& source, const std::st
                      "expected at least " + std::to_string(row_bytes) + " bytes a row (" + std::to_string(width) +
                          " pixels of " + encoding + "), found " + std::to_string(step));
   }
+  if (step % CV_ELEM_SIZE1(type) != 0) {
+    throw InputError(source, context + " field 'step'",
+                     "expected a multiple of the " + std::to_string(CV_ELEM_SIZE1(type)) + "-byte samples of " +
+                         encoding + ", found " + std::to_string(step));
+  }
   if (data_bytes < static_cast<std::size_t>(step) * height) {
     throw InputError(source, context + " field 'data'",
                      "expected step * height = " + std::to_string(static_cast<std::size_t>(step) * height) +
