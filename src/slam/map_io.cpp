@@ -119,6 +119,7 @@ class Reader {
   }
   void bytes(void* out, std::size_t n, const char* field) {
     need(n, field);
+    if (n == 0) return;  // out may be an empty vector's null data(), which memcpy must not get
     std::memcpy(out, data_.data() + pos_, n);
     pos_ += n;
   }
