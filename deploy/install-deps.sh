@@ -15,6 +15,8 @@ packages=(
   libssl-dev openssl  # DDS Security: the keystore checks (libcrypto), deploy/make-keystore.sh
   libv4l-dev v4l-utils qemu-system-x86 busybox-static kmod cpio  # V4L2 camera (libv4l2); VM harness (tests/vm)
   clang-format  # the layout in .clang-format, checked by the format test
+  clang llvm libclang-rt-14-dev  # tests/fuzz: clang++, libFuzzer (only recommended by clang-14: --no-install-recommends
+  # would leave it out), llvm-symbolizer for the sanitizers' stack traces
   libsystemd-dev systemd  # agvslamd: sd_notify (READY/WATCHDOG/STATUS/STOPPING); systemd-analyze verify in the tests
   python3-torch python3-onnx python3-opencv python3-numpy  # src/semantic/training: train and export the segmenter
 )

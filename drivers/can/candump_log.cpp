@@ -2,6 +2,7 @@
 
 #include <cctype>
 #include <cstdio>
+#include <limits>
 
 #include "agvslam/core/error.h"
 
@@ -38,7 +39,11 @@ std::optional<CandumpRecord> parse_candump_line(const std::string& line, const s
     int64_t sec = 0;
     for (std::size_t i = 0; i < dot; ++i) {
       if (std::isdigit(static_cast<unsigned char>(ts[i])) == 0) return fail("bad time stamp");
-      sec = sec * 10 + (ts[i] - '0');
+      // At most kMaxSec seconds, so that sec * 1e9 + the fraction fits in int64 nanoseconds (until 2262).
+      constexpr int64_t kMaxSec = std::numeric_limits<int64_t>::max() / 1000000000 - 1;
+      const int digit = ts[i] - '0';
+      if (sec > (kMaxSec - digit) / 10) return fail("time stamp beyond " + std::to_string(kMaxSec) + " s");
+      sec = sec * 10 + digit;
     }
     int64_t frac = 0;
     int digits = 0;
@@ -58,6 +63,7 @@ std::optional<CandumpRecord> parse_candump_line(const std::string& line, const s
   if (sp == std::string::npos) return fail("no frame after the interface");
   r.interface = line.substr(p, sp - p);
   p = line.find_first_not_of(' ', sp);
+  if (p == std::string::npos) return fail("no frame after the interface");
   std::size_t end = line.find_first_of(" \t\r", p);
   const std::string frame = line.substr(p, end == std::string::npos ? std::string::npos : end - p);
   const std::size_t hash = frame.find('#');

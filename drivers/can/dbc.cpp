@@ -106,6 +106,28 @@ Dbc Dbc::parse(const std::string& text, const std::string& source) {
       throw InputError(source, where(), "expected a number, found '" + s + "'");
     }
   };
+  // The regular expressions admit any run of digits: values beyond the field's range are refused here (std::stoul
+  // would throw out_of_range, a cast would truncate).
+  auto integer = [&](const std::string& s, uint64_t max) {
+    uint64_t v = 0;
+    try {
+      v = std::stoull(s);
+    } catch (const std::exception&) {
+      v = max + 1;
+    }
+    if (v > max) {
+      throw InputError(source, where(), "expected an integer in [0, " + std::to_string(max) + "], found '" + s + "'");
+    }
+    return v;
+  };
+  auto signed_integer = [&](const std::string& s) {
+    try {
+      return static_cast<int64_t>(std::stoll(s));
+    } catch (const std::exception&) {
+      throw InputError(source, where(), "expected a 64-bit integer, found '" + s + "'");
+    }
+  };
+  constexpr uint64_t kMaxRawId = 0xFFFFFFFF;  // 29-bit id | kDbcExtendedFlag
   std::smatch m;
   while (std::getline(lines, line)) {
     ++line_no;
@@ -114,13 +136,12 @@ Dbc Dbc::parse(const std::string& text, const std::string& source) {
       if (!std::regex_match(t, m, bo_re))
         throw InputError(source, where(), "expected 'BO_ <id> <name>: <length> <node>'");
       DbcMessage msg;
-      const auto raw_id = static_cast<uint32_t>(std::stoul(m[1].str()));
+      const auto raw_id = static_cast<uint32_t>(integer(m[1].str(), kMaxRawId));
       msg.extended = (raw_id & kDbcExtendedFlag) != 0;
       msg.id = raw_id & ~kDbcExtendedFlag;
       msg.name = m[2].str();
-      msg.length = static_cast<unsigned>(std::stoul(m[3].str()));
+      msg.length = static_cast<unsigned>(integer(m[3].str(), 64));
       msg.transmitter = m[4].str();
-      if (msg.length > 64) throw InputError(source, where(), "expected a message length of at most 64 bytes");
       dbc.messages_.push_back(msg);
       current = &dbc.messages_.back();
     } else if (starts_with(t, "SG_ ")) {
@@ -135,8 +156,8 @@ Dbc Dbc::parse(const std::string& text, const std::string& source) {
       }
       DbcSignal s;
       s.name = m[1].str();
-      s.start_bit = static_cast<unsigned>(std::stoul(m[3].str()));
-      s.length = static_cast<unsigned>(std::stoul(m[4].str()));
+      s.start_bit = static_cast<unsigned>(integer(m[3].str(), 64 * 8 - 1));
+      s.length = static_cast<unsigned>(integer(m[4].str(), 64));
       s.little_endian = m[5].str() == "1";
       s.is_signed = m[6].str() == "-";
       s.factor = number(m[7].str());
@@ -154,7 +175,7 @@ Dbc Dbc::parse(const std::string& text, const std::string& source) {
     } else {
       if (!t.empty() && !starts_with(t, "SG_")) current = nullptr;
       if (starts_with(t, "VAL_ ") && std::regex_match(t, m, val_re)) {
-        const auto raw_id = static_cast<uint32_t>(std::stoul(m[1].str()));
+        const auto raw_id = static_cast<uint32_t>(integer(m[1].str(), kMaxRawId));
         const std::string sig = m[2].str();
         const std::string items = m[3].str();
         for (auto& msg : dbc.messages_) {
@@ -163,13 +184,13 @@ Dbc Dbc::parse(const std::string& text, const std::string& source) {
             if (s.name != sig) continue;
             for (auto it = std::sregex_iterator(items.begin(), items.end(), val_item_re); it != std::sregex_iterator();
                  ++it) {
-              s.value_names[std::stoll((*it)[1].str())] = (*it)[2].str();
+              s.value_names[signed_integer((*it)[1].str())] = (*it)[2].str();
             }
           }
         }
       } else if (starts_with(t, "BA_ \"VFrameFormat\"") && std::regex_match(t, m, ba_fmt_re)) {
-        const auto raw_id = static_cast<uint32_t>(std::stoul(m[1].str()));
-        const int fmt = std::stoi(m[2].str());
+        const auto raw_id = static_cast<uint32_t>(integer(m[1].str(), kMaxRawId));
+        const auto fmt = integer(m[2].str(), kMaxRawId);
         for (auto& msg : dbc.messages_) {
           if (msg.id == (raw_id & ~kDbcExtendedFlag) && msg.extended == ((raw_id & kDbcExtendedFlag) != 0)) {
             msg.fd = fmt == 14 || fmt == 15;

@@ -35,9 +35,16 @@ void fill_pose_with_cov(const PoseSample& s, geometry_msgs_msg_dds__PoseWithCova
   }
 }
 
+// A received string field for JSON: bytes that are not UTF-8 (a faulty or forged sample) become U+FFFD, as
+// nlohmann's replace handler writes them, so that dumping the message cannot throw.
+std::string utf8_text(const char* s) {
+  if (s == nullptr) return "";
+  const nlohmann::json text = std::string(s);
+  return nlohmann::json::parse(text.dump(-1, ' ', false, nlohmann::json::error_handler_t::replace)).get<std::string>();
+}
+
 nlohmann::json header_json(const std_msgs_msg_dds__Header_& h) {
-  return {{"stamp", {{"sec", h.stamp.sec}, {"nanosec", h.stamp.nanosec}}},
-          {"frame_id", h.frame_id != nullptr ? h.frame_id : ""}};
+  return {{"stamp", {{"sec", h.stamp.sec}, {"nanosec", h.stamp.nanosec}}}, {"frame_id", utf8_text(h.frame_id)}};
 }
 
 nlohmann::json cov_json(const double (&c)[36]) {
@@ -117,7 +124,7 @@ nlohmann::json to_json(const PoseMsg& m) {
 nlohmann::json to_json(const OdomMsg& m) {
   const auto& tw = m.twist.twist;
   return {{"header", header_json(m.header)},
-          {"child_frame_id", m.child_frame_id != nullptr ? m.child_frame_id : ""},
+          {"child_frame_id", utf8_text(m.child_frame_id)},
           {"pose", pose_with_cov_json(m.pose)},
           {"twist",
            {{"twist",

@@ -16,6 +16,7 @@
 #include "agvslam/core/error.h"
 #include "agvslam/io/calibration_io.h"
 #include "cdr.h"
+#include "ros_message_decode.h"
 #include "text_util.h"
 
 namespace agvslam::io {
@@ -82,12 +83,9 @@ bool names_side(const std::string& topic, const std::string& side) {
 
 std::string size_text(const cv::Size& size) { return std::to_string(size.width) + "x" + std::to_string(size.height); }
 
-struct CameraInfo {
-  std::string topic;
-  int width = 0, height = 0;
-  std::string distortion_model;
-  std::vector<double> d, k, r, p;
-};
+}  // namespace
+
+namespace detail {
 
 CameraInfo decode_camera_info(CdrReader& in, const std::string& topic) {
   CameraInfo info;
@@ -124,7 +122,6 @@ BagOdometrySample decode_odometry(CdrReader& in) {
   return s;
 }
 
-// Grey 8-bit image of a sensor_msgs/msg/Image message.
 cv::Mat decode_raw_image(CdrReader& in, const std::string& source, const std::string& context) {
   detail::read_header_stamp_ns(in);
   in.string("header.frame_id");
@@ -169,6 +166,11 @@ cv::Mat decode_raw_image(CdrReader& in, const std::string& source, const std::st
                      "expected at least " + std::to_string(row_bytes) + " bytes a row (" + std::to_string(width) +
                          " pixels of " + encoding + "), found " + std::to_string(step));
   }
+  if (step % CV_ELEM_SIZE1(type) != 0) {
+    throw InputError(source, context + " field 'step'",
+                     "expected a multiple of the " + std::to_string(CV_ELEM_SIZE1(type)) + "-byte samples of " +
+                         encoding + ", found " + std::to_string(step));
+  }
   if (data_bytes < static_cast<std::size_t>(step) * height) {
     throw InputError(source, context + " field 'data'",
                      "expected step * height = " + std::to_string(static_cast<std::size_t>(step) * height) +
@@ -195,7 +197,6 @@ cv::Mat decode_raw_image(CdrReader& in, const std::string& source, const std::st
   return grey;
 }
 
-// Grey 8-bit image of a sensor_msgs/msg/CompressedImage message (png / jpeg).
 cv::Mat decode_compressed_image(CdrReader& in, const std::string& source, const std::string& context) {
   detail::read_header_stamp_ns(in);
   in.string("header.frame_id");
@@ -215,7 +216,13 @@ cv::Mat decode_compressed_image(CdrReader& in, const std::string& source, const 
   return grey;
 }
 
-}  // namespace
+}  // namespace detail
+
+using detail::CameraInfo;
+using detail::decode_camera_info;
+using detail::decode_compressed_image;
+using detail::decode_odometry;
+using detail::decode_raw_image;
 
 // ---------------------------------------------------------------------------------------------------------------
 // The .db3 files

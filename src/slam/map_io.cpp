@@ -119,6 +119,7 @@ class Reader {
   }
   void bytes(void* out, std::size_t n, const char* field) {
     need(n, field);
+    if (n == 0) return;  // out may be an empty vector's null data(), which memcpy must not get
     std::memcpy(out, data_.data() + pos_, n);
     pos_ += n;
   }
@@ -465,10 +466,14 @@ MapFileSummary decode_map(const std::string& bytes, const std::string& source, c
       kp.response = r.get<float>(where.c_str());
       kp.octave = r.get<int32_t>(where.c_str());
       kp.class_id = r.get<int32_t>(where.c_str());
-      if (kp.octave < 0 || kp.octave >= geometry->n_levels || !std::isfinite(kp.pt.x) || !std::isfinite(kp.pt.y)) {
-        throw InputError(
-            source, where + " keypoint " + std::to_string(i),
-            "expected a finite position and a pyramid level in [0, " + std::to_string(geometry->n_levels - 1) + "]");
+      // Inside the image (ORB finds keypoints there): the feature grid turns the position into a cell index.
+      const bool inside = kp.pt.x >= 0 && kp.pt.x <= static_cast<float>(geometry->camera.width) && kp.pt.y >= 0 &&
+                          kp.pt.y <= static_cast<float>(geometry->camera.height);
+      if (kp.octave < 0 || kp.octave >= geometry->n_levels || !inside) {
+        throw InputError(source, where + " keypoint " + std::to_string(i),
+                         "expected a position inside the " + std::to_string(geometry->camera.width) + "x" +
+                             std::to_string(geometry->camera.height) + " image and a pyramid level in [0, " +
+                             std::to_string(geometry->n_levels - 1) + "]");
       }
     }
     descs.create(static_cast<int>(n), 32, CV_8UC1);

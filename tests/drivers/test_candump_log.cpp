@@ -63,4 +63,18 @@ TEST(CandumpLog, RejectsMalformedLines) {
   }
 }
 
+// Found by tests/fuzz (candump): seconds whose nanoseconds overflow int64, and a line that ends after the
+// interface, were undefined behaviour and an uncaught std::out_of_range.
+TEST(CandumpLog, RejectsTimeStampsBeyondInt64AndLinesWithoutAFrame) {
+  EXPECT_EQ(parse_candump_line("(9223372035.999999) vcan0 123#00", "dump.log", 1)->t_ns, 9223372035999999000);
+  for (const char* bad : {"(9223372036.0) vcan0 123#00", "(11699999999.123456) vcan0 300#00", "(1.0) vcan0   "}) {
+    try {
+      parse_candump_line(bad, "dump.log", 3);
+      ADD_FAILURE() << "accepted: " << bad;
+    } catch (const agvslam::InputError& e) {
+      EXPECT_EQ(e.where(), "line 3") << bad;
+    }
+  }
+}
+
 }  // namespace

@@ -70,6 +70,22 @@ TEST(Dbc, RejectsMalformedLinesWithTheirNumber) {
   EXPECT_THROW(Dbc::load("/nonexistent/agvslam.dbc"), agvslam::InputError);
 }
 
+// Found by tests/fuzz (dbc): a run of digits beyond unsigned long escaped as std::out_of_range, and ids beyond
+// 32 bits were truncated.
+TEST(Dbc, RejectsNumbersBeyondTheirField) {
+  for (const char* bad :
+       {"BO_ 77888888888888888888888 M: 8 A\n", "BO_ 4294967296 M: 8 A\n", "BO_ 1 M: 65 A\n",
+        "BO_ 1 M: 8 A\n SG_ S : 99999999999999999999|8@1+ (1,0) [0|1] \"\" B\n",
+        "BO_ 1 M: 8 A\n SG_ S : 0|8@1+ (1,0) [0|1] \"\" B\n\nVAL_ 1 S 99999999999999999999 \"x\" ;\n"}) {
+    try {
+      Dbc::parse(bad, "big.dbc");
+      ADD_FAILURE() << "accepted: " << bad;
+    } catch (const agvslam::InputError& e) {
+      EXPECT_EQ(e.source(), "big.dbc");
+    }
+  }
+}
+
 TEST(Dbc, ShippedDbcDescribesTheEncoderLayout) {
   const Dbc dbc = Dbc::load(std::string(AGVSLAM_SOURCE_DIR) + "/deploy/agvslam.dbc");
   struct Want {

@@ -98,6 +98,19 @@ TEST(RosMessages, JsonUsesRosFieldNamesAndRoundTripPrecision) {
   EXPECT_EQ(back, j);
 }
 
+// Found by tests/fuzz (dds_samples): a received frame_id that is not UTF-8 made agvslam-echo's dump() throw.
+TEST(RosMessages, JsonOfStringsThatAreNotUtf8StillDumps) {
+  char frame_id[] = "map\xff\xfe";
+  char child[] = "base\xc3";
+  OdomMsg m{};
+  m.header.frame_id = frame_id;
+  m.child_frame_id = child;
+  const nlohmann::json j = to_json(m);
+  EXPECT_EQ(j["header"]["frame_id"], "map\ufffd\ufffd");
+  EXPECT_EQ(j["child_frame_id"], "base\ufffd");
+  EXPECT_NO_THROW(j.dump());
+}
+
 TEST(RosMessages, TypeNamesFollowRmwCyclonedds) {
   EXPECT_STREQ(geometry_msgs_msg_dds__PoseWithCovarianceStamped__desc.m_typename, kPoseTypeName);
   EXPECT_STREQ(nav_msgs_msg_dds__Odometry__desc.m_typename, kOdomTypeName);

@@ -8,6 +8,7 @@
 #include <opencv2/imgproc.hpp>
 #include <random>
 
+#include "../src/io/ros_message_decode.h"
 #include "agvslam/io/calibration_io.h"
 #include "agvslam/io/dataset.h"
 #include "agvslam/io/rosbag_dataset.h"
@@ -477,4 +478,21 @@ TEST(RosbagDataset, CameraInfoOfNoRectifiedPairNamesTheTopic) {
 }
 
 }  // namespace
+// Found by tests/fuzz (rosbag_cdr): a mono16 image whose step is not a whole number of pixels escaped from
+// cv::Mat as a cv::Exception.
+TEST(RosbagDataset, ImageStepOfHalfASampleNamesTheField) {
+  test::CdrWriter w;
+  w.header(1'000'000'000, "camera");
+  w.u32(2);  // height
+  w.u32(2);  // width
+  w.string("mono16");
+  w.u8(0);
+  w.u32(5);  // step: 2 pixels of 2 bytes and one byte of padding, half a sample
+  const std::vector<uint8_t> pixels(10, 0x80);
+  w.bytes(pixels.data(), pixels.size());
+  io::detail::CdrReader in(w.data().data(), w.data().size(), "bag.db3", "topic /left message 3");
+  expect_input_error([&] { io::detail::decode_raw_image(in, "bag.db3", "topic /left message 3"); },
+                     {"bag.db3", "topic /left message 3 field 'step'", "multiple of the 2-byte samples of mono16"});
+}
+
 }  // namespace agvslam::io
