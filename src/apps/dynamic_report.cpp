@@ -57,7 +57,9 @@ nlohmann::json object_diagnostics(const std::vector<agvslam::io::SceneObject>* o
       const uint8_t* d = r.mask.image.ptr<uint8_t>(y);
       const float* gd = gt_disparity_px.empty() ? nullptr : gt_disparity_px.ptr<float>(y);
       for (int x = box.x; x < box.br().x; ++x) {
-        if (!g[x] || !own(x, y)) continue;
+        // A moving object is its moving pixels; one standing still is its own instance pixels (none without
+        // instance_0/: its box alone would count the background around it).
+        if ((obj.moving ? !g[x] : gt_instances.empty()) || !own(x, y)) continue;
         ++pixels;
         if (gd != nullptr && gd[x] > 0) disparities.push_back(gd[x]);
         in_mask += d[x] ? 1 : 0;
@@ -262,6 +264,11 @@ void score_frame(std::size_t i, std::size_t first, const agvslam::io::StereoData
       d["gt_motion_valid"] = m.valid;
     }
   }
+  for (const auto& d : jf["objects"]) {
+    if (d["moving"].get<bool>()) continue;
+    totals.still_pixels += d["pixels"].get<int>();
+    totals.still_masked += d["in_mask"].get<int>();
+  }
   if (it != gt.objects.end()) totals.breakdown.add(it->second, jf["objects"], truth.mask.size(), scoring);
   jf["detections"] = detection_diagnostics(f, result.mask.instances, truth.mask);
 }
@@ -338,6 +345,11 @@ void print_summary(bool scored, const eval::DetectionScoringConfig& scoring, Tot
         score.false_positives_per_100_frames());
     std::printf("pixels: precision %.4f recall %.4f IoU %.4f\n", score.pixel_precision(), score.pixel_recall(),
                 score.pixel_iou());
+    if (totals.still_pixels > 0) {
+      std::printf("people and vehicles standing still: %.4f of their %lld pixels left unmasked\n",
+                  1.0 - static_cast<double>(totals.still_masked) / static_cast<double>(totals.still_pixels),
+                  static_cast<long long>(totals.still_pixels));
+    }
     std::printf("%s\n", totals.breakdown.describe().c_str());
     std::printf("%s\n", totals.breakdown.describe_misses().c_str());
     if (totals.breakdown.has_motion()) std::printf("%s\n", totals.breakdown.describe_motion().c_str());
@@ -374,6 +386,12 @@ void write_json(const Options& o, const agvslam::io::StereoDataset& dataset, std
     j["dont_care_objects"] = score.ignored_objects();
     j["false_regions_per_100_frames"] = score.false_positives_per_100_frames();
     j["pixel"] = {{"precision", score.pixel_precision()}, {"recall", score.pixel_recall()}, {"iou", score.pixel_iou()}};
+    j["still_objects"] = {
+        {"pixels", totals.still_pixels},
+        {"masked_pixels", totals.still_masked},
+        {"unmasked_fraction", totals.still_pixels > 0 ? 1.0 - static_cast<double>(totals.still_masked) /
+                                                                  static_cast<double>(totals.still_pixels)
+                                                      : 1.0}};
     j["recall_breakdown"] = totals.breakdown.to_json();
     j["misses_by_stage"] = totals.breakdown.misses_json();
     if (totals.breakdown.has_motion()) j["recall_by_ground_truth_motion"] = totals.breakdown.motion_json();

@@ -255,6 +255,9 @@ struct Totals {
   int regions = 0, frames_detected = 0, frames_with_regions = 0, unconfirmed = 0;
   int instances_scored = 0;  // frames whose objects were scored with instance_0/ (their own pixels only)
   RecallBreakdown breakdown;
+  // Pixels of people and vehicles standing still (instance_0/ and objects.txt), and of those the ones masked: the
+  // features a detector must leave to the SLAM.
+  int64_t still_pixels = 0, still_masked = 0;
   nlohmann::json per_frame = nlohmann::json::array();
 
   void add_time(const std::string& stage, double ms) {

@@ -119,6 +119,30 @@ TEST(DynamicTool, WritesMasksOverlaysScoresAndJson) {
     }
   }
   EXPECT_GT(checked, 0);
+
+  // People and vehicles standing still (the person stops halfway): their own pixels (instance_0/) and of those the
+  // ones in the written mask, recounted here; what the detector must leave to the SLAM.
+  int64_t still_pixels = 0, still_masked = 0;
+  for (const auto& jf : j["per_frame"]) {
+    if (!jf.contains("objects")) continue;
+    char name[32];
+    std::snprintf(name, sizeof(name), "%06d.png", jf["frame"].get<int>());
+    const cv::Mat inst = cv::imread(data + "/instance_0/" + name, cv::IMREAD_UNCHANGED);
+    const cv::Mat mask = cv::imread(out + "/mask/" + name, cv::IMREAD_UNCHANGED);
+    ASSERT_FALSE(inst.empty() || mask.empty()) << name;
+    for (const auto& o : jf["objects"]) {
+      if (o["moving"].get<bool>()) continue;
+      const cv::Mat own = inst == o["id"].get<int>();
+      EXPECT_EQ(o["pixels"].get<int>(), cv::countNonZero(own)) << name;
+      still_pixels += cv::countNonZero(own);
+      still_masked += cv::countNonZero(own & mask);
+    }
+  }
+  EXPECT_GT(still_pixels, 0) << "the person stands for a while";
+  EXPECT_EQ(j["still_objects"]["pixels"].get<int64_t>(), still_pixels);
+  EXPECT_EQ(j["still_objects"]["masked_pixels"].get<int64_t>(), still_masked);
+  EXPECT_NE(stdout_text.find("people and vehicles standing still:"), std::string::npos);
+
   const nlohmann::json& rb = j["recall_breakdown"];
   int by_size = 0, by_distance = 0;
   for (const char* k : {"size_lt1500", "size_1500_5000", "size_5000_20000", "size_ge20000"})

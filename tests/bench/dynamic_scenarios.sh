@@ -2,12 +2,14 @@
 # Scores the dynamic-region detector on simulator scenarios:
 #   tests/bench/dynamic_scenarios.sh [--build DIR] [--data DIR] [--seeds "101 102 103 104 105"]
 #                                    [--scenarios "static scene1 scene2 scene3 scene4 scene5"] [--threads N]
-#                                    [--params-dynamic FILE] [--record]
+#                                    [--params-dynamic FILE] [--semantic MODEL] [--record]
 # Generates each <scenario>_<seed> sequence under --data once (agvslam-sim, full default length), runs
 # agvslam-dynamic on it (JSON under <data>/results/) and prints one line per sequence and the totals:
 # object precision / recall / mean IoU (paper 004 eqs. 12-14), false regions per 100 frames, and the median and
 # p95 detector time per frame: wall and the detector thread's CPU time (agvslam-dynamic runs it with one OpenCV
 # thread; CPU time stays meaningful on a loaded machine). Rendering dominates: ~0.2 s per frame and core.
+# --semantic MODEL adds the semantic keyframes (agvslam-dynamic --semantic) to the geometric detector; the totals
+# then also say how much of the people and vehicles standing still stays unmasked.
 set -euo pipefail
 source "$(dirname "$0")/record.sh"
 record_init "$0" "$@"
@@ -17,6 +19,7 @@ seeds="101 102 103 104 105"
 scenarios="static scene1 scene2 scene3 scene4 scene5"
 threads=$(nproc)
 params=()
+semantic=()
 while [[ $# -gt 0 ]]; do
   case "$1" in
     --build) build=$2; shift 2 ;;
@@ -26,7 +29,8 @@ while [[ $# -gt 0 ]]; do
     --threads) threads=$2; shift 2 ;;
     --record) record=1; shift ;;
     --params-dynamic) params=(--params-dynamic "$2"); shift 2 ;;
-    *) echo "dynamic_scenarios.sh: unknown option '$1' (expected --build, --data, --seeds, --scenarios, --threads, --params-dynamic, --record)" >&2; exit 2 ;;
+    --semantic) semantic=(--semantic "$2"); shift 2 ;;
+    *) echo "dynamic_scenarios.sh: unknown option '$1' (expected --build, --data, --seeds, --scenarios, --threads, --params-dynamic, --semantic, --record)" >&2; exit 2 ;;
   esac
 done
 sim=$build/bin/agvslam-sim
@@ -34,7 +38,9 @@ dyn=$build/bin/agvslam-dynamic
 for tool in "$sim" "$dyn"; do
   [[ -x $tool ]] || { echo "dynamic_scenarios.sh: $tool not found; build first (cmake --build --preset release)" >&2; exit 2; }
 done
-mkdir -p "$data/results"
+results=$data/results
+[[ ${#semantic[@]} -gt 0 ]] && results=$data/results_semantic  # beside the geometric detector's, not over them
+mkdir -p "$results"
 for scenario in $scenarios; do
   for seed in $seeds; do
     seq=$data/${scenario}_$seed
@@ -42,12 +48,12 @@ for scenario in $scenarios; do
     if [[ ! -f $seq/objects.txt || ! -d $seq/instance_0 ]]; then
       "$sim" --scenario "$scenario" --seed "$seed" --out "$seq" --threads "$threads" > "$seq.log" 2>&1
     fi
-    "$dyn" --dataset "$seq" "${params[@]}" --out "$data/results/${scenario}_$seed" --overlay-every 50 \
-      --json "$data/results/${scenario}_$seed.json" > "$data/results/${scenario}_$seed.txt" 2> /dev/null
+    "$dyn" --dataset "$seq" "${params[@]}" "${semantic[@]}" --out "$results/${scenario}_$seed" --overlay-every 50 \
+      --json "$results/${scenario}_$seed.json" > "$results/${scenario}_$seed.txt" 2> /dev/null
   done
 done
 record_start
-/usr/bin/env python3 - "$data/results" $scenarios -- $seeds <<'PY'
+/usr/bin/env python3 - "$results" $scenarios -- $seeds <<'PY'
 import json, sys
 root = sys.argv[1]
 args = sys.argv[2:]
@@ -61,6 +67,7 @@ motion = {}
 print(f"{'sequence':<14}{'frames':>7}{'P':>8}{'R':>8}{'IoU':>8}{'TP':>6}{'FP':>6}{'FN':>6}{'FP/100f':>9}{'med ms':>8}{'p95 ms':>8}"
       f"{'cpu med':>9}{'cpu p95':>9}")
 static_frames = static_regions = 0
+still = [0, 0]  # pixels of people and vehicles standing still, of those masked
 for sc in scenarios:
     for seed in seeds:
         j = json.load(open(f"{root}/{sc}_{seed}.json"))
@@ -78,6 +85,8 @@ for sc in scenarios:
             for band, bins in j.get("recall_by_ground_truth_motion", {}).items():
                 for k, v in bins.items():
                     b = motion.setdefault(band, {}).setdefault(k, [0, 0]); b[0] += v["found"]; b[1] += v["objects"]
+            s = j.get("still_objects", {"pixels": 0, "masked_pixels": 0})
+            still[0] += s["pixels"]; still[1] += s["masked_pixels"]
         else:
             static_frames += j["frames"]["detected"]; static_regions += j["regions"]["total"]
         t = j["timings"]["total"]
@@ -89,6 +98,9 @@ tp, fp, fn = tot["tp"], tot["fp"], tot["fn"]
 if tp + fp + fn:
     print(f"scene1..5 total: precision {tp / max(1, tp + fp):.3f} recall {tp / max(1, tp + fn):.3f} "
           f"mean IoU {tot['iou'] / max(1, tp):.3f} (TP {tp} FP {fp} FN {fn})")
+if still[0]:
+    print(f"people and vehicles standing still: {1 - still[1] / still[0]:.3f} of their pixels left unmasked "
+          f"({still[0] - still[1]} of {still[0]})")
 if breakdown:
     names = [("size_lt1500", "<1500 px"), ("size_1500_5000", "1500-5000 px"), ("size_5000_20000", "5000-20000 px"),
              ("size_ge20000", ">=20000 px"), ("border", "cut by the image border"), ("border_left", "cut by the left border"),

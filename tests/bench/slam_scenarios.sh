@@ -3,7 +3,7 @@
 #   tests/bench/slam_scenarios.sh [--build DIR] [--data DIR] [--seeds "101 102 103 104 105"]
 #                                 [--scenarios "static scene1 scene2 scene3 scene4 scene5 scene6"]
 #                                 [--modes "detector gt off"] [--mapping inline|thread] [--threads N]
-#                                 [--generate-only] [--table-only] [--record]
+#                                 [--semantic MODEL] [--generate-only] [--table-only] [--record]
 # Generates each <scenario>_<seed> sequence under --data once (agvslam-sim, full default length; ~0.2-0.35 s per
 # frame and core), runs agvslam-run on it per mode (trajectory, JSON and log under <data>/slam/), and prints one
 # table (tests/bench/slam_table.py): per sequence the ATE RMSE per mode (SE(3)-aligned), drift (largest distance
@@ -12,6 +12,8 @@
 # mean and standard deviation over the seeds, and the product's masking targets checked on the means.
 # --mapping inline (default) maps each keyframe before the next frame: the same input gives the same result.
 # --table-only prints the table from the results already under <data>/slam/.
+# Mode `semantic` is the detector with the semantic keyframes (agvslam-run --dynamic detector --semantic MODEL;
+# MODEL from --semantic, default the shipped params/models/pspnet_mnv2.onnx).
 set -euo pipefail
 source "$(dirname "$0")/record.sh"
 record_init "$0" "$@"
@@ -24,6 +26,7 @@ mapping=inline
 threads=$(nproc)
 generate_only=0
 table_only=0
+semantic_model=$(dirname "$0")/../../params/models/pspnet_mnv2.onnx
 while [[ $# -gt 0 ]]; do
   case "$1" in
     --build) build=$2; shift 2 ;;
@@ -33,10 +36,11 @@ while [[ $# -gt 0 ]]; do
     --modes) modes=$2; shift 2 ;;
     --mapping) mapping=$2; shift 2 ;;
     --threads) threads=$2; shift 2 ;;
+    --semantic) semantic_model=$2; shift 2 ;;
     --record) record=1; shift ;;
     --generate-only) generate_only=1; shift ;;
     --table-only) table_only=1; shift ;;
-    *) echo "slam_scenarios.sh: unknown option '$1' (expected --build, --data, --seeds, --scenarios, --modes, --mapping, --threads, --generate-only, --table-only, --record)" >&2; exit 2 ;;
+    *) echo "slam_scenarios.sh: unknown option '$1' (expected --build, --data, --seeds, --scenarios, --modes, --mapping, --threads, --semantic, --generate-only, --table-only, --record)" >&2; exit 2 ;;
   esac
 done
 sim=$build/bin/agvslam-sim
@@ -55,7 +59,9 @@ for scenario in $scenarios_to_run; do
     [[ $generate_only == 1 ]] && continue
     for mode in $modes; do
       out=$data/slam/${scenario}_${seed}_$mode
-      "$run" --dataset "$seq" --out "$out.tum" --dynamic "$mode" --mapping "$mapping" --json "$out.json" \
+      masking=(--dynamic "$mode")
+      [[ $mode == semantic ]] && masking=(--dynamic detector --semantic "$semantic_model")
+      "$run" --dataset "$seq" --out "$out.tum" "${masking[@]}" --mapping "$mapping" --json "$out.json" \
         > "$out.txt" 2> "$out.log" || echo "slam_scenarios.sh: agvslam-run failed on $seq ($mode), see $out.log" >&2
     done
   done

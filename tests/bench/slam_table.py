@@ -94,6 +94,10 @@ def main(argv):
             if off["ate"] > 2 * gt["ate"]:
                 lower = 100 * (1 - det["ate"] / off["ate"])
                 checks.append((f"off > 2 x gt: detector {lower:.1f} % lower than off (>= 70)", lower >= 70))
+        if "semantic" in means and det["ate"] > 0:
+            # Issue 38: the semantic keyframes must not make the pose worse than the geometric detector alone.
+            vs_det = 100 * (means["semantic"]["ate"] / det["ate"] - 1)
+            checks.append((f"semantic ATE vs detector {vs_det:+.1f} % (<= 0)", vs_det <= 0))
         line = "; ".join(f"{text} {'ok' if ok else 'MISSED'}" for text, ok in checks)
         print(f"  {sc}: {line}")
         failures += [f"{sc}: {text}" for text, ok in checks if not ok]
