@@ -108,6 +108,7 @@ void fill_status_msg(const PoseSample& s, const FrameIds& frames, StatusMsg& out
   out.odometry_distance_ratio = static_cast<float>(s.odometry_check.distance_ratio);
   out.odometry_speed_rmse_mps = static_cast<float>(s.odometry_check.speed_rmse_mps);
   out.odometry_heading_difference_deg = static_cast<float>(s.odometry_check.heading_difference_deg);
+  out.map_id = s.map_id;
 }
 
 nlohmann::json to_json(const PoseMsg& m) {
@@ -140,7 +141,8 @@ nlohmann::json to_json(const StatusMsg& m) {
           {"odometry_distance_ratio",
            std::isnan(m.odometry_distance_ratio) ? nlohmann::json() : nlohmann::json(m.odometry_distance_ratio)},
           {"odometry_speed_rmse_mps", m.odometry_speed_rmse_mps},
-          {"odometry_heading_difference_deg", m.odometry_heading_difference_deg}};
+          {"odometry_heading_difference_deg", m.odometry_heading_difference_deg},
+          {"map_id", m.map_id}};
 }
 
 }  // namespace agvslam::drivers::dds

@@ -132,6 +132,13 @@ void PoseOutputs::publish(OutputItem& item) {
   drivers::PoseSample& s = item.sample;
   const bool tracking = s.tracking_state == drivers::TrackingState::kTracking && !item.heartbeat;
   if (odometry_monitor_) check_odometry(item, tracking);
+  if (!item.heartbeat && s.map_id != map_id_) {
+    spdlog::warn(
+        "slam: tracking was lost too long to relocalise; map {} started at the vehicle's position (frame {}): the "
+        "pose jumps to its origin (DDS status map_id)",
+        s.map_id, s.frame_index);
+    map_id_ = s.map_id;
+  }
   s.latency_ns = item.heartbeat ? 0 : dds::realtime_now_ns() - s.t_ns;
   if (tracking && dds_pose_) dds_pose_->publish(s);
   if (dds_status_) dds_status_->publish(s);

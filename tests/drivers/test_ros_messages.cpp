@@ -79,6 +79,12 @@ TEST(RosMessages, PoseOdomStatusCarryTheSample) {
   EXPECT_EQ(st.odometry_speed_rmse_mps, 0.2F);
   EXPECT_EQ(st.odometry_heading_difference_deg, -3.5F);
   EXPECT_EQ(to_json(st).at("odometry_check_state"), 5);
+  // The map the pose is in (a new map after a long loss).
+  EXPECT_EQ(st.map_id, 0U);
+  checked.map_id = 3;
+  fill_status_msg(checked, frames, st);
+  EXPECT_EQ(st.map_id, 3U);
+  EXPECT_EQ(to_json(st).at("map_id"), 3);
 }
 
 TEST(RosMessages, JsonUsesRosFieldNamesAndRoundTripPrecision) {
@@ -116,6 +122,7 @@ TEST(RosMessages, StatusMsgMatchesTheIdl) {
   const std::map<std::string, std::string> ros_to_idl = {{"std_msgs/Header", "std_msgs::msg::dds_::Header_"},
                                                          {"uint8", "uint8"},
                                                          {"uint64", "unsigned long long"},
+                                                         {"uint32", "unsigned long"},
                                                          {"float32", "float"}};
   std::vector<std::string> from_msg, from_idl;
   std::string line;
@@ -145,7 +152,7 @@ TEST(RosMessages, StatusMsgMatchesTheIdl) {
     from_idl.push_back(line.substr(b, sp - b) + " " + line.substr(sp + 1));
   }
   EXPECT_EQ(from_msg, from_idl);
-  EXPECT_EQ(from_idl.size(), 12U);
+  EXPECT_EQ(from_idl.size(), 13U);
 }
 
 TEST(DdsConfig, ValidatesDescribesAndBuildsCycloneXml) {

@@ -111,6 +111,7 @@ class PoseOutputs {
   drivers::OdometryCheckState odometry_state_ = drivers::OdometryCheckState::kOff;
   std::chrono::steady_clock::time_point last_odometry_warning_{};
   uint64_t odometry_disagreements_ = 0;
+  uint32_t map_id_ = 0;  // of the last frame's sample: a change is logged
   TextFile trajectory_, pose_log_;
   int unflushed_ = 0;
   uint64_t samples_ = 0, tracking_samples_ = 0, heartbeats_ = 0;

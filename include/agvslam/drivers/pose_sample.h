@@ -92,6 +92,9 @@ struct PoseSample {
   Matrix6d cov_twist = Matrix6d::Identity() * 1e-4;
 
   TrackingState tracking_state = TrackingState::kNotInitialized;
+  // The SLAM map the pose is in: 0 for the first, +1 each time a long loss started a new map, whose origin is the
+  // vehicle where it started, so poses of different map ids must not be compared.
+  uint32_t map_id = 0;
 
   uint64_t frame_index = 0;             // index of the frame since the daemon started
   uint64_t frames_processed = 0;        // frames the tracker processed since start
