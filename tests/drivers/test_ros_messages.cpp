@@ -110,6 +110,28 @@ TEST(RosMessages, TypeNamesFollowRmwCyclonedds) {
   EXPECT_STREQ(agvslam_msgs_msg_dds__Status__desc.m_typename, kStatusTypeName);
   EXPECT_STREQ(kPoseTypeName, "geometry_msgs::msg::dds_::PoseWithCovarianceStamped_");
   EXPECT_STREQ(kOdomTypeName, "nav_msgs::msg::dds_::Odometry_");
+  EXPECT_STREQ(tf2_msgs_msg_dds__TFMessage__desc.m_typename, kTfTypeName);
+  EXPECT_STREQ(kTfTypeName, "tf2_msgs::msg::dds_::TFMessage_");
+}
+
+TEST(RosMessages, TransformCarriesTheChildPoseInTheParent) {
+  const PoseSample s = synthetic_pose_sample(23, 1700000000250000000LL);
+  const std::string parent = "map", child = "base_link";
+  TransformMsg m{};
+  fill_transform_msg(s.t_ns, s.T_map_base, parent, child, m);
+  EXPECT_STREQ(m.header.frame_id, "map");
+  EXPECT_STREQ(m.child_frame_id, "base_link");
+  EXPECT_EQ(from_ros_time(m.header.stamp), s.t_ns);
+  EXPECT_GE(m.transform.rotation.w, 0.0);
+  EXPECT_EQ(m.transform.translation.x, s.T_map_base.translation().x());
+  EXPECT_TRUE(from_transform_msg(m).isApprox(s.T_map_base, 1e-12));
+  TfMsg tf{};
+  tf.transforms._length = tf.transforms._maximum = 1;
+  tf.transforms._buffer = &m;
+  const nlohmann::json j = to_json(tf);
+  ASSERT_EQ(j.at("transforms").size(), 1U);
+  EXPECT_EQ(j.at("transforms")[0].at("child_frame_id"), "base_link");
+  EXPECT_EQ(j.at("transforms")[0].at("transform").at("rotation").at("w").get<double>(), m.transform.rotation.w);
 }
 
 // The ROS 2 package shipped for the status type (drivers/dds/ros2/agvslam_msgs/msg/Status.msg) must declare the
