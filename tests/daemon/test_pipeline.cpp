@@ -24,7 +24,8 @@ struct Seen {
   double detector_ms;
 };
 
-std::vector<Seen> play(const std::string& dir, bool ground_truth_masks) {
+// A dataset played as fast as the pipeline takes it, without detector, threads for mapping or DDS: deterministic.
+DaemonConfig lossless_dataset_config(const std::string& dir) {
   DaemonConfig c;
   c.path = "test.yaml";
   c.source.type = SourceType::kDataset;
@@ -34,6 +35,11 @@ std::vector<Seen> play(const std::string& dir, bool ground_truth_masks) {
   c.pipeline.mapping = MappingMode::kInline;
   c.system.threaded_mapping = false;
   c.outputs.dds_enabled = false;
+  return c;
+}
+
+std::vector<Seen> play(const std::string& dir, bool ground_truth_masks) {
+  const DaemonConfig c = lossless_dataset_config(dir);
   const SourceSetup setup = prepare_source(c);
   DatasetPlayback playback;
   playback.laps = 2;
@@ -77,18 +83,10 @@ TEST(Pipeline, ALongLossStartsANewMapAndTheSamplesCarryItsId) {
   // status, the JSON log) carry map_id 0 before, 1 from the new map on.
   AGVSLAM_REQUIRE_SHARED(data, "data/kitti06_f000-050");
   const std::string dir = test::make_temp_dir("agvslamd-newmap");
-  DaemonConfig c;
-  c.path = "test.yaml";
-  c.source.type = SourceType::kDataset;
-  c.source.dataset = data;
-  c.source.rate = 0;
-  c.pipeline.dynamic = DynamicMode::kOff;
-  c.pipeline.mapping = MappingMode::kInline;
-  c.system.threaded_mapping = false;
+  DaemonConfig c = lossless_dataset_config(data);
   const features::FeaturesConfig f = features::load_features_config(AGVSLAM_SOURCE_DIR "/params/features_kitti.yaml");
   c.system.orb = f.orb;
   c.system.stereo = f.stereo_matching;
-  c.outputs.dds_enabled = false;
   c.log.pose_log = dir + "/samples.jsonl";
   const SourceSetup setup = prepare_source(c);
   DatasetPlayback playback;
