@@ -10,9 +10,10 @@
 # keeps its CA (new enclaves are signed by it); an enclave that exists is left alone unless --force.
 #
 # Roles (topic names as DDS sees them: ROS topic /<ns>/pose is rt/<ns>/pose):
-#   daemon   agvslamd: publishes rt/<ns>/* (pose, odom, status), subscribes to its inputs rt/<ns>/in/*
-#   reader   reads rt/<ns>/* only, publishes nothing of agvslam's (plus the topics every ROS 2 node uses:
-#            ros_discovery_info, rt/rosout, rt/parameter_events and its parameter services)
+#   daemon   agvslamd: publishes rt/<ns>/* (pose, odom, status) and rt/tf, rt/tf_static; subscribes to its inputs
+#            rt/<ns>/in/*
+#   reader   reads rt/<ns>/*, rt/tf and rt/tf_static only, publishes nothing of agvslam's (plus the topics every
+#            ROS 2 node uses: ros_discovery_info, rt/rosout, rt/parameter_events and its parameter services)
 #   input    publishes agvslamd's inputs rt/<ns>/in/* (e.g. a vehicle controller's wheel odometry)
 #
 # Options:
@@ -177,12 +178,12 @@ make_enclave() {
   local publish subscribe
   case $role in
     daemon)
-      publish=$(topics_xml "rt/$ns/*")
+      publish=$(topics_xml "rt/$ns/*" rt/tf rt/tf_static)
       subscribe=$(topics_xml "rt/$ns/in/*")
       ;;
     reader)
       publish=$(topics_xml "${ros_pub[@]}")
-      subscribe=$(topics_xml "rt/$ns/*" "${ros_sub[@]}")
+      subscribe=$(topics_xml "rt/$ns/*" rt/tf rt/tf_static "${ros_sub[@]}")
       ;;
     input)
       publish=$(topics_xml "rt/$ns/in/*")

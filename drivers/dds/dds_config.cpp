@@ -35,6 +35,9 @@ const params::Table<DdsConfig>& dds_params() {
               {"publish_pose", &DdsConfig::publish_pose},
               {"publish_odom", &DdsConfig::publish_odom},
               {"publish_status", &DdsConfig::publish_status},
+              {"publish_tf", &DdsConfig::publish_tf},
+              {"publish_tf_static", &DdsConfig::publish_tf_static},
+              {"camera_frame_id", &DdsConfig::camera_frame_id, Text::non_empty(), "a frame name, e.g. camera_optical_frame"},
               {"map_frame_id", &DdsConfig::map_frame_id, Text::non_empty(), "a frame name, e.g. map"},
               {"odom_frame_id", &DdsConfig::odom_frame_id, Text::non_empty(), "a frame name, e.g. map or odom"},
               {"base_frame_id", &DdsConfig::base_frame_id, Text::non_empty(), "a frame name, e.g. base_link"},
@@ -46,13 +49,18 @@ const params::Table<DdsConfig>& dds_params() {
               "topic_namespace", [](const DdsConfig& c) { return is_ros_name(c.topic_namespace); },
               "a ROS name without leading or trailing '/' (letters, digits, '_', '/'), e.g. agvslam")
           .check(
-              "publish_pose", [](const DdsConfig& c) { return c.publish_pose || c.publish_odom || c.publish_status; },
-              "at least one of publish_pose, publish_odom, publish_status")
+              "publish_pose",
+              [](const DdsConfig& c) {
+                return c.publish_pose || c.publish_odom || c.publish_status || c.publish_tf || c.publish_tf_static;
+              },
+              "at least one of publish_pose, publish_odom, publish_status, publish_tf, publish_tf_static")
           .summary([](const DdsConfig& c) {
             std::string topics;
             if (c.publish_pose) topics += " " + c.pose_topic();
             if (c.publish_odom) topics += " " + c.odom_topic();
             if (c.publish_status) topics += " " + c.status_topic();
+            if (c.publish_tf) topics += " " + DdsConfig::tf_topic();
+            if (c.publish_tf_static) topics += " " + DdsConfig::tf_static_topic();
             return "topics" + topics;
           });
   return table;

@@ -57,6 +57,11 @@ RosDefaultQos::RosDefaultQos(const DdsConfig& config) : qos_(dds_create_qos()) {
   dds_qset_durability(qos_, DDS_DURABILITY_VOLATILE);
 }
 
+RosDefaultQos::RosDefaultQos(const DdsConfig& config, int history_depth, bool transient_local) : RosDefaultQos(config) {
+  dds_qset_history(qos_, DDS_HISTORY_KEEP_LAST, history_depth);
+  if (transient_local) dds_qset_durability(qos_, DDS_DURABILITY_TRANSIENT_LOCAL);
+}
+
 RosDefaultQos::~RosDefaultQos() { dds_delete_qos(qos_); }
 
 Participant::Participant(const DdsConfig& config) {

@@ -10,6 +10,10 @@ const char* to_string(Topic topic) {
       return "odom";
     case Topic::kStatus:
       return "status";
+    case Topic::kTf:
+      return "tf";
+    case Topic::kTfStatic:
+      return "tf_static";
   }
   return "unknown";
 }
@@ -29,6 +33,21 @@ DdsPosePublisher::DdsPosePublisher(const DdsConfig& config, bool start_thread)
   }
   if (config_.publish_odom) writers_[1] = make_writer(&nav_msgs_msg_dds__Odometry__desc, config_.odom_topic());
   if (config_.publish_status) writers_[2] = make_writer(&agvslam_msgs_msg_dds__Status__desc, config_.status_topic());
+  if (config_.publish_tf) {
+    // tf2_ros::DynamicBroadcasterQoS: reliable, keep last 100, volatile.
+    const RosDefaultQos tf_qos(config_, 100, false);
+    const dds_entity_t topic = participant_.create_topic(&tf2_msgs_msg_dds__TFMessage__desc, DdsConfig::tf_topic());
+    writers_[3] = dds_check(dds_create_writer(participant_.get(), topic, tf_qos.get(), nullptr), "DDS writer rt/tf");
+  }
+  if (config_.publish_tf_static) {
+    // tf2_ros::StaticBroadcasterQoS: reliable, keep last 1, transient local (the writer keeps the latest message
+    // for readers that join later).
+    const RosDefaultQos static_qos(config_, 1, true);
+    const dds_entity_t topic =
+        participant_.create_topic(&tf2_msgs_msg_dds__TFMessage__desc, DdsConfig::tf_static_topic());
+    writers_[4] =
+        dds_check(dds_create_writer(participant_.get(), topic, static_qos.get(), nullptr), "DDS writer rt/tf_static");
+  }
   if (start_thread) thread_ = std::thread([this] { run(); });
 }
 
@@ -76,12 +95,42 @@ bool DdsPosePublisher::write_now(const PoseSample& sample) {
     fill_status_msg(sample, frames_, m);
     ok = dds_write(writers_[2], &m) >= 0 && ok;
   }
+  if (writers_[3] > 0) {
+    // map -> odom -> base_link when an odometry pose is current, so odom -> base_link stays smooth while the map
+    // correction jumps; else map -> base_link.
+    const bool via_odom = sample.odom_valid && frames_.odom != frames_.map;
+    TransformMsg transforms[2]{};
+    if (via_odom) {
+      fill_transform_msg(sample.t_ns, sample.T_map_base * sample.T_odom_base.inverse(), frames_.map, frames_.odom,
+                         transforms[0]);
+      fill_transform_msg(sample.t_ns, sample.T_odom_base, frames_.odom, frames_.base, transforms[1]);
+    } else {
+      fill_transform_msg(sample.t_ns, sample.T_map_base, frames_.map, frames_.base, transforms[0]);
+    }
+    TfMsg m{};
+    m.transforms._length = m.transforms._maximum = via_odom ? 2 : 1;
+    m.transforms._buffer = transforms;
+    m.transforms._release = false;
+    ok = dds_write(writers_[3], &m) >= 0 && ok;
+  }
   if (ok) {
     published_.fetch_add(1, std::memory_order_relaxed);
   } else {
     write_errors_.fetch_add(1, std::memory_order_relaxed);
   }
   return ok;
+}
+
+bool DdsPosePublisher::write_static_transform(int64_t t_ns, const SE3d& T_parent_child, const std::string& parent,
+                                              const std::string& child) {
+  if (writers_[4] <= 0) return false;
+  TransformMsg transform{};
+  fill_transform_msg(t_ns, T_parent_child, parent, child, transform);
+  TfMsg m{};
+  m.transforms._length = m.transforms._maximum = 1;
+  m.transforms._buffer = &transform;
+  m.transforms._release = false;
+  return dds_write(writers_[4], &m) >= 0;
 }
 
 void DdsPosePublisher::run() {

@@ -18,18 +18,22 @@ void fill_header(int64_t t_ns, const std::string& frame_id, std_msgs_msg_dds__He
   h.frame_id = borrow(frame_id);
 }
 
-void fill_pose_with_cov(const PoseSample& s, geometry_msgs_msg_dds__PoseWithCovariance_& out) {
-  const Eigen::Vector3d& t = s.T_map_base.translation();
-  Eigen::Quaterniond q(s.T_map_base.linear());
+void fill_quaternion(const Eigen::Matrix3d& R, geometry_msgs_msg_dds__Quaternion_& out) {
+  Eigen::Quaterniond q(R);
   q.normalize();
   if (q.w() < 0.0) q.coeffs() = -q.coeffs();
+  out.x = q.x();
+  out.y = q.y();
+  out.z = q.z();
+  out.w = q.w();
+}
+
+void fill_pose_with_cov(const PoseSample& s, geometry_msgs_msg_dds__PoseWithCovariance_& out) {
+  const Eigen::Vector3d& t = s.T_map_base.translation();
   out.pose.position.x = t.x();
   out.pose.position.y = t.y();
   out.pose.position.z = t.z();
-  out.pose.orientation.x = q.x();
-  out.pose.orientation.y = q.y();
-  out.pose.orientation.z = q.z();
-  out.pose.orientation.w = q.w();
+  fill_quaternion(s.T_map_base.linear(), out.pose.orientation);
   for (int r = 0; r < 6; ++r) {
     for (int c = 0; c < 6; ++c) out.covariance[r * 6 + c] = s.cov_pose(r, c);
   }
@@ -115,6 +119,39 @@ void fill_status_msg(const PoseSample& s, const FrameIds& frames, StatusMsg& out
   out.odometry_distance_ratio = static_cast<float>(s.odometry_check.distance_ratio);
   out.odometry_speed_rmse_mps = static_cast<float>(s.odometry_check.speed_rmse_mps);
   out.odometry_heading_difference_deg = static_cast<float>(s.odometry_check.heading_difference_deg);
+  out.map_id = s.map_id;
+}
+
+void fill_transform_msg(int64_t t_ns, const SE3d& T_parent_child, const std::string& parent, const std::string& child,
+                        TransformMsg& out) {
+  fill_header(t_ns, parent, out.header);
+  out.child_frame_id = borrow(child);
+  const Eigen::Vector3d& t = T_parent_child.translation();
+  out.transform.translation.x = t.x();
+  out.transform.translation.y = t.y();
+  out.transform.translation.z = t.z();
+  fill_quaternion(T_parent_child.linear(), out.transform.rotation);
+}
+
+SE3d from_transform_msg(const TransformMsg& m) {
+  const auto& q = m.transform.rotation;
+  const auto& t = m.transform.translation;
+  return make_se3(Eigen::Quaterniond(q.w, q.x, q.y, q.z).normalized(), Eigen::Vector3d(t.x, t.y, t.z));
+}
+
+nlohmann::json to_json(const TfMsg& m) {
+  nlohmann::json transforms = nlohmann::json::array();
+  for (uint32_t i = 0; i < m.transforms._length; ++i) {
+    const TransformMsg& tr = m.transforms._buffer[i];
+    const auto& t = tr.transform.translation;
+    const auto& q = tr.transform.rotation;
+    transforms.push_back({{"header", header_json(tr.header)},
+                          {"child_frame_id", tr.child_frame_id != nullptr ? tr.child_frame_id : ""},
+                          {"transform",
+                           {{"translation", {{"x", t.x}, {"y", t.y}, {"z", t.z}}},
+                            {"rotation", {{"x", q.x}, {"y", q.y}, {"z", q.z}, {"w", q.w}}}}}});
+  }
+  return {{"transforms", transforms}};
 }
 
 nlohmann::json to_json(const PoseMsg& m) {
@@ -147,7 +184,8 @@ nlohmann::json to_json(const StatusMsg& m) {
           {"odometry_distance_ratio",
            std::isnan(m.odometry_distance_ratio) ? nlohmann::json() : nlohmann::json(m.odometry_distance_ratio)},
           {"odometry_speed_rmse_mps", m.odometry_speed_rmse_mps},
-          {"odometry_heading_difference_deg", m.odometry_heading_difference_deg}};
+          {"odometry_heading_difference_deg", m.odometry_heading_difference_deg},
+          {"map_id", m.map_id}};
 }
 
 }  // namespace agvslam::drivers::dds

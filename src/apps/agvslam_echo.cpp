@@ -110,6 +110,24 @@ int run(const Options& o) {
       emit("status", dds::to_json(m), dds::from_ros_time(m.header.stamp), recv, buf);
     };
   }
+  // tf only when named (all: the daemon's own topics): rt/tf and rt/tf_static are every node's.
+  for (const char* tf_topic : {"tf", "tf_static"}) {
+    if (o.topic != tf_topic) continue;
+    auto print = [&, tf_topic](const dds::TfMsg& m, int64_t recv) {
+      std::string text;
+      int64_t stamp_ns = recv;
+      for (uint32_t i = 0; i < m.transforms._length; ++i) {
+        const dds::TransformMsg& t = m.transforms._buffer[i];
+        const auto& p = t.transform.translation;
+        std::snprintf(buf, sizeof buf, "%s[%s -> %s] x %.3f y %.3f z %.3f m yaw %.2f deg", i > 0 ? "; " : "",
+                      t.header.frame_id, t.child_frame_id, p.x, p.y, p.z, yaw_deg(t.transform.rotation));
+        text += buf;
+        stamp_ns = dds::from_ros_time(t.header.stamp);
+      }
+      emit(tf_topic, dds::to_json(m), stamp_ns, recv, text);
+    };
+    (o.topic == "tf" ? h.on_tf : h.on_tf_static) = print;
+  }
   dds::DdsPoseSubscriber sub(cfg, std::move(h));
 
   std::signal(SIGINT, on_signal);
@@ -151,8 +169,8 @@ int main(int argc, char** argv) {
   spdlog::set_default_logger(spdlog::stderr_color_mt("agvslam-echo"));
   CLI::App app{"agvslam-echo: print the pose, odometry and status samples agvslamd publishes over DDS"};
   Options o;
-  app.add_option("--topic", o.topic, "pose|odom|status|all")
-      ->check(CLI::IsMember({"pose", "odom", "status", "all"}))
+  app.add_option("--topic", o.topic, "pose|odom|status|all (those three)|tf|tf_static")
+      ->check(CLI::IsMember({"pose", "odom", "status", "all", "tf", "tf_static"}))
       ->capture_default_str();
   app.add_option("--domain", o.domain, "DDS domain id (ROS_DOMAIN_ID)")->capture_default_str();
   app.add_option("--interface", o.interface,

@@ -95,6 +95,8 @@ bool open_dds(const Options& o, std::unique_ptr<dds::DdsPosePublisher>& pub) {
   cfg.validate("agvslam-pose-replay options");
   if (cfg.security.enabled) spdlog::info("agvslam-pose-replay: {}", cfg.security.describe());
   spdlog::info("agvslam-pose-replay: {}{}", cfg.describe(), o.sync ? ", writes on the caller's thread" : "");
+  // The replayed pose topics only: tf is one tree per robot, and a replay beside a running daemon must not join it.
+  cfg.publish_tf = cfg.publish_tf_static = false;
   pub = std::make_unique<dds::DdsPosePublisher>(cfg, !o.sync);
   if (o.wait_subscribers <= 0) return true;
   const auto timeout = std::chrono::milliseconds(static_cast<int64_t>(o.wait_timeout_s * 1000));

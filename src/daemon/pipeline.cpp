@@ -128,7 +128,7 @@ Pipeline::Pipeline(const DaemonConfig& config, const SourceSetup& setup, std::un
       }
     }
   }
-  outputs_ = std::make_unique<PoseOutputs>(config);
+  outputs_ = std::make_unique<PoseOutputs>(config, config.base_link.T_base_cam() * setup.calibration.T_cam0_rect);
 }
 
 Pipeline::~Pipeline() {

@@ -46,6 +46,10 @@ double PoseSampleBuilder::rotation_sd_rad(int inliers) const {
 void PoseSampleBuilder::build(const slam::TrackResult& r, int64_t capture_t_ns, drivers::PoseSample& out) {
   out.t_ns = capture_t_ns;
   out.tracking_state = to_output_state(r.state);
+  out.map_id = r.map_id;
+  // A new map's poses are in another frame: no velocity from the difference with the old map's last pose.
+  if (r.map_id != prev_map_id_) prev_valid_ = false;
+  prev_map_id_ = r.map_id;
   if (r.state != slam::TrackingState::kOk || !r.pose_valid) {
     // No pose for this frame: the last good one (identity before the first), flagged by the state.
     out.T_map_base = prev_T_map_base_;

@@ -3,6 +3,7 @@
 #include <spdlog/spdlog.h>
 #include <cerrno>
 #include <cinttypes>
+#include <cmath>
 #include <cstring>
 #include <nlohmann/json.hpp>
 
@@ -58,18 +59,25 @@ void TextFile::flush() {
   if (file_ != nullptr) std::fflush(file_);
 }
 
-PoseOutputs::PoseOutputs(const DaemonConfig& config) : config_(config) {
+PoseOutputs::PoseOutputs(const DaemonConfig& config) : PoseOutputs(config, config.base_link.T_base_cam()) {}
+
+PoseOutputs::PoseOutputs(const DaemonConfig& config, const SE3d& T_base_cam) : config_(config) {
   if (config.outputs.dds_enabled) {
     const dds::DdsConfig& base = config.outputs.dds;
     if (base.publish_status) {
       dds::DdsConfig c = base;
-      c.publish_pose = c.publish_odom = false;
+      c.publish_pose = c.publish_odom = c.publish_tf = c.publish_tf_static = false;
       dds_status_ = std::make_unique<dds::DdsPosePublisher>(c);
     }
-    if (base.publish_pose || base.publish_odom) {
+    if (base.publish_pose || base.publish_odom || base.publish_tf || base.publish_tf_static) {
       dds::DdsConfig c = base;
       c.publish_status = false;
       dds_pose_ = std::make_unique<dds::DdsPosePublisher>(c);
+      if (base.publish_tf_static && !dds_pose_->write_static_transform(dds::realtime_now_ns(), T_base_cam,
+                                                                       base.base_frame_id, base.camera_frame_id)) {
+        spdlog::warn("dds: the static transform {} -> {} could not be written on {}", base.base_frame_id,
+                     base.camera_frame_id, dds::DdsConfig::tf_static_topic());
+      }
     }
   }
   if (config.odometry.source == OdometrySource::kCan) {
@@ -99,15 +107,46 @@ PoseOutputs::~PoseOutputs() {
   dds_status_.reset();
 }
 
+void PoseOutputs::integrate_odometry(const OdometryRate& rate) {
+  if (odom_started_) {
+    const double dt_s = ns_to_s(rate.t_ns - last_rate_.t_ns);
+    if (dt_s <= 0) return;  // out of order: the integration needs time order
+    // A gap longer than stale_ms is bridged with the older rate as well: the odom frame must stay continuous.
+    const double mid_yaw = odom_yaw_rad_ + 0.5 * last_rate_.yaw_rate_radps * dt_s;
+    odom_x_m_ += last_rate_.speed_mps * dt_s * std::cos(mid_yaw);
+    odom_y_m_ += last_rate_.speed_mps * dt_s * std::sin(mid_yaw);
+    odom_yaw_rad_ += last_rate_.yaw_rate_radps * dt_s;
+  }
+  odom_started_ = true;
+  last_rate_ = rate;
+}
+
+bool PoseOutputs::odom_pose_at(int64_t t_ns, SE3d& T_odom_base) const {
+  if (!odom_started_) return false;
+  const double ahead_s = ns_to_s(t_ns - last_rate_.t_ns);
+  if (ahead_s * 1000.0 > config_.odometry.check.stale_ms) return false;
+  const double dt_s = std::max(ahead_s, 0.0);  // a frame captured before the last odometry sample: that sample
+  const double mid_yaw = odom_yaw_rad_ + 0.5 * last_rate_.yaw_rate_radps * dt_s;
+  const double yaw = odom_yaw_rad_ + last_rate_.yaw_rate_radps * dt_s;
+  T_odom_base = make_se3(Eigen::Quaterniond(Eigen::AngleAxisd(yaw, Eigen::Vector3d::UnitZ())),
+                         Eigen::Vector3d(odom_x_m_ + last_rate_.speed_mps * dt_s * std::cos(mid_yaw),
+                                         odom_y_m_ + last_rate_.speed_mps * dt_s * std::sin(mid_yaw), 0.0));
+  return true;
+}
+
 void PoseOutputs::check_odometry(OutputItem& item, bool tracking) {
   drivers::PoseSample& s = item.sample;
   if (can_ && can_odometry_) {
     can_->poll();
     for (const drivers::can::ReceivedCanFrame& r : can_->take_received()) {
       if (r.frame.id != can_odometry_->id() || r.frame.extended != can_odometry_->extended()) continue;
-      if (auto rate = can_odometry_->decode(r.frame, r.t_ns)) odometry_monitor_->add_odometry(*rate);
+      if (auto rate = can_odometry_->decode(r.frame, r.t_ns)) {
+        odometry_monitor_->add_odometry(*rate);
+        integrate_odometry(*rate);
+      }
     }
   }
+  s.odom_valid = odom_pose_at(s.t_ns, s.T_odom_base);
   s.odometry_check = item.heartbeat ? odometry_monitor_->status_at(s.t_ns)
                                     : odometry_monitor_->add_pose(s.t_ns, s.T_map_base, tracking);
   const drivers::OdometryCheck& c = s.odometry_check;
@@ -132,6 +171,13 @@ void PoseOutputs::publish(OutputItem& item) {
   drivers::PoseSample& s = item.sample;
   const bool tracking = s.tracking_state == drivers::TrackingState::kTracking && !item.heartbeat;
   if (odometry_monitor_) check_odometry(item, tracking);
+  if (!item.heartbeat && s.map_id != map_id_) {
+    spdlog::warn(
+        "slam: tracking was lost too long to relocalise; map {} started at the vehicle's position (frame {}): the "
+        "pose jumps to its origin (DDS status map_id)",
+        s.map_id, s.frame_index);
+    map_id_ = s.map_id;
+  }
   s.latency_ns = item.heartbeat ? 0 : dds::realtime_now_ns() - s.t_ns;
   if (tracking && dds_pose_) dds_pose_->publish(s);
   if (dds_status_) dds_status_->publish(s);

@@ -206,6 +206,78 @@ TEST(Agvslamd, DatasetPlayedLosslesslyPublishesEveryPoseOverDdsAndMatchesTheRunn
   fs::remove_all(dir);
 }
 
+SE3d pose_from_transform(const json& t) {
+  const json& tr = t.at("transform").at("translation");
+  const json& q = t.at("transform").at("rotation");
+  return make_se3(Eigen::Quaterniond(q.at("w").get<double>(), q.at("x").get<double>(), q.at("y").get<double>(),
+                                     q.at("z").get<double>())
+                      .normalized(),
+                  Eigen::Vector3d(tr.at("x").get<double>(), tr.at("y").get<double>(), tr.at("z").get<double>()));
+}
+
+// tf end to end: agvslamd on the simulator sequence at the camera rate; one agvslam-echo reads rt/tf from the start,
+// another joins rt/tf_static two seconds after the daemon started (transient local: it still gets the extrinsic).
+// Every map -> base_link transform is the published pose of its frame (no odometry input: no odom frame).
+TEST(Agvslamd, TfCarriesThePublishedPoseAndTfStaticReachesALateSubscriber) {
+  AGVSLAM_REQUIRE_NETNS(netns);
+  const std::string seq = test::daemon_sim_sequence();
+  const std::string dir = test::make_temp_dir("agvslamd-tf");
+  write_text(dir + "/d.yaml", "source:\n  type: dataset\n  dataset: " + seq + "\n  rate: 20\n" + stages_yaml() +
+                                  "pipeline:\n  mapping: inline\n" + kMount +
+                                  "dds:\n  network_interface: lo\n  topic_namespace: agvslamd_test\n"
+                                  "  wait_for_subscribers: 1\n  wait_timeout_s: 60\n"
+                                  "log:\n  pose_log: " +
+                                  dir + "/poses.jsonl\n");
+  const std::string echo = test::tool_path("agvslam-echo") + " --json --interface lo --namespace agvslamd_test ";
+  const std::string script = "ip link set lo up && (" + echo + "--timeout 300 > " + dir + "/echo.jsonl 2> " + dir +
+                             "/echo.err & e=$!; " + echo + "--topic tf --timeout 300 > " + dir + "/tf.jsonl 2> " + dir +
+                             "/tf.err & t=$!; sleep 0.5; " + test::tool_path("agvslamd") + " --config " + dir +
+                             "/d.yaml > " + dir + "/daemon.out 2> " + dir + "/daemon.err & d=$!; sleep 2; " + echo +
+                             "--topic tf_static --count 1 --timeout 20 > " + dir + "/tf_static.jsonl 2> " + dir +
+                             "/tf_static.err; s=$?; wait $d; rc=$?; sleep 1; kill -INT $e $t; wait $e; "
+                             "wait $t; exit $((rc + 10 * s)))";
+  write_text(dir + "/run.sh", script + "\n");
+  ASSERT_EQ(test::run_command(netns + " sh " + dir + "/run.sh"), 0)
+      << read_text(dir + "/daemon.err") << read_text(dir + "/tf_static.err");
+
+  std::vector<json> statics;
+  for (const json& l : read_json_lines(dir + "/tf_static.jsonl")) {
+    if (l.contains("topic")) statics.push_back(l.at("msg"));
+  }
+  ASSERT_EQ(statics.size(), 1U);
+  ASSERT_EQ(statics[0].at("transforms").size(), 1U);
+  const json& st = statics[0].at("transforms")[0];
+  EXPECT_EQ(st.at("header").at("frame_id"), "base_link");
+  EXPECT_EQ(st.at("child_frame_id"), "camera_optical_frame");
+  // The simulator's images are rectified already: the extrinsic is the mount's.
+  EXPECT_TRUE(pose_from_transform(st).isApprox(mount_T_base_cam(), 1e-9));
+
+  std::map<int64_t, SE3d> published;  // t_ns -> T_map_base of every tracked sample
+  for (const json& l : read_json_lines(dir + "/poses.jsonl")) {
+    if (l.at("dds").at("pose").get<bool>()) {
+      published[l.at("sample").at("t_ns").get<int64_t>()] = pose_from_sample(l.at("sample"));
+    }
+  }
+  ASSERT_GT(published.size(), 10U);  // at the camera rate on a loaded machine some frames are dropped
+  std::size_t matched = 0;
+  for (const json& l : read_json_lines(dir + "/tf.jsonl")) {
+    if (!l.contains("topic")) continue;
+    const json& transforms = l.at("msg").at("transforms");
+    ASSERT_EQ(transforms.size(), 1U);
+    const json& t = transforms[0];
+    EXPECT_EQ(t.at("header").at("frame_id"), "map");
+    EXPECT_EQ(t.at("child_frame_id"), "base_link");
+    const auto it = published.find(stamp_ns(t.at("header")));
+    ASSERT_NE(it, published.end()) << "a transform for a frame whose pose was not published";
+    EXPECT_TRUE(pose_from_transform(t).isApprox(it->second, 1e-9));
+    ++matched;
+  }
+  // rt/tf's reader is not waited for: the first frames may go out before it matched.
+  EXPECT_GE(matched + 5, published.size());
+  std::printf("tf: %zu of %zu published poses received as map -> base_link\n", matched, published.size());
+  fs::remove_all(dir);
+}
+
 // DDS Security end to end: agvslamd with the agvslamd enclave of a keystore from deploy/make-keystore.sh, agvslam-echo
 // with the reader enclave's credentials receives every sample.
 TEST(Agvslamd, WithDdsSecurityAnAuthenticatedReaderReceivesEverySample) {

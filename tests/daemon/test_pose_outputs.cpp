@@ -10,6 +10,7 @@
 #include <filesystem>
 #include <map>
 #include <nlohmann/json.hpp>
+#include <thread>
 
 #include "agvslam/core/error.h"
 #include "agvslam/daemon/pose_builder.h"
@@ -101,6 +102,65 @@ TEST(PoseOutputs, PoseOnlyWhileTrackingStatusAlwaysFilesAsPublished) {
               return s;
             }()));
   std::filesystem::remove_all(dir);
+}
+
+// tf: the static camera extrinsic reaches a subscriber that joins after it was written (transient local), and
+// every tracking sample's pose goes out as map -> base_link on rt/tf, with ROS 2's type name.
+TEST(PoseOutputs, TfStaticReachesALateSubscriberAndTfCarriesTheTrackingPoses) {
+  DaemonConfig c;
+  c.path = "test.yaml";
+  c.outputs.dds_enabled = true;
+  c.outputs.dds.domain_id = 100 + static_cast<int>((getpid() + 25) % 100);
+  c.outputs.dds.network_interface = "lo";
+  c.outputs.dds.topic_namespace = "agvslamd_tf_test";
+  c.outputs.dds.map_frame_id = "map_a";
+  c.outputs.dds.base_frame_id = "base_a";
+  c.outputs.dds.camera_frame_id = "camera_a";
+  const SE3d T_base_cam = make_se3(Eigen::Quaterniond(0.5, -0.5, 0.5, -0.5), Eigen::Vector3d(0.3, -0.05, 0.5));
+  PoseOutputs out(c, T_base_cam);
+  std::this_thread::sleep_for(std::chrono::milliseconds(300));  // the static transform is written before anyone reads
+
+  std::vector<SE3d> statics, poses;
+  std::vector<std::string> static_frames, pose_frames;
+  dds::SubscriberHandlers h;
+  h.on_tf_static = [&](const dds::TfMsg& m, int64_t) {
+    ASSERT_EQ(m.transforms._length, 1U);
+    statics.push_back(dds::from_transform_msg(m.transforms._buffer[0]));
+    static_frames.push_back(std::string(m.transforms._buffer[0].header.frame_id) + ">" +
+                            m.transforms._buffer[0].child_frame_id);
+  };
+  h.on_tf = [&](const dds::TfMsg& m, int64_t) {
+    ASSERT_EQ(m.transforms._length, 1U);
+    poses.push_back(dds::from_transform_msg(m.transforms._buffer[0]));
+    pose_frames.push_back(std::string(m.transforms._buffer[0].header.frame_id) + ">" +
+                          m.transforms._buffer[0].child_frame_id);
+  };
+  dds::DdsPoseSubscriber sub(c.outputs.dds, h);
+  for (int k = 0; k < 200 && sub.matched_publishers(dds::Topic::kTf) < 1; ++k) {
+    std::this_thread::sleep_for(std::chrono::milliseconds(20));
+  }
+  ASSERT_EQ(sub.matched_publishers(dds::Topic::kTf), 1);
+  for (int k = 0; k < 100 && statics.empty(); ++k) sub.poll(std::chrono::milliseconds(50));
+  ASSERT_EQ(statics.size(), 1U);
+  EXPECT_EQ(static_frames[0], "base_a>camera_a");
+  EXPECT_TRUE(statics[0].isApprox(T_base_cam, 1e-12));
+
+  const int64_t t0 = dds::realtime_now_ns();
+  std::vector<SE3d> tracked;
+  for (uint64_t i = 0; i < 6; ++i) {
+    OutputItem item;
+    item.sample = drivers::synthetic_pose_sample(i, t0 + static_cast<int64_t>(i) * 50000000LL);
+    item.sample.tracking_state = i == 3 ? drivers::TrackingState::kLost : drivers::TrackingState::kTracking;
+    if (i != 3) tracked.push_back(item.sample.T_map_base);
+    out.publish(item);
+  }
+  out.flush(std::chrono::seconds(5));
+  for (int k = 0; k < 100 && poses.size() < tracked.size(); ++k) sub.poll(std::chrono::milliseconds(50));
+  ASSERT_EQ(poses.size(), tracked.size());  // never a transform for a lost frame
+  for (std::size_t k = 0; k < poses.size(); ++k) {
+    EXPECT_EQ(pose_frames[k], "map_a>base_a");
+    EXPECT_TRUE(poses[k].isApprox(tracked[k], 1e-12)) << k;
+  }
 }
 
 // With DDS Security the daemon's two publishers (status; pose and odometry) use the agvslamd enclave of a keystore

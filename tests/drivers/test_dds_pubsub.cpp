@@ -10,6 +10,8 @@
 #include <filesystem>
 #include <fstream>
 #include <nlohmann/json.hpp>
+#include <thread>
+#include <vector>
 
 #include "agvslam/drivers/dds/publisher.h"
 #include "agvslam/drivers/dds/subscriber.h"
@@ -20,6 +22,8 @@ namespace {
 
 using namespace agvslam::drivers;
 using namespace agvslam::drivers::dds;
+using agvslam::make_se3;
+using agvslam::SE3d;
 using agvslam::test::read_json_lines;
 namespace fs = std::filesystem;
 
@@ -76,6 +80,51 @@ TEST(DdsPubSub, InProcessEverySampleArrivesInOrderWithExactValues) {
   EXPECT_EQ(got_odom, want_odom);
   EXPECT_EQ(got_status, want_status);
   EXPECT_EQ(sub.matched_publishers(Topic::kPose), 1);
+}
+
+// With an odometry pose in the sample, rt/tf carries map -> odom and odom -> base_link, which chain to the
+// published pose; without one, map -> base_link alone.
+TEST(DdsPubSub, TfChainsMapOdomBaseToThePoseWhenOdometryIsCurrent) {
+  DdsConfig cfg;
+  cfg.domain_id = private_domain();
+  cfg.network_interface = "lo";
+  cfg.topic_namespace = "agvslam_tf";
+  cfg.publish_pose = cfg.publish_odom = cfg.publish_status = cfg.publish_tf_static = false;
+  cfg.odom_frame_id = "odom";
+  DdsPosePublisher pub(cfg);
+  std::vector<std::vector<std::pair<std::string, SE3d>>> got;
+  SubscriberHandlers h;
+  h.on_tf = [&](const TfMsg& m, int64_t) {
+    std::vector<std::pair<std::string, SE3d>> transforms;
+    for (uint32_t i = 0; i < m.transforms._length; ++i) {
+      const TransformMsg& t = m.transforms._buffer[i];
+      transforms.emplace_back(std::string(t.header.frame_id) + ">" + t.child_frame_id, from_transform_msg(t));
+    }
+    got.push_back(transforms);
+  };
+  DdsPoseSubscriber sub(cfg, h);
+  for (int k = 0; k < 200 && pub.matched_subscribers(Topic::kTf) < 1; ++k) {
+    std::this_thread::sleep_for(std::chrono::milliseconds(20));
+  }
+  ASSERT_EQ(pub.matched_subscribers(Topic::kTf), 1);
+  PoseSample with_odom = synthetic_pose_sample(9, 1700000000000000000LL);
+  with_odom.odom_valid = true;
+  with_odom.T_odom_base =
+      make_se3(Eigen::Quaterniond(Eigen::AngleAxisd(0.7, Eigen::Vector3d::UnitZ())), Eigen::Vector3d(4.0, -1.5, 0.0));
+  PoseSample without = synthetic_pose_sample(10, 1700000000050000000LL);
+  ASSERT_TRUE(pub.write_now(with_odom));
+  ASSERT_TRUE(pub.write_now(without));
+  ASSERT_TRUE(pub.flush(std::chrono::seconds(5)));
+  for (int k = 0; k < 100 && got.size() < 2; ++k) sub.poll(std::chrono::milliseconds(50));
+  ASSERT_EQ(got.size(), 2U);
+  ASSERT_EQ(got[0].size(), 2U);
+  EXPECT_EQ(got[0][0].first, "map>odom");
+  EXPECT_EQ(got[0][1].first, "odom>base_link");
+  EXPECT_TRUE(got[0][1].second.isApprox(with_odom.T_odom_base, 1e-12));
+  EXPECT_TRUE((got[0][0].second * got[0][1].second).isApprox(with_odom.T_map_base, 1e-9));
+  ASSERT_EQ(got[1].size(), 1U);
+  EXPECT_EQ(got[1][0].first, "map>base_link");
+  EXPECT_TRUE(got[1][0].second.isApprox(without.T_map_base, 1e-12));
 }
 
 TEST(DdsPubSub, PublishNeverWaitsAndDropsTheOldestWhenTheThreadFallsBehind) {

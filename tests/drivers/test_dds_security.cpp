@@ -112,7 +112,9 @@ TEST_F(DdsSecurity, ScriptMakesTheSros2LayoutAndEveryEnclavePassesTheChecks) {
   }
   // The daemon publishes its topics and reads only its inputs; the reader publishes nothing of agvslam's.
   const std::string daemon = read_text(dir_ + "/ks/enclaves/agvslam/agvslamd/permissions.xml");
-  EXPECT_NE(daemon.find("<publish><topics><topic>rt/agvslam/*</topic></topics></publish>"), std::string::npos);
+  EXPECT_NE(daemon.find("<publish><topics><topic>rt/agvslam/*</topic><topic>rt/tf</topic><topic>rt/tf_static</topic>"
+                        "</topics></publish>"),
+            std::string::npos);
   EXPECT_NE(daemon.find("<subscribe><topics><topic>rt/agvslam/in/*</topic></topics></subscribe>"), std::string::npos);
   const std::string reader = read_text(dir_ + "/ks/enclaves/agvslam/reader/permissions.xml");
   EXPECT_EQ(reader.find("<topic>rt/agvslam/"), reader.find("<subscribe>") + std::string("<subscribe><topics>").size());

@@ -79,6 +79,12 @@ TEST(RosMessages, PoseOdomStatusCarryTheSample) {
   EXPECT_EQ(st.odometry_speed_rmse_mps, 0.2F);
   EXPECT_EQ(st.odometry_heading_difference_deg, -3.5F);
   EXPECT_EQ(to_json(st).at("odometry_check_state"), 5);
+  // The map the pose is in (a new map after a long loss).
+  EXPECT_EQ(st.map_id, 0U);
+  checked.map_id = 3;
+  fill_status_msg(checked, frames, st);
+  EXPECT_EQ(st.map_id, 3U);
+  EXPECT_EQ(to_json(st).at("map_id"), 3);
 }
 
 TEST(RosMessages, JsonUsesRosFieldNamesAndRoundTripPrecision) {
@@ -117,6 +123,28 @@ TEST(RosMessages, TypeNamesFollowRmwCyclonedds) {
   EXPECT_STREQ(agvslam_msgs_msg_dds__Status__desc.m_typename, kStatusTypeName);
   EXPECT_STREQ(kPoseTypeName, "geometry_msgs::msg::dds_::PoseWithCovarianceStamped_");
   EXPECT_STREQ(kOdomTypeName, "nav_msgs::msg::dds_::Odometry_");
+  EXPECT_STREQ(tf2_msgs_msg_dds__TFMessage__desc.m_typename, kTfTypeName);
+  EXPECT_STREQ(kTfTypeName, "tf2_msgs::msg::dds_::TFMessage_");
+}
+
+TEST(RosMessages, TransformCarriesTheChildPoseInTheParent) {
+  const PoseSample s = synthetic_pose_sample(23, 1700000000250000000LL);
+  const std::string parent = "map", child = "base_link";
+  TransformMsg m{};
+  fill_transform_msg(s.t_ns, s.T_map_base, parent, child, m);
+  EXPECT_STREQ(m.header.frame_id, "map");
+  EXPECT_STREQ(m.child_frame_id, "base_link");
+  EXPECT_EQ(from_ros_time(m.header.stamp), s.t_ns);
+  EXPECT_GE(m.transform.rotation.w, 0.0);
+  EXPECT_EQ(m.transform.translation.x, s.T_map_base.translation().x());
+  EXPECT_TRUE(from_transform_msg(m).isApprox(s.T_map_base, 1e-12));
+  TfMsg tf{};
+  tf.transforms._length = tf.transforms._maximum = 1;
+  tf.transforms._buffer = &m;
+  const nlohmann::json j = to_json(tf);
+  ASSERT_EQ(j.at("transforms").size(), 1U);
+  EXPECT_EQ(j.at("transforms")[0].at("child_frame_id"), "base_link");
+  EXPECT_EQ(j.at("transforms")[0].at("transform").at("rotation").at("w").get<double>(), m.transform.rotation.w);
 }
 
 // The ROS 2 package shipped for the status type (drivers/dds/ros2/agvslam_msgs/msg/Status.msg) must declare the
@@ -129,6 +157,7 @@ TEST(RosMessages, StatusMsgMatchesTheIdl) {
   const std::map<std::string, std::string> ros_to_idl = {{"std_msgs/Header", "std_msgs::msg::dds_::Header_"},
                                                          {"uint8", "uint8"},
                                                          {"uint64", "unsigned long long"},
+                                                         {"uint32", "unsigned long"},
                                                          {"float32", "float"}};
   std::vector<std::string> from_msg, from_idl;
   std::string line;
@@ -158,7 +187,7 @@ TEST(RosMessages, StatusMsgMatchesTheIdl) {
     from_idl.push_back(line.substr(b, sp - b) + " " + line.substr(sp + 1));
   }
   EXPECT_EQ(from_msg, from_idl);
-  EXPECT_EQ(from_idl.size(), 12U);
+  EXPECT_EQ(from_idl.size(), 13U);
 }
 
 TEST(DdsConfig, ValidatesDescribesAndBuildsCycloneXml) {

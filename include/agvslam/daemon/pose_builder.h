@@ -13,6 +13,7 @@
 // only when the previous frame was tracked too and 0 < dt <= max_velocity_gap; otherwise zero with a large
 // covariance (1e6, "unknown").
 // Covariance: CovarianceConfig's heuristic (diagonal; the tracker reports none).
+// Map id: the tracker's (a new map after a long loss); no velocity across a change of map.
 // States: kOk -> tracking (pose published); kInitialising -> not_initialized; kLost -> lost. A sample that is not
 // tracking carries the last good pose (or identity before the first), zero twist and a 1e6 covariance: outputs
 // that always carry a pose (CAN) flag it by the state, never with a made-up pose.
@@ -59,6 +60,7 @@ class PoseSampleBuilder {
   bool prev_valid_ = false;
   SE3d prev_T_map_base_ = SE3d::Identity();
   int64_t prev_t_ns_ = 0;
+  uint32_t prev_map_id_ = 0;
 };
 
 }  // namespace agvslam::daemon

@@ -87,6 +87,9 @@ class PoseOutputs {
  public:
   // Opens every enabled output. DDS failures throw (DdsError naming the domain/topic); CAN retries with back-off
   // (an absent interface is not an error: the bus may come up later); files throw InputError naming the field.
+  // T_base_cam: the rectified left camera (the SLAM's camera) in base_link, published once on rt/tf_static.
+  PoseOutputs(const DaemonConfig& config, const SE3d& T_base_cam);
+  // The same with config.base_link's extrinsic (images without rectification).
   explicit PoseOutputs(const DaemonConfig& config);
   ~PoseOutputs();
   PoseOutputs(const PoseOutputs&) = delete;
@@ -111,6 +114,16 @@ class PoseOutputs {
   drivers::OdometryCheckState odometry_state_ = drivers::OdometryCheckState::kOff;
   std::chrono::steady_clock::time_point last_odometry_warning_{};
   uint64_t odometry_disagreements_ = 0;
+  uint32_t map_id_ = 0;  // of the last frame's sample: a change is logged
+  // Wheel odometry integrated in the plane (x, y, yaw of base_link in odom) up to the last odometry sample, for
+  // tf's odom frame.
+  bool odom_started_ = false;
+  OdometryRate last_rate_;
+  double odom_x_m_ = 0, odom_y_m_ = 0, odom_yaw_rad_ = 0;
+  void integrate_odometry(const OdometryRate& rate);
+  // base_link in odom at t_ns (the last integrated pose moved on by the last rate); false when no odometry is
+  // current (none yet, or older than odometry.stale_ms).
+  bool odom_pose_at(int64_t t_ns, SE3d& T_odom_base) const;
   TextFile trajectory_, pose_log_;
   int unflushed_ = 0;
   uint64_t samples_ = 0, tracking_samples_ = 0, heartbeats_ = 0;

@@ -80,6 +80,10 @@ struct PoseSample {
   int64_t t_ns = 0;
 
   SE3d T_map_base = SE3d::Identity();
+  // base_link in the odom frame (REP-105) from the vehicle's wheel odometry integrated to t_ns; valid while an
+  // odometry input is current. The map -> odom transform is then T_map_base * T_odom_base^-1.
+  bool odom_valid = false;
+  SE3d T_odom_base = SE3d::Identity();
   // Covariance of the pose, row-major 6x6 about (x, y, z, rotation about X, about Y, about Z), in m^2, rad^2 and
   // m*rad, as geometry_msgs/PoseWithCovariance defines it (the rotation part is a small rotation of base_link
   // expressed in the map frame's axes).
@@ -92,6 +96,9 @@ struct PoseSample {
   Matrix6d cov_twist = Matrix6d::Identity() * 1e-4;
 
   TrackingState tracking_state = TrackingState::kNotInitialized;
+  // The SLAM map the pose is in: 0 for the first, +1 each time a long loss started a new map, whose origin is the
+  // vehicle where it started, so poses of different map ids must not be compared.
+  uint32_t map_id = 0;
 
   uint64_t frame_index = 0;             // index of the frame since the daemon started
   uint64_t frames_processed = 0;        // frames the tracker processed since start

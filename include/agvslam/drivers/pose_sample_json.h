@@ -23,6 +23,7 @@ inline nlohmann::json pose_sample_to_json(const PoseSample& s) {
           {"v_base_mps", {s.v_base_mps.x(), s.v_base_mps.y(), s.v_base_mps.z()}},
           {"w_base_radps", {s.w_base_radps.x(), s.w_base_radps.y(), s.w_base_radps.z()}},
           {"tracking_state", static_cast<int>(s.tracking_state)},
+          {"map_id", s.map_id},
           {"frame_index", s.frame_index},
           {"frames_processed", s.frames_processed},
           {"frames_dropped", s.frames_dropped},

@@ -22,6 +22,16 @@ struct DdsConfig {
   bool publish_pose = true;    // rt/<ns>/pose, geometry_msgs/PoseWithCovarianceStamped
   bool publish_odom = true;    // rt/<ns>/odom, nav_msgs/Odometry
   bool publish_status = true;  // rt/<ns>/status, agvslam_msgs/Status
+  // tf2_msgs/TFMessage on rt/tf (ROS 2's global /tf, not namespaced: tf is one tree per robot) while tracking:
+  // map -> odom when the daemon integrates wheel odometry (and odom_frame_id is not the map frame), with that
+  // odometry's odom -> base_link, else map -> base_link. QoS of tf2_ros's broadcaster: reliable, keep last 100,
+  // volatile.
+  bool publish_tf = true;
+  // rt/tf_static once at start: base_link -> camera_frame_id (the rectified left camera, optical axes: z forward,
+  // x right, y down), reliable, keep last 1, transient local (tf2_ros's static broadcaster), so a node that starts
+  // later still receives it.
+  bool publish_tf_static = true;
+  std::string camera_frame_id = "camera_optical_frame";
   // REP-105 frame names. The pose is T_map_base; odometry carries the same pose (header.frame_id = odom_frame_id,
   // `map` by default because the SLAM pose is a map-frame pose that may jump at loop closure) and the body-frame
   // twist (child_frame_id = base_frame_id).
@@ -46,6 +56,8 @@ struct DdsConfig {
   std::string pose_topic() const { return "rt/" + topic_namespace + "/pose"; }
   std::string odom_topic() const { return "rt/" + topic_namespace + "/odom"; }
   std::string status_topic() const { return "rt/" + topic_namespace + "/status"; }
+  static std::string tf_topic() { return "rt/tf"; }
+  static std::string tf_static_topic() { return "rt/tf_static"; }
 };
 
 // ROS 2 name tokens (letters, digits, underscores; not starting with a digit) separated by single '/', without a

@@ -58,6 +58,8 @@ std::string cyclone_config_xml(const DdsConfig& config);
 class RosDefaultQos {
  public:
   explicit RosDefaultQos(const DdsConfig& config);
+  // The same with another history depth (samples) and, when asked, transient-local durability (tf's QoS).
+  RosDefaultQos(const DdsConfig& config, int history_depth, bool transient_local);
   ~RosDefaultQos();
   RosDefaultQos(const RosDefaultQos&) = delete;
   RosDefaultQos& operator=(const RosDefaultQos&) = delete;

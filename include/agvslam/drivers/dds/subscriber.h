@@ -19,6 +19,10 @@ struct SubscriberHandlers {
   std::function<void(const PoseMsg&, int64_t recv_t_ns)> on_pose;
   std::function<void(const OdomMsg&, int64_t recv_t_ns)> on_odom;
   std::function<void(const StatusMsg&, int64_t recv_t_ns)> on_status;
+  // rt/tf (tf2_ros's listener QoS: reliable, keep last 100, volatile) and rt/tf_static (reliable, keep last 1,
+  // transient local: a late subscriber still gets the static transforms).
+  std::function<void(const TfMsg&, int64_t recv_t_ns)> on_tf;
+  std::function<void(const TfMsg&, int64_t recv_t_ns)> on_tf_static;
 };
 
 class DdsPoseSubscriber {
@@ -38,7 +42,7 @@ class DdsPoseSubscriber {
  private:
   Participant participant_;
   SubscriberHandlers handlers_;
-  std::array<dds_entity_t, 3> readers_{};
+  std::array<dds_entity_t, 5> readers_{};
   DdsEntity waitset_;
 };
 
