@@ -222,7 +222,8 @@ TEST(Agvslamd, TfCarriesThePublishedPoseAndTfStaticReachesALateSubscriber) {
   AGVSLAM_REQUIRE_NETNS(netns);
   const std::string seq = test::daemon_sim_sequence();
   const std::string dir = test::make_temp_dir("agvslamd-tf");
-  write_text(dir + "/d.yaml", "source:\n  type: dataset\n  dataset: " + seq + "\n  rate: 20\n" + stages_yaml() +
+  // Real time (80 frames, 4 s): the daemon must still be running when the late tf_static reader joins at 2 s.
+  write_text(dir + "/d.yaml", "source:\n  type: dataset\n  dataset: " + seq + "\n  rate: 1\n" + stages_yaml() +
                                   "pipeline:\n  mapping: inline\n" + kMount +
                                   "dds:\n  network_interface: lo\n  topic_namespace: agvslamd_test\n"
                                   "  wait_for_subscribers: 1\n  wait_timeout_s: 60\n"
