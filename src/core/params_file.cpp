@@ -68,6 +68,12 @@ bool read_scalar(const YAML::Node& root, const std::string& path, const std::str
   return true;
 }
 
+// A YAML key may be a list or a map ("? [a, b]: 1"); a setting's name is always a plain word.
+std::string key_name(const YAML::Node& key, const std::string& path, const std::string& where) {
+  if (!key.IsScalar()) throw InputError(path, where, "expected a plain name as key, not a list or a map");
+  return key.Scalar();
+}
+
 }  // namespace
 
 File::File(const std::string& path) : impl_(std::make_unique<Impl>()) {
@@ -100,7 +106,7 @@ void File::require_section(const std::string& section) const {
 void File::check_sections(const std::vector<std::string>& allowed) const {
   if (!impl_->root.IsMap()) return;
   for (const auto& kv : impl_->root) {
-    const std::string key = kv.first.as<std::string>();
+    const std::string key = key_name(kv.first, impl_->path, "(top level)");
     if (!contains(allowed, key)) {
       throw InputError(impl_->path, key, "unknown section; expected one of: " + join(allowed));
     }
@@ -114,7 +120,7 @@ void File::check_keys(const std::string& section, const std::vector<std::string>
   if (sec.IsNull()) return;
   if (!sec.IsMap()) throw InputError(impl_->path, section, "expected a map of settings");
   for (const auto& kv : sec) {
-    const std::string key = kv.first.as<std::string>();
+    const std::string key = key_name(kv.first, impl_->path, section);
     if (!contains(allowed, key)) {
       throw InputError(impl_->path, section + "." + key, "unknown setting; expected one of: " + join(allowed));
     }

@@ -210,6 +210,11 @@ TEST_F(ParamsTest, UnknownKeysAndSectionsListTheKnownOnes) {
   EXPECT_EQ(error_of("sample: 5\n").first, "sample");
   EXPECT_EQ(error_of("[1, 2]\n").first, "(top level)");
   EXPECT_EQ(error_of("sample: [1, 2\n").first, "line 2");
+  // Keys that are lists or maps (found by tests/fuzz: yaml-cpp's conversion error escaped).
+  std::tie(where, what) = error_of("? [a, b]\n: 1\n");
+  EXPECT_EQ(where, "(top level)");
+  EXPECT_NE(what.find("expected a plain name as key"), std::string::npos) << what;
+  EXPECT_EQ(error_of("sample:\n  ? {a: 1}\n  : 2\n").first, "sample");
 }
 
 TEST_F(ParamsTest, WrongTypesNameTheFieldAndWhatWasExpected) {
