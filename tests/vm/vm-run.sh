@@ -42,7 +42,11 @@ run_dir=$(mktemp -d "$VM_BUILD/vm-runs/run.XXXXXX" 2>/dev/null || { mkdir -p "$V
 shared=${AGVSLAM_SHARED_DIR:-$source_dir/../shared}
 # Host folders the VM must see where it mounts empty tmpfs (/tmp, /run, /var/tmp): a checkout made with mktemp -d.
 keep=$source_dir
-if [ -d "$shared" ]; then keep="$keep,$(cd "$shared" && pwd -P)"; fi
+# ../shared may be a link (to a folder outside the checkout's tmpfs): the VM gets the folder it points to.
+if [ -d "$shared" ]; then
+  shared=$(cd "$shared" && pwd -P)
+  keep="$keep,$shared"
+fi
 {
   echo '#!/bin/bash'
   echo "export PATH=/tmp/vm-bin:/usr/local/sbin:/usr/local/bin:/usr/sbin:/usr/bin:/sbin:/bin HOME=/tmp LANG=C.UTF-8"
