@@ -334,7 +334,11 @@ void log_settings(const Options& o, const Settings& s, const Input& in, const da
 }
 
 nlohmann::json timing_json(const Series& s) {
-  return {{"median_ms", s.median()}, {"p95_ms", s.quantile(0.95)}, {"max_ms", s.max()}, {"count", s.count()}};
+  return {{"median_ms", s.median()},
+          {"p95_ms", s.quantile(0.95)},
+          {"p99_ms", s.quantile(0.99)},
+          {"max_ms", s.max()},
+          {"count", s.count()}};
 }
 
 class ProgressBar {
