@@ -56,11 +56,9 @@
 
 #include <spdlog/sinks/stdout_color_sinks.h>
 #include <spdlog/spdlog.h>
-#include <unistd.h>
 #include <CLI/CLI.hpp>
 
 #include <algorithm>
-#include <chrono>
 #include <cmath>
 #include <cstdio>
 #include <filesystem>
@@ -87,6 +85,7 @@
 #include "agvslam/sim/simulator.h"
 #include "agvslam/slam/system.h"
 #include "agvslam/stereo/stereo_config.h"
+#include "run_frame_log.h"
 #include "tool_main.h"
 
 namespace {
@@ -96,7 +95,7 @@ using agvslam::Series;
 namespace slam = agvslam::slam;
 namespace dyn = agvslam::dynamic;
 namespace daemon = agvslam::daemon;
-using Clock = std::chrono::steady_clock;
+using agvslam::apps::run_tool::FrameLog;
 
 enum class DynamicMode { kDetector, kGroundTruth, kOff };
 
@@ -340,184 +339,6 @@ nlohmann::json timing_json(const Series& s) {
           {"max_ms", s.max()},
           {"count", s.count()}};
 }
-
-class ProgressBar {
- public:
-  explicit ProgressBar(std::size_t total) : total_(total), tty_(isatty(STDERR_FILENO) != 0), start_(Clock::now()) {}
-  void update(std::size_t done, const char* state, std::size_t keyframes, bool force = false) {
-    const auto now = Clock::now();
-    const double since_draw = std::chrono::duration<double>(now - last_draw_).count();
-    if (!force && since_draw < (tty_ ? 0.2 : 10.0)) return;
-    last_draw_ = now;
-    const double elapsed = std::chrono::duration<double>(now - start_).count();
-    const double fps = elapsed > 0 ? static_cast<double>(done) / elapsed : 0;
-    constexpr int kWidth = 30;
-    const int filled = total_ > 0 ? static_cast<int>(kWidth * done / total_) : kWidth;
-    std::string bar(static_cast<std::size_t>(filled), '#');
-    bar.resize(kWidth, '.');
-    std::fprintf(stderr, "%s[%s] %zu/%zu %.1f fps  state %-12s keyframes %zu%s", tty_ ? "\r" : "", bar.c_str(), done,
-                 total_, fps, state, keyframes, tty_ ? "   " : "\n");
-    std::fflush(stderr);
-  }
-  void finish() {
-    if (tty_) std::fprintf(stderr, "\n");
-  }
-
- private:
-  std::size_t total_;
-  bool tty_;
-  Clock::time_point start_, last_draw_{};
-};
-
-// The per-frame figures of the run, gathered in the pipeline's tracking thread (add()) and read once it ended.
-class FrameLog {
- public:
-  // Stages in the order of the timing table.
-  static constexpr const char* kStageOrder[] = {
-      "extract",    "stereo",       "map_wait",      "frame",          "local_map",      "retire",
-      "retire_cpu", "keyframe",     "keyframe_wait", "inline_mapping", "tracking",       "tracking_cpu",
-      "detector",   "detector_cpu", "frontend_sum",  "frontend_cpu",   "frame_interval", "read"};
-
-  FrameLog(bool inline_mapping, std::size_t last, std::size_t total_frames)
-      : inline_mapping_(inline_mapping), last_(last), total_frames_(total_frames) {}
-
-  // Just before the first frame: the clocks of the progress bar, the frame interval and the wall time start.
-  void start() {
-    progress_.emplace(total_frames_);
-    t_start_ = t_prev_frame_ = t_last_frame_ = Clock::now();
-  }
-
-  void add(const daemon::TrackedFrame& f) {
-    const slam::TrackResult& r = f.result;
-    count(f.captured, r);
-    add_timings(f, r);
-    const int moving_inliers = score_moving_inliers(f.captured.ground_truth_mask, r);
-    add_record(f, moving_inliers);
-    progress_->update(frames, slam::to_string(r.state), r.keyframes);
-    t_last_frame_ = Clock::now();
-  }
-
-  // The progress bar's last line; the time from the start to the last frame (s).
-  double finish() {
-    progress_->update(frames, "done", keyframes, true);
-    progress_->finish();
-    return std::chrono::duration<double>(t_last_frame_ - t_start_).count();
-  }
-
-  std::size_t frames = 0, tracked = 0, lost = 0, resets = 0, recovered = 0, max_queue = 0, keyframes = 0;
-  std::size_t new_maps = 0;         // maps started after a long loss (tracking.new_map_after_lost_s)
-  std::size_t keyframe_waits = 0;   // frames that waited for room in local mapping's queue
-  std::string last_state;           // of the last frame
-  long first_tracked = -1;          // frames processed before the first pose
-  long blank_recovered_after = -1;  // frames after the blank until a pose
-  std::vector<std::size_t> laps_keyframes, laps_points;
-  // Inliers of the pose on ground-truth moving objects (what the dynamic masks are there to prevent).
-  std::vector<double> moving_inlier_fraction;
-  std::size_t moving_inliers_total = 0, inliers_total = 0;
-  std::map<std::string, Series> series;  // per-stage times (ms)
-  nlohmann::json per_frame = nlohmann::json::array();
-
- private:
-  void count(const daemon::CapturedFrame& c, const slam::TrackResult& r) {
-    const long step = static_cast<long>(frames);
-    ++frames;
-    const bool ok = r.state == slam::TrackingState::kOk;
-    if (ok && first_tracked < 0) first_tracked = step;
-    if (c.blank && c.lap == 0) blank_end_step_ = step;
-    if (blank_end_step_ >= 0 && blank_recovered_after < 0 && !c.blank && ok)
-      blank_recovered_after = step - blank_end_step_ - 1;
-    if (static_cast<std::size_t>(c.source_index) == last_) {
-      laps_keyframes.push_back(r.keyframes);
-      laps_points.push_back(r.map_points);
-    }
-    if (ok) ++tracked;
-    if (r.state == slam::TrackingState::kLost) ++lost;
-    if (r.counts.reset) ++resets;
-    if (r.counts.recovered) ++recovered;
-    if (r.counts.new_map) ++new_maps;
-    if (r.counts.keyframe_waited) ++keyframe_waits;
-    last_state = slam::to_string(r.state);
-    keyframes = r.keyframes;
-    max_queue = std::max(max_queue, r.mapping_queue);
-  }
-
-  void add_timings(const daemon::TrackedFrame& f, const slam::TrackResult& r) {
-    const auto now = Clock::now();
-    const double interval_ms = std::chrono::duration<double, std::milli>(now - t_prev_frame_).count();
-    t_prev_frame_ = now;
-    series["extract"].add(r.timings.extract_ms);
-    series["stereo"].add(r.timings.stereo_ms);
-    series["map_wait"].add(r.timings.map_wait_ms);
-    series["frame"].add(r.timings.frame_ms);
-    series["local_map"].add(r.timings.local_map_ms);
-    series["retire"].add(r.timings.retire_ms);
-    series["retire_cpu"].add(r.timings.retire_cpu_ms);
-    series["keyframe"].add(r.timings.keyframe_ms);
-    if (r.counts.keyframe_waited) series["keyframe_wait"].add(r.timings.keyframe_wait_ms);
-    if (inline_mapping_) series["inline_mapping"].add(r.timings.inline_mapping_ms);
-    series["tracking"].add(r.timings.total_ms);
-    series["tracking_cpu"].add(r.timings.total_cpu_ms);
-    series["read"].add(f.captured.read_ms);
-    if (f.times.detector_ms >= 0) {
-      series["detector"].add(f.times.detector_ms);
-      series["frontend_sum"].add(f.times.detector_ms + r.timings.total_ms);
-      series["detector_cpu"].add(f.times.detector_cpu_ms);
-      series["frontend_cpu"].add(f.times.detector_cpu_ms + r.timings.total_cpu_ms);
-    }
-    if (frames > 1) series["frame_interval"].add(interval_ms);
-  }
-
-  // The pose's inliers on ground-truth moving pixels; -1 when not scored (no mask or no pose).
-  int score_moving_inliers(const cv::Mat& gt_mask, const slam::TrackResult& r) {
-    if (gt_mask.empty() || !r.pose_valid || r.inlier_keypoints_px.empty()) return -1;
-    int moving = 0;
-    for (const cv::Point2f& pt : r.inlier_keypoints_px) {
-      const int x = std::clamp(static_cast<int>(std::lround(pt.x)), 0, gt_mask.cols - 1);
-      const int y = std::clamp(static_cast<int>(std::lround(pt.y)), 0, gt_mask.rows - 1);
-      if (gt_mask.at<uint8_t>(y, x) != 0) ++moving;
-    }
-    moving_inliers_total += static_cast<std::size_t>(moving);
-    inliers_total += r.inlier_keypoints_px.size();
-    moving_inlier_fraction.push_back(static_cast<double>(moving) / static_cast<double>(r.inlier_keypoints_px.size()));
-    return moving;
-  }
-
-  void add_record(const daemon::TrackedFrame& f, int moving_inliers) {
-    const slam::TrackResult& r = f.result;
-    per_frame.push_back(
-        {{"frame", f.captured.source_index},
-         {"lap", f.captured.lap},
-         {"blank", f.captured.blank},
-         {"loops", r.loops_closed},
-         {"t_ns", f.captured.frame.t_ns},
-         {"state", slam::to_string(r.state)},
-         {"map_id", r.map_id},
-         {"new_map", r.counts.new_map},
-         {"keyframe_wait_ms", r.counts.keyframe_waited ? r.timings.keyframe_wait_ms : 0.0},
-         {"features", r.counts.features},
-         {"stereo_features", r.counts.stereo_features},
-         {"method", r.counts.method},
-         {"frame_matches", r.counts.frame_matches},
-         {"inliers", r.counts.inliers},
-         {"keyframe", r.counts.new_keyframe},
-         {"keyframes", r.keyframes},
-         {"map_points", r.map_points},
-         {"mapping_queue", r.mapping_queue},
-         {"mask_pixels", f.mask.empty() ? 0 : cv::countNonZero(f.mask)},
-         {"moving_inliers", moving_inliers},
-         {"p_w_c", r.pose_valid ? nlohmann::json::array(
-                                      {r.T_w_c.translation().x(), r.T_w_c.translation().y(), r.T_w_c.translation().z()})
-                                : nlohmann::json()},
-         {"tracking_ms", r.timings.total_ms},
-         {"detector_ms", f.times.detector_ms}});
-  }
-
-  const bool inline_mapping_;
-  const std::size_t last_, total_frames_;
-  std::optional<ProgressBar> progress_;
-  long blank_end_step_ = -1;  // step of the last blanked frame (first lap)
-  Clock::time_point t_start_, t_prev_frame_, t_last_frame_;
-};
 
 // What the SLAM holds at the end of the run.
 struct SlamResults {
