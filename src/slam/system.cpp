@@ -257,17 +257,7 @@ TrackResult System::track_stereo(int64_t t_ns, const cv::Mat& left, const cv::Ma
   r.counts = counts;
   r.counts.reset = r.counts.reset || was_reset;
 
-  if (r.state == TrackingState::kOk) {
-    const Frame& f = tracking_->last_frame();
-    r.pose_valid = true;
-    r.T_w_c = f.T_w_c();
-    r.inlier_keypoints_px.reserve(f.size());
-    for (std::size_t i = 0; i < f.size(); ++i)
-      if (f.map_points[i] && !f.outlier[i]) r.inlier_keypoints_px.push_back(f.keypoints[i].pt);
-    if (f.reference_keyframe) {
-      trajectory_.push_back({t_ns, f.reference_keyframe->id, tracking_->last_relative_pose()});
-    }
-  }
+  if (r.state == TrackingState::kOk) take_pose(r);
   if (counts.reset) reset_now();
   if (counts.new_map) {
     // The frame that waited out the loss initialises the new map at once (its features are still here).
@@ -281,12 +271,7 @@ TrackResult System::track_stereo(int64_t t_ns, const cv::Mat& left, const cv::Ma
     r.counts.inliers = init_counts.inliers;
     r.counts.new_keyframe = init_counts.new_keyframe;
     r.timings.keyframe_ms += init_timings.keyframe_ms;
-    if (r.state == TrackingState::kOk) {
-      const Frame& f = tracking_->last_frame();
-      r.pose_valid = true;
-      r.T_w_c = f.T_w_c();
-      trajectory_.push_back({t_ns, f.reference_keyframe->id, tracking_->last_relative_pose()});
-    }
+    if (r.state == TrackingState::kOk) take_pose(r);
   }
   r.map_id = map_id_;
   if (!config_.threaded_mapping) {
@@ -308,6 +293,17 @@ TrackResult System::track_stereo(int64_t t_ns, const cv::Mat& left, const cv::Ma
   r.timings.total_ms = ms_since(t_start);
   r.timings.total_cpu_ms = thread_cpu_ms() - cpu_start;
   return r;
+}
+
+void System::take_pose(TrackResult& r) {
+  const Frame& f = tracking_->last_frame();
+  r.pose_valid = true;
+  r.T_w_c = f.T_w_c();
+  r.inlier_keypoints_px.clear();
+  r.inlier_keypoints_px.reserve(f.size());
+  for (std::size_t i = 0; i < f.size(); ++i)
+    if (f.map_points[i] && !f.outlier[i]) r.inlier_keypoints_px.push_back(f.keypoints[i].pt);
+  if (f.reference_keyframe) trajectory_.push_back({r.t_ns, f.reference_keyframe->id, tracking_->last_relative_pose()});
 }
 
 std::vector<std::string> System::earlier_map_files() const {

@@ -166,6 +166,8 @@ class System {
   void reset_now();
   // Lost for too long: the current map's trajectory is frozen, the map cleared and the counter moved on.
   void start_new_map();
+  // After a tracked frame: its pose, pose inliers and trajectory entry into r.
+  void take_pose(TrackResult& r);
   // Waits until local mapping and loop closing are idle (threaded) or runs their queues (inline).
   void settle();
   MapFileContext file_context() const;
