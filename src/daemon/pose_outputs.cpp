@@ -107,15 +107,24 @@ PoseOutputs::~PoseOutputs() {
   dds_status_.reset();
 }
 
+namespace {
+
+// The planar pose (x, y in m, yaw in rad) moved on by a speed and yaw rate held for dt_s (midpoint heading).
+void advance_planar(double& x_m, double& y_m, double& yaw_rad, const OdometryRate& rate, double dt_s) {
+  const double mid_yaw = yaw_rad + 0.5 * rate.yaw_rate_radps * dt_s;
+  x_m += rate.speed_mps * dt_s * std::cos(mid_yaw);
+  y_m += rate.speed_mps * dt_s * std::sin(mid_yaw);
+  yaw_rad += rate.yaw_rate_radps * dt_s;
+}
+
+}  // namespace
+
 void PoseOutputs::integrate_odometry(const OdometryRate& rate) {
   if (odom_started_) {
     const double dt_s = ns_to_s(rate.t_ns - last_rate_.t_ns);
     if (dt_s <= 0) return;  // out of order: the integration needs time order
     // A gap longer than stale_ms is bridged with the older rate as well: the odom frame must stay continuous.
-    const double mid_yaw = odom_yaw_rad_ + 0.5 * last_rate_.yaw_rate_radps * dt_s;
-    odom_x_m_ += last_rate_.speed_mps * dt_s * std::cos(mid_yaw);
-    odom_y_m_ += last_rate_.speed_mps * dt_s * std::sin(mid_yaw);
-    odom_yaw_rad_ += last_rate_.yaw_rate_radps * dt_s;
+    advance_planar(odom_x_m_, odom_y_m_, odom_yaw_rad_, last_rate_, dt_s);
   }
   odom_started_ = true;
   last_rate_ = rate;
@@ -125,12 +134,11 @@ bool PoseOutputs::odom_pose_at(int64_t t_ns, SE3d& T_odom_base) const {
   if (!odom_started_) return false;
   const double ahead_s = ns_to_s(t_ns - last_rate_.t_ns);
   if (ahead_s * 1000.0 > config_.odometry.check.stale_ms) return false;
-  const double dt_s = std::max(ahead_s, 0.0);  // a frame captured before the last odometry sample: that sample
-  const double mid_yaw = odom_yaw_rad_ + 0.5 * last_rate_.yaw_rate_radps * dt_s;
-  const double yaw = odom_yaw_rad_ + last_rate_.yaw_rate_radps * dt_s;
-  T_odom_base = make_se3(Eigen::Quaterniond(Eigen::AngleAxisd(yaw, Eigen::Vector3d::UnitZ())),
-                         Eigen::Vector3d(odom_x_m_ + last_rate_.speed_mps * dt_s * std::cos(mid_yaw),
-                                         odom_y_m_ + last_rate_.speed_mps * dt_s * std::sin(mid_yaw), 0.0));
+  double x_m = odom_x_m_, y_m = odom_y_m_, yaw_rad = odom_yaw_rad_;
+  // A frame captured before the last odometry sample gets that sample's pose.
+  advance_planar(x_m, y_m, yaw_rad, last_rate_, std::max(ahead_s, 0.0));
+  T_odom_base = make_se3(Eigen::Quaterniond(Eigen::AngleAxisd(yaw_rad, Eigen::Vector3d::UnitZ())),
+                         Eigen::Vector3d(x_m, y_m, 0.0));
   return true;
 }
 
