@@ -2,6 +2,19 @@
 
 namespace agvslam::drivers::dds {
 
+namespace {
+
+// One tf2_msgs/TFMessage of n transforms (borrowed, not freed by Cyclone).
+bool write_transforms(dds_entity_t writer, TransformMsg* transforms, uint32_t n) {
+  TfMsg m{};
+  m.transforms._length = m.transforms._maximum = n;
+  m.transforms._buffer = transforms;
+  m.transforms._release = false;
+  return dds_write(writer, &m) >= 0;
+}
+
+}  // namespace
+
 const char* to_string(Topic topic) {
   switch (topic) {
     case Topic::kPose:
@@ -24,29 +37,27 @@ DdsPosePublisher::DdsPosePublisher(const DdsConfig& config, bool start_thread)
       participant_((config.validate("DdsConfig"), config)),
       ring_(static_cast<std::size_t>(config.queue_capacity)) {
   const RosDefaultQos qos(config_);
-  auto make_writer = [&](const dds_topic_descriptor_t* desc, const std::string& name) {
+  auto make_writer = [&](const dds_topic_descriptor_t* desc, const std::string& name, const dds_qos_t* q) {
     const dds_entity_t topic = participant_.create_topic(desc, name);
-    return dds_check(dds_create_writer(participant_.get(), topic, qos.get(), nullptr), "DDS writer " + name);
+    return dds_check(dds_create_writer(participant_.get(), topic, q, nullptr), "DDS writer " + name);
   };
   if (config_.publish_pose) {
-    writers_[0] = make_writer(&geometry_msgs_msg_dds__PoseWithCovarianceStamped__desc, config_.pose_topic());
+    writers_[0] = make_writer(&geometry_msgs_msg_dds__PoseWithCovarianceStamped__desc, config_.pose_topic(), qos.get());
   }
-  if (config_.publish_odom) writers_[1] = make_writer(&nav_msgs_msg_dds__Odometry__desc, config_.odom_topic());
-  if (config_.publish_status) writers_[2] = make_writer(&agvslam_msgs_msg_dds__Status__desc, config_.status_topic());
+  if (config_.publish_odom)
+    writers_[1] = make_writer(&nav_msgs_msg_dds__Odometry__desc, config_.odom_topic(), qos.get());
+  if (config_.publish_status)
+    writers_[2] = make_writer(&agvslam_msgs_msg_dds__Status__desc, config_.status_topic(), qos.get());
   if (config_.publish_tf) {
     // tf2_ros::DynamicBroadcasterQoS: reliable, keep last 100, volatile.
     const RosDefaultQos tf_qos(config_, 100, false);
-    const dds_entity_t topic = participant_.create_topic(&tf2_msgs_msg_dds__TFMessage__desc, DdsConfig::tf_topic());
-    writers_[3] = dds_check(dds_create_writer(participant_.get(), topic, tf_qos.get(), nullptr), "DDS writer rt/tf");
+    writers_[3] = make_writer(&tf2_msgs_msg_dds__TFMessage__desc, DdsConfig::tf_topic(), tf_qos.get());
   }
   if (config_.publish_tf_static) {
     // tf2_ros::StaticBroadcasterQoS: reliable, keep last 1, transient local (the writer keeps the latest message
     // for readers that join later).
     const RosDefaultQos static_qos(config_, 1, true);
-    const dds_entity_t topic =
-        participant_.create_topic(&tf2_msgs_msg_dds__TFMessage__desc, DdsConfig::tf_static_topic());
-    writers_[4] =
-        dds_check(dds_create_writer(participant_.get(), topic, static_qos.get(), nullptr), "DDS writer rt/tf_static");
+    writers_[4] = make_writer(&tf2_msgs_msg_dds__TFMessage__desc, DdsConfig::tf_static_topic(), static_qos.get());
   }
   if (start_thread) thread_ = std::thread([this] { run(); });
 }
@@ -107,11 +118,7 @@ bool DdsPosePublisher::write_now(const PoseSample& sample) {
     } else {
       fill_transform_msg(sample.t_ns, sample.T_map_base, frames_.map, frames_.base, transforms[0]);
     }
-    TfMsg m{};
-    m.transforms._length = m.transforms._maximum = via_odom ? 2 : 1;
-    m.transforms._buffer = transforms;
-    m.transforms._release = false;
-    ok = dds_write(writers_[3], &m) >= 0 && ok;
+    ok = write_transforms(writers_[3], transforms, via_odom ? 2 : 1) && ok;
   }
   if (ok) {
     published_.fetch_add(1, std::memory_order_relaxed);
@@ -126,11 +133,7 @@ bool DdsPosePublisher::write_static_transform(int64_t t_ns, const SE3d& T_parent
   if (writers_[4] <= 0) return false;
   TransformMsg transform{};
   fill_transform_msg(t_ns, T_parent_child, parent, child, transform);
-  TfMsg m{};
-  m.transforms._length = m.transforms._maximum = 1;
-  m.transforms._buffer = &transform;
-  m.transforms._release = false;
-  return dds_write(writers_[4], &m) >= 0;
+  return write_transforms(writers_[4], &transform, 1);
 }
 
 void DdsPosePublisher::run() {
