@@ -20,7 +20,8 @@ grep -q "epoch 3" "$work/whole.log" || { cat "$work/whole.log"; echo "FAIL: the 
 
 $py "$src/src/semantic/training/train.py" "${args[@]}" --out "$work/part.onnx" > "$work/part.log" 2>&1 &
 pid=$!
-for _ in $(seq 600); do grep -q "epoch 2" "$work/part.log" && break; sleep 0.1; done
+# Stopped once epoch 2's checkpoint is written (the epoch's own line comes before its checkpoint).
+for _ in $(seq 600); do grep -q "checkpoint after epoch 2" "$work/part.log" && break; sleep 0.1; done
 kill "$pid" 2>/dev/null || true
 wait "$pid" 2>/dev/null || true
 [ -f "$work/part.ckpt" ] || { cat "$work/part.log"; echo "FAIL: no checkpoint after epoch 2"; exit 1; }

@@ -337,6 +337,8 @@ def main():
                                      "optimizer": optimizer.state_dict(), "schedule": schedule.state_dict(),
                                      "numpy_rng": rng.bit_generator.state, "torch_rng": torch.get_rng_state(),
                                      "python_rng": random.getstate()})
+        # After the file is in place: a run stopped from here on continues after this epoch.
+        print(f"checkpoint after epoch {epoch + 1}: {checkpoint}", flush=True)
         if last:
             break
 
