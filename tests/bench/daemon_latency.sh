@@ -17,6 +17,7 @@
 # The rendered sequence is cached in BUILD/bench-data. Needs `unshare -n` (root or user namespaces).
 set -euo pipefail
 source "$(dirname "$0")/record.sh"
+source "$(dirname "$0")/agvslamd_sim.sh"
 record_init "$0" "$@"
 here=$(cd "$(dirname "$0")" && pwd)
 src=$(cd "$here/../.." && pwd)
@@ -62,17 +63,7 @@ source:
   type: dataset
   dataset: $seq
   rate: 1
-stages:
-  features: $src/params/features.yaml
-  slam: $src/params/slam.yaml
-  dynamic: $src/params/dynamic.yaml
-  stereo: $src/params/stereo.yaml
-  place: $src/params/place.yaml
-pipeline:
-  dynamic: detector
-  mapping: thread
-base_link:
-  z_m: 0.5
+$(agvslamd_sim_pipeline_yaml "$src")
 dds:
   network_interface: lo
   topic_namespace: agvslam_bench

@@ -15,6 +15,7 @@
 # --data: a sequence written by agvslam-sim (default: rendered once into BUILD/bench-data). Needs `unshare -n`.
 set -euo pipefail
 source "$(dirname "$0")/record.sh"
+source "$(dirname "$0")/agvslamd_sim.sh"
 record_init "$0" "$@"
 here=$(cd "$(dirname "$0")" && pwd)
 src=$(cd "$here/../.." && pwd)
@@ -65,17 +66,7 @@ source:
   dataset: $data
   rate: 0
   loop: true
-stages:
-  features: $src/params/features.yaml
-  slam: $src/params/slam.yaml
-  dynamic: $src/params/dynamic.yaml
-  stereo: $src/params/stereo.yaml
-  place: $src/params/place.yaml
-pipeline:
-  dynamic: detector
-  mapping: thread
-base_link:
-  z_m: 0.5
+$(agvslamd_sim_pipeline_yaml "$src")
 map:
   file: $out/soak.map
   mode: map
