@@ -14,10 +14,12 @@
 #include <sys/socket.h>
 #include <sys/un.h>
 
+#include <algorithm>
 #include <atomic>
 #include <cmath>
 #include <filesystem>
 #include <functional>
+#include <map>
 #include <mutex>
 #include <regex>
 #include <thread>
@@ -276,6 +278,77 @@ TEST(Agvslamd, TfCarriesThePublishedPoseAndTfStaticReachesALateSubscriber) {
   // rt/tf's reader is not waited for: the first frames may go out before it matched.
   EXPECT_GE(matched + 5, published.size());
   std::printf("tf: %zu of %zu published poses received as map -> base_link\n", matched, published.size());
+  fs::remove_all(dir);
+}
+
+// The DDS subscriber leaves and another joins while the daemon runs (a ROS 2 node restarted on the vehicle): the
+// daemon keeps tracking and publishing at its pace with nobody listening (publishing never waits for a reader), and
+// the new reader receives every pose from the one it joined at on, each equal to the published one.
+TEST(Agvslamd, ASubscriberLeavingAndAnotherJoiningLosesNothingAfterItJoins) {
+  AGVSLAM_REQUIRE_NETNS(netns);
+  const std::string seq = test::daemon_sim_sequence();
+  const std::string dir = test::make_temp_dir("agvslamd-rejoin");
+  // Real time (80 frames, 4 s): the first reader (pose, odom and status: the daemon waits for a reader on each)
+  // takes 45 samples (~15 frames, ~0.75 s) and leaves; the second, on the pose alone, joins ~1.7 s later.
+  write_text(dir + "/d.yaml", "source:\n  type: dataset\n  dataset: " + seq + "\n  rate: 1\n" + stages_yaml() +
+                                  "pipeline:\n  mapping: inline\n" + kMount +
+                                  "dds:\n  network_interface: lo\n  topic_namespace: agvslamd_test\n"
+                                  "  wait_for_subscribers: 1\n  wait_timeout_s: 60\n"
+                                  "log:\n  pose_log: " +
+                                  dir + "/poses.jsonl\n");
+  const std::string echo = test::tool_path("agvslam-echo") + " --json --interface lo --namespace agvslamd_test ";
+  const std::string script = "ip link set lo up && (" + echo + "--count 45 --timeout 60 > " + dir + "/first.jsonl 2> " +
+                             dir + "/first.err & f=$!; " + test::tool_path("agvslamd") + " --config " + dir +
+                             "/d.yaml --json " + dir + "/stats.json > " + dir + "/daemon.out 2> " + dir +
+                             "/daemon.err & d=$!; wait $f; a=$?; sleep 1.7; " + echo + "--topic pose --timeout 60 > " +
+                             dir + "/second.jsonl 2> " + dir +
+                             "/second.err & s=$!; wait $d; rc=$?; sleep 1; kill -INT $s; wait $s; "
+                             "exit $((rc + 10 * a)))";
+  write_text(dir + "/run.sh", script + "\n");
+  ASSERT_EQ(test::run_command(netns + " sh " + dir + "/run.sh"), 0)
+      << read_text(dir + "/daemon.err") << read_text(dir + "/first.err") << read_text(dir + "/second.err");
+
+  std::vector<int64_t> published;  // stamps of the tracked samples, in order
+  std::map<int64_t, SE3d> pose_at;
+  for (const json& l : read_json_lines(dir + "/poses.jsonl")) {
+    if (!l.at("dds").at("pose").get<bool>()) continue;
+    const int64_t t = l.at("sample").at("t_ns").get<int64_t>();
+    published.push_back(t);
+    pose_at[t] = pose_from_sample(l.at("sample"));
+  }
+  auto received = [&](const std::string& file) {
+    std::vector<int64_t> stamps;
+    for (const json& l : read_json_lines(file)) {
+      if (!l.contains("topic") || l.at("topic") != "pose") continue;
+      const json& m = l.at("msg");
+      const int64_t t = stamp_ns(m.at("header"));
+      const auto it = pose_at.find(t);
+      EXPECT_NE(it, pose_at.end()) << "received a pose that was not published";
+      if (it != pose_at.end()) {
+        const json& p = m.at("pose").at("pose").at("position");
+        EXPECT_EQ(p.at("x").get<double>(), it->second.translation().x());
+        EXPECT_EQ(p.at("y").get<double>(), it->second.translation().y());
+      }
+      stamps.push_back(t);
+    }
+    return stamps;
+  };
+  const std::vector<int64_t> first = received(dir + "/first.jsonl");
+  const std::vector<int64_t> second = received(dir + "/second.jsonl");
+  ASSERT_GE(first.size(), 10U);
+  EXPECT_TRUE(std::equal(first.begin(), first.end(), published.begin())) << "the first reader got the first poses";
+  ASSERT_GE(second.size(), 10U) << "the second reader joined ~2.5 s into a 4 s run";
+  EXPECT_GT(second.front(), first.back()) << "nobody read between the two";
+  // From the pose it joined at, the second reader received every later one, in order.
+  const auto from = std::find(published.begin(), published.end(), second.front());
+  ASSERT_NE(from, published.end());
+  EXPECT_TRUE(std::equal(second.begin(), second.end(), from, published.end())) << "a pose lost after joining";
+  // With nobody listening the daemon went on at the camera's pace: every frame processed, none dropped.
+  const json stats = json::parse(read_text(dir + "/stats.json"));
+  EXPECT_EQ(stats.at("dropped_outputs").get<uint64_t>(), 0U);
+  EXPECT_GE(published.size(), 60U);
+  std::printf("rejoin: %zu poses published, first reader %zu, second %zu (from pose %td)\n", published.size(),
+              first.size(), second.size(), from - published.begin());
   fs::remove_all(dir);
 }
 
