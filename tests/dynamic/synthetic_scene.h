@@ -5,6 +5,7 @@
 
 #include <Eigen/Core>
 #include <Eigen/Geometry>
+#include <algorithm>
 #include <cmath>
 #include <opencv2/core.hpp>
 #include <opencv2/imgproc.hpp>
@@ -51,6 +52,12 @@ struct RenderOutput {
   cv::Mat depth_m;  // CV_32FC1, 0 = nothing
   cv::Mat id;       // CV_32SC1, -1 = nothing
 };
+
+// The CV_8UC1 mask's value at the pixel nearest p: a point tracked to within half a pixel of the right or bottom
+// edge rounds onto the next column or row, which is clamped back into the image.
+inline uint8_t mask_at(const cv::Mat& mask, const cv::Point2f& p) {
+  return mask.at<uint8_t>(std::clamp(cvRound(p.y), 0, mask.rows - 1), std::clamp(cvRound(p.x), 0, mask.cols - 1));
+}
 
 inline double sample_bilinear(const cv::Mat& tex, double x, double y) {
   const int w = tex.cols, h = tex.rows;

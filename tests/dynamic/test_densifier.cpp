@@ -64,7 +64,7 @@ TEST(Densifier, AddsTestedPointsAroundASmallGroup) {
     EXPECT_TRUE(p.densified);
     EXPECT_EQ(p.age, 1);
     for (const cv::Point2f& q : existing) EXPECT_GE(cv::norm(p.prev_px - q), min_d - 1e-6);
-    const bool near = near_box.at<uint8_t>(cv::Point(cvRound(p.cur_px.x), cvRound(p.cur_px.y))) != 0;
+    const bool near = mask_at(near_box, p.cur_px) != 0;
     on_box += near && p.dynamic;
     dynamic_off_box += !near && p.dynamic;
   }

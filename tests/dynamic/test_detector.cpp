@@ -80,8 +80,7 @@ void expect_box_found(const RunOutcome& run, double min_iou) {
   int off_box = 0;
   for (const auto& p : r.points) {
     if (!p.dynamic) continue;
-    const cv::Point q(cvRound(p.cur_px.x), cvRound(p.cur_px.y));
-    if (near_box.at<uint8_t>(q) == 0) ++off_box;
+    if (mask_at(near_box, p.cur_px) == 0) ++off_box;
   }
   EXPECT_LE(off_box, 3) << summary(r);
   std::printf("%s\nIoU %.3f, false positive px %d of %d box px\n%s\n", summary(r).c_str(), overlap, false_px, gt_px,
@@ -306,8 +305,7 @@ TEST(DynamicDetector, DensifiedPointsAroundASlowMoverAreTestedAgainstTheMultiFra
       detector.detect(frames[k], r);
       int box_dynamic = 0;
       for (const auto& p : r.points) {
-        const cv::Point q(cvRound(p.cur_px.x), cvRound(p.cur_px.y));
-        const bool on_box = gt_masks[k].at<uint8_t>(q) != 0;
+        const bool on_box = mask_at(gt_masks[k], p.cur_px) != 0;
         box_dynamic += on_box && p.dynamic;
         if (!p.densified) continue;
         ++c.densified;
@@ -612,7 +610,7 @@ TEST(DynamicDetector, ABoxEnteringFromTheLeftWhileDrivingGetsTheBandsDrivingSeed
     for (const TrackedPoint& p : with[i].points) {
       if (!p.densified || !p.dynamic || p.cur_px.x >= per_frame().band.strip_px) continue;
       ++seeds;
-      seeds_on_box += near_box.at<uint8_t>(cvRound(p.cur_px.y), cvRound(p.cur_px.x)) > 0;
+      seeds_on_box += mask_at(near_box, p.cur_px) > 0;
     }
     iou_with += iou(with[i].mask.image, gt[i]);
     iou_without += iou(without[i].mask.image, gt[i]);

@@ -71,7 +71,7 @@ TEST(PointTracks, FlagsTheTracksOnAMovingBox) {
   for (const TrackedPoint& p : r.points) {
     tracked += p.tracked;
     if (!p.dynamic) continue;
-    const bool near = near_box.at<uint8_t>(cv::Point(cvRound(p.cur_px.x), cvRound(p.cur_px.y))) != 0;
+    const bool near = mask_at(near_box, p.cur_px) != 0;
     (near ? on_box : off_box) += 1;
   }
   EXPECT_GT(tracked, 250);
