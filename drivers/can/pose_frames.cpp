@@ -148,6 +148,7 @@ std::size_t encode_classic_frames(const PoseSample& s, uint8_t counter, const Fr
   CanFrameBytes& b = out[n++] = classic(kPoseYZOffset, layout);
   put_bits_le(b.data.data(), 0, 32, to_raw(q.y_mm, 32));
   put_bits_le(b.data.data(), 32, 16, to_raw(std::clamp<int64_t>(q.z_mm, -32768, 32767), 16));
+  put_bits_le(b.data.data(), 48, 4, s.map_id & 0xFU);
   seal_classic(b, counter);
 
   if (with_velocity) {
@@ -223,6 +224,7 @@ CanFrameBytes encode_fd_frame(const PoseSample& s, uint8_t counter, const FrameL
   put_bits_le(d, 320, 32, s.frame_index & 0xFFFFFFFFULL);
   put_bits_le(d, 352, 4, to_raw(q.state, 4));
   put_bits_le(d, 356, 4, counter & 0xFU);
+  put_bits_le(d, 360, 16, s.map_id & 0xFFFFU);
   f.data[kPoseFdLength - 1] = frame_crc(f);
   return f;
 }

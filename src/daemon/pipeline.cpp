@@ -32,13 +32,13 @@ std::string PipelineStats::one_line() const {
   char buf[512];
   std::snprintf(buf, sizeof buf,
                 "%s, %.1f fps, %llu frames (%llu tracked, %llu lost), dropped %llu (queue %llu, source %llu), "
-                "latency p50 %.1f ms p99 %.1f ms, keyframes %zu, camera %s, published %llu (dds pose %llu, "
-                "status %llu, can %llu)",
+                "latency p50 %.1f ms p99 %.1f ms, keyframes %zu, map points %zu, camera %s, published %llu "
+                "(dds pose %llu, status %llu, can %llu)",
                 state.c_str(), fps, static_cast<unsigned long long>(processed),
                 static_cast<unsigned long long>(tracked), static_cast<unsigned long long>(lost),
                 static_cast<unsigned long long>(dropped_queue + dropped_source),
                 static_cast<unsigned long long>(dropped_queue), static_cast<unsigned long long>(dropped_source),
-                latency_p50_ms, latency_p99_ms, keyframes, source.connected ? "ok" : "lost, reopening",
+                latency_p50_ms, latency_p99_ms, keyframes, map_points, source.connected ? "ok" : "lost, reopening",
                 static_cast<unsigned long long>(published), static_cast<unsigned long long>(outputs.dds_pose.published),
                 static_cast<unsigned long long>(outputs.dds_status.published),
                 static_cast<unsigned long long>(outputs.can.cycles_sent));

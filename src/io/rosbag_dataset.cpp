@@ -357,7 +357,8 @@ RosbagDataset::RosbagDataset(const std::string& bag_dir, const std::string& cali
   } catch (const YAML::Exception& e) {
     throw InputError(metadata_path, "line " + std::to_string(e.mark.line + 1), "expected YAML: " + e.msg);
   }
-  const YAML::Node info = document["rosbag2_bagfile_information"];
+  // Subscripting a scalar or a sequence throws YAML::BadSubscript: every node is checked to be a map first.
+  const YAML::Node info = document.IsMap() ? document["rosbag2_bagfile_information"] : YAML::Node();
   if (!info || !info.IsMap()) {
     throw InputError(metadata_path, "field 'rosbag2_bagfile_information'",
                      "missing (expected the metadata.yaml that ros2 bag record writes)");
@@ -391,7 +392,7 @@ RosbagDataset::RosbagDataset(const std::string& bag_dir, const std::string& cali
   std::vector<TopicInfo> topics;
   for (std::size_t i = 0; i < topic_list.size(); ++i) {
     const std::string where = prefix + "topics_with_message_count[" + std::to_string(i) + "].topic_metadata.";
-    const YAML::Node meta = topic_list[i]["topic_metadata"];
+    const YAML::Node meta = topic_list[i].IsMap() ? topic_list[i]["topic_metadata"] : YAML::Node();
     if (!meta || !meta.IsMap()) {
       throw InputError(metadata_path, "field '" + where.substr(0, where.size() - 1) + "'",
                        "missing (expected name, type, serialization_format)");

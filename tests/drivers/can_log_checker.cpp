@@ -24,7 +24,7 @@ constexpr double kRadToDeg = 180.0 / M_PI;
 // Expected physical values, straight from the sample's SI fields (independent of the encoder's arithmetic).
 struct Expected {
   double x, y, z, roll, pitch, yaw, vx, vy, yaw_rate, sd_x, sd_y, sd_yaw, latency_ms, fps, dyn_pct;
-  int64_t dropped, state, frame_index, t_ms;
+  int64_t dropped, state, frame_index, t_ms, map_id;
 };
 
 Expected expected_from(const nlohmann::json& s) {
@@ -51,6 +51,7 @@ Expected expected_from(const nlohmann::json& s) {
   e.dropped = static_cast<int64_t>(s.at("frames_dropped").get<uint64_t>() % 65536);
   e.state = s.at("tracking_state").get<int64_t>();
   e.frame_index = static_cast<int64_t>(s.at("frame_index").get<uint64_t>() % 4294967296ULL);
+  e.map_id = static_cast<int64_t>(s.value("map_id", uint64_t{0}));
   const int64_t t_ns = s.at("t_ns").get<int64_t>();
   e.t_ms = (t_ns >= 0 ? t_ns / 1000000 : -((-t_ns + 999999) / 1000000)) % 4294967296LL;
   return e;
@@ -168,6 +169,8 @@ CanCheckResult check_can_log(const Dbc& dbc, const std::vector<nlohmann::json>& 
     }
     check("AGVSLAM_POSE_YZ", "PoseY", e.y);
     check("AGVSLAM_POSE_YZ", "PoseZ", e.z);
+    check("AGVSLAM_POSE_YZ", "MapId", static_cast<double>(e.map_id % 16));
+    check("AGVSLAM_POSE_FD", "MapId", static_cast<double>(e.map_id % 65536));
     for (const char* msg : {"AGVSLAM_VELOCITY", "AGVSLAM_POSE_FD"}) {
       check(msg, "VelX", e.vx);
       check(msg, "VelY", e.vy);

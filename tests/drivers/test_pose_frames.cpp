@@ -129,6 +129,30 @@ TEST(PoseFrames, OdometryCheckFrameAgainstTheDbc) {
   EXPECT_EQ(encode_odometry_check_frame(check, 0, FrameLayout{0x18FF1000, true}).id, 0x18FF1005U);
 }
 
+// The map the pose is in: a vehicle controller must see a new map (its own origin) in the pose frames themselves.
+TEST(PoseFrames, MapIdInThePoseFramesAgainstTheDbc) {
+  PoseSample s = synthetic_pose_sample(3, 1700000000000000000LL);
+  s.map_id = 0x12345;  // 4 bits on classic CAN (5), 16 on CAN FD (0x2345)
+  std::array<CanFrameBytes, kMaxClassicFrames> frames;
+  ASSERT_GE(encode_classic_frames(s, 9, FrameLayout{}, false, false, false, frames), 2U);
+  const CanFrameBytes& yz = frames[1];
+  EXPECT_EQ(yz.id, 0x301U);
+  EXPECT_EQ(yz.data[6], 0x95);  // MapId 5 | Counter 9 << 4
+  EXPECT_EQ(yz.data[7], frame_crc(yz));
+  const CanFrameBytes fd = encode_fd_frame(s, 9, FrameLayout{});
+  EXPECT_EQ(fd.data[45], 0x45);
+  EXPECT_EQ(fd.data[46], 0x23);
+
+  const Dbc dbc = Dbc::load(kDbcPath);
+  EXPECT_EQ(decode_signals(*dbc.find(0x301, false), yz).at("MapId"), 5.0);
+  EXPECT_EQ(decode_signals(*dbc.find(0x308, false), fd).at("MapId"), 0x2345);
+  // The first map is 0 in both.
+  s.map_id = 0;
+  encode_classic_frames(s, 9, FrameLayout{}, false, false, false, frames);
+  EXPECT_EQ(frames[1].data[6], 0x90);
+  EXPECT_EQ(get_bits_le(encode_fd_frame(s, 9, FrameLayout{}).data.data(), 360, 16), 0U);
+}
+
 // Every frame the encoder makes for 200 synthetic samples, written as candump -L lines, read back and decoded
 // with the DBC's signal definitions: every value within half a step of the sample, Crc and Counter right.
 void round_trip(bool fd) {
@@ -159,7 +183,7 @@ void round_trip(bool fd) {
   for (const auto& f : res.failures) ADD_FAILURE() << f;
   EXPECT_TRUE(res.ok);
   EXPECT_EQ(res.log_cycles, 200);
-  EXPECT_EQ(res.values_checked, fd ? 200 * 19 : 200 * 16);  // every signal but Counter and Crc
+  EXPECT_EQ(res.values_checked, fd ? 200 * 20 : 200 * 17);  // every signal but Counter and Crc
 }
 
 TEST(PoseFrames, ClassicFramesRoundTripThroughTheDbc) { round_trip(false); }

@@ -220,6 +220,36 @@ def tool_seeds(shared, bin_dir):
             put("map", name, open(out, "rb").read())
 
 
+def rosbag_metadata(storage="sqlite3", compression='""', files=("bag_0.db3",), topics=(
+        ("/camera/left/image_raw", "sensor_msgs/msg/Image", 50), ("/camera/right/image_raw", "sensor_msgs/msg/Image", 50),
+        ("/odom", "nav_msgs/msg/Odometry", 250))):
+    # metadata.yaml as ros2 bag record (rosbag2 version 5, Humble) writes it.
+    s = ("rosbag2_bagfile_information:\n  version: 5\n  storage_identifier: %s\n  duration:\n"
+         "    nanoseconds: 2450000000\n  starting_time:\n    nanoseconds_since_epoch: 1700000000000000000\n"
+         "  message_count: 350\n  topics_with_message_count:\n" % storage)
+    for name, kind, count in topics:
+        s += ("    - topic_metadata:\n        name: %s\n        type: %s\n        serialization_format: cdr\n"
+              "        offered_qos_profiles: \"\"\n      message_count: %d\n" % (name, kind, count))
+    s += '  compression_format: %s\n  compression_mode: ""\n  relative_file_paths:\n' % compression
+    s += "".join("    - %s\n" % f for f in files)
+    s += ("  files:\n    - path: %s\n      starting_time:\n        nanoseconds_since_epoch: 1700000000000000000\n"
+          "      duration:\n        nanoseconds: 2450000000\n      message_count: 350\n" % files[0])
+    return s.encode()
+
+
+def rosbag_metadata_seeds():
+    put("rosbag_metadata", "humble_stereo_odom.yaml", rosbag_metadata())
+    put("rosbag_metadata", "mcap.yaml", rosbag_metadata(storage="mcap", files=("bag_0.mcap",)))
+    put("rosbag_metadata", "zstd.yaml", rosbag_metadata(compression="zstd"))
+    put("rosbag_metadata", "two_files.yaml", rosbag_metadata(files=("bag_0.db3", "bag_1.db3")))
+    put("rosbag_metadata", "compressed_images.yaml", rosbag_metadata(topics=tuple(
+        (t, k, 40) for t, k in (("/stereo/left/image_raw/compressed", "sensor_msgs/msg/CompressedImage"),
+                                ("/stereo/right/image_raw/compressed", "sensor_msgs/msg/CompressedImage"),
+                                ("/stereo/left/camera_info", "sensor_msgs/msg/CameraInfo"),
+                                ("/stereo/right/camera_info", "sensor_msgs/msg/CameraInfo")))))
+    put("rosbag_metadata", "query.txt", b"left=/camera/left/image_raw&right=/camera/right/image_raw&odom=/odom")
+
+
 def main():
     ap = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
     ap.add_argument("--shared", required=True, help="the shared data folder (kitti01_f000-050, euroc_v101_f000-094)")
@@ -267,6 +297,7 @@ def main():
     put("dbc", "agvslam.dbc", open(os.path.join(SRC, "deploy", "agvslam.dbc"), "rb").read())
     cdr_seeds(grey_png(8, 4))
     can_seeds()
+    rosbag_metadata_seeds()
     tool_seeds(a.shared, a.bin)
 
 

@@ -26,6 +26,7 @@ AGVSLAM_FUZZ_TARGET(candump)
 AGVSLAM_FUZZ_TARGET(dbc)
 AGVSLAM_FUZZ_TARGET(can_frames)
 AGVSLAM_FUZZ_TARGET(rosbag_cdr)
+AGVSLAM_FUZZ_TARGET(rosbag_metadata)
 AGVSLAM_FUZZ_TARGET(dds_samples)
 #undef AGVSLAM_FUZZ_TARGET
 
@@ -46,6 +47,7 @@ int main(int argc, char** argv) {
       {"dbc", fuzz_dbc},
       {"can_frames", fuzz_can_frames},
       {"rosbag_cdr", fuzz_rosbag_cdr},
+      {"rosbag_metadata", fuzz_rosbag_metadata},
       {"dds_samples", fuzz_dds_samples},
   };
   if (argc < 2 || targets.count(argv[1]) == 0) {

@@ -417,6 +417,14 @@ TEST(RosbagDataset, BadBagsNameTheFileTopicAndField) {
   const std::string zstd = copy_of("zstd");
   replace_in_metadata(zstd, "compression_format: \"\"", "compression_format: zstd");
   expect_input_error([&] { open_dataset(zstd); }, {"compression_format", "zstd"});
+  // Not a map where one is expected (found by fuzzing: yaml-cpp throws its own exception on a scalar's key).
+  const std::string scalar = copy_of("scalar");
+  std::ofstream(scalar + "/metadata.yaml", std::ios::trunc) << "just some text\n";
+  expect_input_error([&] { open_dataset(scalar); }, {"metadata.yaml", "rosbag2_bagfile_information", "missing"});
+  const std::string topic_scalar = copy_of("topic_scalar");
+  replace_in_metadata(topic_scalar, "  topics_with_message_count:\n", "  topics_with_message_count:\n    - 7\n");
+  expect_input_error([&] { open_dataset(topic_scalar); },
+                     {"metadata.yaml", "topics_with_message_count[0].topic_metadata", "missing"});
 
   // No camera_info and no calibration file.
   TempDir bare_dir("agvslam-rosbag");

@@ -141,6 +141,7 @@ inline PoseSample synthetic_pose_sample(uint64_t i, int64_t t_ns) {
   s.w_base_radps = Eigen::Vector3d(0.003 * std::cos(k), -0.002, 0.1667 + 0.01 * std::sin(0.5 * k));
   s.cov_twist = Matrix6d::Identity() * (4e-4 + 1e-7 * k);
   s.tracking_state = static_cast<TrackingState>((i / 7) % 4);
+  s.map_id = static_cast<uint32_t>(i / 60 + (i >= 180 ? 70000 : 0));  // a new map now and then; one id above 16 bits
   s.frame_index = 3 * i + 1;
   s.frames_processed = 2 * i + 1;
   s.frames_dropped = i / 5;

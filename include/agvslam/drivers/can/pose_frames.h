@@ -5,7 +5,7 @@
 // Classic CAN, 8 bytes each, ids relative to a configurable base id (default 0x300), all signals little-endian
 // (Intel, DBC "@1"), signed values two's complement:
 //   base+0 AGVSLAM_POSE_XYAW   PoseX int32 mm | PoseYaw int16 0.01 deg | TrackingState 4 bit | Counter | Crc
-//   base+1 AGVSLAM_POSE_YZ     PoseY int32 mm | PoseZ int16 mm | reserved 4 bit | Counter | Crc
+//   base+1 AGVSLAM_POSE_YZ     PoseY int32 mm | PoseZ int16 mm | MapId 4 bit (low bits) | Counter | Crc
 //   base+2 AGVSLAM_VELOCITY    VelX int16 mm/s | VelY int16 mm/s | YawRate int16 0.01 deg/s | reserved | Counter | Crc
 //   base+3 AGVSLAM_POSE_STDDEV StdDevX uint16 mm | StdDevY uint16 mm | StdDevYaw uint16 0.01 deg | reserved | Counter |
 //   Crc base+4 AGVSLAM_STATUS      LatencyMs uint16 0.1 ms | Fps uint8 0.5 Hz | DynamicPct uint8 0.5 % |
@@ -19,7 +19,10 @@
 // pose), bits 56..63 Crc (CRC-8/SAE-J1850: poly 0x1D, init 0xFF, final xor 0xFF) over the 4 bytes of the CAN id
 // (little-endian, without EFF/RTR/ERR flags) followed by payload bytes 0..len-2.
 // CAN FD (optional, instead of the classic set): base+8 AGVSLAM_POSE_FD, 48 bytes, everything in one frame (see
-// the DBC for its byte map).
+// the DBC for its byte map; MapId there has 16 bits).
+// MapId: the SLAM map the pose is in (PoseSample::map_id); it changes when a long loss started a new map, whose
+// origin is elsewhere: the vehicle must not join poses of different MapId (4 bits on classic CAN: a change is what
+// it reads, and 16 new maps between two frames it receives do not happen).
 // Pose = T_map_base (REP-105 map frame, base_link); yaw = atan2(R10, R00) in (-180, 180] degrees; velocities in
 // base_link axes; StdDev = sqrt of the covariance diagonal. Values are rounded to the nearest step and saturate
 // at the signal's range.
