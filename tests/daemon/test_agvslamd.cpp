@@ -217,6 +217,17 @@ SE3d pose_from_transform(const json& t) {
                   Eigen::Vector3d(tr.at("x").get<double>(), tr.at("y").get<double>(), tr.at("z").get<double>()));
 }
 
+// agvslamd on the simulator sequence at the camera rate (80 frames, 4 s), inline mapping, DDS on lo waiting for a
+// reader on pose, odom and status, the pose log in dir.
+std::string realtime_dds_config(const std::string& seq, const std::string& dir) {
+  return "source:\n  type: dataset\n  dataset: " + seq + "\n  rate: 1\n" + stages_yaml() +
+         "pipeline:\n  mapping: inline\n" + kMount +
+         "dds:\n  network_interface: lo\n  topic_namespace: agvslamd_test\n"
+         "  wait_for_subscribers: 1\n  wait_timeout_s: 60\n"
+         "log:\n  pose_log: " +
+         dir + "/poses.jsonl\n";
+}
+
 // tf end to end: agvslamd on the simulator sequence at the camera rate; one agvslam-echo reads rt/tf from the start,
 // another joins rt/tf_static two seconds after the daemon started (transient local: it still gets the extrinsic).
 // Every map -> base_link transform is the published pose of its frame (no odometry input: no odom frame).
@@ -225,12 +236,7 @@ TEST(Agvslamd, TfCarriesThePublishedPoseAndTfStaticReachesALateSubscriber) {
   const std::string seq = test::daemon_sim_sequence();
   const std::string dir = test::make_temp_dir("agvslamd-tf");
   // Real time (80 frames, 4 s): the daemon must still be running when the late tf_static reader joins at 2 s.
-  write_text(dir + "/d.yaml", "source:\n  type: dataset\n  dataset: " + seq + "\n  rate: 1\n" + stages_yaml() +
-                                  "pipeline:\n  mapping: inline\n" + kMount +
-                                  "dds:\n  network_interface: lo\n  topic_namespace: agvslamd_test\n"
-                                  "  wait_for_subscribers: 1\n  wait_timeout_s: 60\n"
-                                  "log:\n  pose_log: " +
-                                  dir + "/poses.jsonl\n");
+  write_text(dir + "/d.yaml", realtime_dds_config(seq, dir));
   const std::string echo = test::tool_path("agvslam-echo") + " --json --interface lo --namespace agvslamd_test ";
   const std::string script = "ip link set lo up && (" + echo + "--timeout 300 > " + dir + "/echo.jsonl 2> " + dir +
                              "/echo.err & e=$!; " + echo + "--topic tf --timeout 300 > " + dir + "/tf.jsonl 2> " + dir +
@@ -290,12 +296,7 @@ TEST(Agvslamd, ASubscriberLeavingAndAnotherJoiningLosesNothingAfterItJoins) {
   const std::string dir = test::make_temp_dir("agvslamd-rejoin");
   // Real time (80 frames, 4 s): the first reader (pose, odom and status: the daemon waits for a reader on each)
   // takes 45 samples (~15 frames, ~0.75 s) and leaves; the second, on the pose alone, joins ~1.7 s later.
-  write_text(dir + "/d.yaml", "source:\n  type: dataset\n  dataset: " + seq + "\n  rate: 1\n" + stages_yaml() +
-                                  "pipeline:\n  mapping: inline\n" + kMount +
-                                  "dds:\n  network_interface: lo\n  topic_namespace: agvslamd_test\n"
-                                  "  wait_for_subscribers: 1\n  wait_timeout_s: 60\n"
-                                  "log:\n  pose_log: " +
-                                  dir + "/poses.jsonl\n");
+  write_text(dir + "/d.yaml", realtime_dds_config(seq, dir));
   const std::string echo = test::tool_path("agvslam-echo") + " --json --interface lo --namespace agvslamd_test ";
   const std::string script = "ip link set lo up && (" + echo + "--count 45 --timeout 60 > " + dir + "/first.jsonl 2> " +
                              dir + "/first.err & f=$!; " + test::tool_path("agvslamd") + " --config " + dir +
