@@ -5,19 +5,17 @@
 #include <cstdlib>
 #include <limits>
 
+#include "agvslam/core/cpu_clones.h"
+
 namespace agvslam::stereo {
 
 namespace {
 constexpr int32_t kQuarter = 4;  // intensities in quarter grey levels inside the matcher
 
 // The matching costs of one window row for every candidate: rc[e] = sum_i |ref_row[i] - strip[i + e] + means[e]|,
-// then added to costs[e]. Compiled twice on x86-64 (AVX2 and the baseline), chosen at load time by the CPU, so
-// the same binary runs on any x86-64 and uses 16-lane integer arithmetic where the CPU has it. The results are
-// identical: integer arithmetic in either. Not under ThreadSanitizer, which instruments the load-time resolver that
-// picks the copy; it runs before the sanitizer's runtime is set up and crashes the program at start.
-#if defined(__x86_64__) && defined(__GNUC__) && !defined(__clang__) && !defined(__SANITIZE_THREAD__)
-__attribute__((target_clones("avx2", "default")))
-#endif
+// then added to costs[e]. In an AVX2 and a baseline copy (agvslam/core/cpu_clones.h): 16-lane integer arithmetic
+// where the CPU has it, identical results in either.
+AGVSLAM_CPU_CLONES
 void accumulate_row_costs(const int16_t* ref_row, int side, const int16_t* strip, const int16_t* means, int m,
                           uint16_t* rc, int32_t* costs) {
   for (int e = 0; e < m; ++e) rc[e] = 0;
